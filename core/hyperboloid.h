@@ -1,0 +1,133 @@
+// The hyperboloid mirror (one sheet of a hyperboloid of two sheets), in the mirror frame of conventions.h.
+//
+//   (z + c)^2 / a^2 - (x^2 + y^2) / b^2 = 1,   c = sqrt(a^2 + b^2)
+//   sheet used: z(r) = -c + a * sqrt(1 + r^2 / b^2),  0 <= r <= d / 2   (d: rim diameter)
+//
+// Foci: F1 = (0, 0, 0), the single effective viewpoint, inside the sheet; F2 = (0, 0, -2c), where the camera
+// pinhole belongs. A ray aimed at F1 that meets the sheet reflects towards F2. The reflective side faces the
+// camera; Normal() returns the unit normal on that side (pointing away from F1, roughly towards -z).
+//
+// Parameters, in order: a, b, rim diameter d (metres). Valid: a > 0, b > 0, d > 0, all finite.
+#pragma once
+
+#include <cmath>
+#include <string>
+
+#include "core/error.h"
+#include "core/types.h"
+
+namespace hovs {
+
+template <class T>
+struct HyperboloidMirror {
+  T a = T(0), b = T(0), rim_diameter = T(0);
+
+  T c() const {
+    using std::sqrt;
+    return sqrt(a * a + b * b);
+  }
+  T RimRadius() const { return rim_diameter * T(0.5); }
+  // Second focus, where the ideal camera pinhole sits.
+  Vec3<T> SecondFocus() const { return Vec3<T>(T(0), T(0), T(-2) * c()); }
+
+  // Sheet height z at radius r.
+  T SheetZ(const T& r) const {
+    using std::sqrt;
+    return -c() + a * sqrt(T(1) + r * r / (b * b));
+  }
+  T RimZ() const { return SheetZ(RimRadius()); }
+  // Vertex of the sheet (r = 0): z = a - c.
+  T VertexZ() const { return a - c(); }
+
+  // The sheet point above (x, y); differentiable at the vertex.
+  Vec3<T> SurfacePoint(const T& x, const T& y) const {
+    using std::sqrt;
+    return Vec3<T>(x, y, -c() + a * sqrt(T(1) + (x * x + y * y) / (b * b)));
+  }
+
+  // Partial derivatives dz/dx, dz/dy of the sheet at (x, y).
+  Vec2<T> Slope(const T& x, const T& y) const {
+    using std::sqrt;
+    const T s = sqrt(T(1) + (x * x + y * y) / (b * b));
+    const T k = a / (b * b * s);
+    return Vec2<T>(k * x, k * y);
+  }
+
+  // Unit normal on the reflective side at a point p of the sheet.
+  Vec3<T> Normal(const Vec3<T>& p) const {
+    const Vec3<T> n(p(0) / (b * b), p(1) / (b * b), -(p(2) + c()) / (a * a));
+    return Normalized(n);
+  }
+
+  bool WithinRim(const Vec3<T>& p) const {
+    const double r2 = ScalarPart(p(0)) * ScalarPart(p(0)) + ScalarPart(p(1)) * ScalarPart(p(1));
+    const double rr = ScalarPart(RimRadius());
+    return r2 <= rr * rr * (1 + 1e-12);
+  }
+
+  // The mirror point seen from F1 in direction s (any length): M = lambda * s / |s| with
+  // lambda = b^2 / (a - c * s_z / |s|). False when the direction misses the sheet (s_z / |s| >= a / c).
+  bool PointAlong(const Vec3<T>& s, Vec3<T>* m) const {
+    using std::sqrt;
+    const T n = sqrt(s.squaredNorm());
+    if (!(ScalarPart(n) > 0)) return false;
+    const T denom = a - c() * s(2) / n;
+    if (!(ScalarPart(denom) > 0)) return false;
+    *m = (b * b / denom) * (s / n);
+    return true;
+  }
+
+  // Intersection of the ray o + t v (t > t_min) with the sheet: the smallest such t on the upper sheet
+  // (z + c > 0). Does not test the rim. Solves the quadratic in a cancellation-free form.
+  bool IntersectSheet(const Vec3<T>& o, const Vec3<T>& v, T* t, double t_min = 0.0) const {
+    using std::abs;
+    using std::sqrt;
+    const T cc = c();
+    const T ia2 = T(1) / (a * a), ib2 = T(1) / (b * b);
+    const T oz = o(2) + cc;
+    const T A = v(2) * v(2) * ia2 - (v(0) * v(0) + v(1) * v(1)) * ib2;
+    const T B = oz * v(2) * ia2 - (o(0) * v(0) + o(1) * v(1)) * ib2;
+    const T C = oz * oz * ia2 - (o(0) * o(0) + o(1) * o(1)) * ib2 - T(1);
+    T roots[2];
+    int count = 0;
+    const double scale = std::abs(ScalarPart(B)) + std::abs(ScalarPart(A)) + 1e-300;
+    if (std::abs(ScalarPart(A)) < 1e-14 * scale) {
+      if (ScalarPart(B) == 0) return false;
+      roots[count++] = -C / (T(2) * B);
+    } else {
+      const T disc = B * B - A * C;
+      if (ScalarPart(disc) < 0) return false;
+      const T sq = sqrt(disc);
+      const T q = ScalarPart(B) >= 0 ? -(B + sq) : -(B - sq);
+      if (ScalarPart(q) != 0) roots[count++] = C / q;
+      roots[count++] = q / A;
+    }
+    bool found = false;
+    for (int i = 0; i < count; ++i) {
+      const double ti = ScalarPart(roots[i]);
+      if (!(ti > t_min) || !std::isfinite(ti)) continue;
+      if (!(ScalarPart(o(2) + roots[i] * v(2) + cc) > 0)) continue;  // lower sheet
+      if (!found || ti < ScalarPart(*t)) {
+        *t = roots[i];
+        found = true;
+      }
+    }
+    return found;
+  }
+
+  void Check(const std::string& where = "mirror") const {
+    const double va = ScalarPart(a), vb = ScalarPart(b), vd = ScalarPart(rim_diameter);
+    HOVS_REQUIRE(std::isfinite(va) && std::isfinite(vb) && std::isfinite(vd), where,
+                 "a, b and the rim diameter must be finite numbers");
+    HOVS_REQUIRE(va > 0, where, "a must be positive (got ", va, ")");
+    HOVS_REQUIRE(vb > 0, where, "b must be positive (got ", vb, ")");
+    HOVS_REQUIRE(vd > 0, where, "the rim diameter must be positive (got ", vd, ")");
+  }
+
+  template <class U>
+  HyperboloidMirror<U> Cast() const {
+    return {ConvertScalar<U>(a), ConvertScalar<U>(b), ConvertScalar<U>(rim_diameter)};
+  }
+};
+
+}  // namespace hovs

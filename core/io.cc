@@ -1,0 +1,95 @@
+#include "core/io.h"
+
+#include <unistd.h>
+
+#include <atomic>
+#include <chrono>
+#include <fstream>
+#include <sstream>
+
+#include "core/error.h"
+
+namespace hovs {
+namespace fs = std::filesystem;
+
+namespace {
+std::string UniqueSuffix() {
+  static std::atomic<int> counter{0};
+  const auto now = std::chrono::steady_clock::now().time_since_epoch().count();
+  return std::to_string(::getpid()) + "-" + std::to_string(now) + "-" + std::to_string(counter++);
+}
+}  // namespace
+
+void WriteFileAtomic(const fs::path& path, const std::string& content) {
+  const fs::path parent = path.has_parent_path() ? path.parent_path() : fs::path(".");
+  std::error_code ec;
+  fs::create_directories(parent, ec);
+  HOVS_REQUIRE(!ec, parent.string(), "cannot create folder: ", ec.message());
+  const fs::path tmp = parent / ("." + path.filename().string() + ".tmp-" + UniqueSuffix());
+  {
+    std::ofstream out(tmp, std::ios::binary | std::ios::trunc);
+    HOVS_REQUIRE(out.good(), tmp.string(), "cannot open for writing");
+    out.write(content.data(), static_cast<std::streamsize>(content.size()));
+    out.flush();
+    if (!out.good()) {
+      out.close();
+      fs::remove(tmp, ec);
+      throw Error(path.string(), "write failed (disk full?)");
+    }
+  }
+  fs::rename(tmp, path, ec);
+  if (ec) {
+    std::error_code ec2;
+    fs::remove(tmp, ec2);
+    throw Error(path.string(), "cannot rename into place: " + ec.message());
+  }
+}
+
+std::string ReadFile(const fs::path& path) {
+  std::ifstream in(path, std::ios::binary);
+  HOVS_REQUIRE(in.good(), path.string(), "cannot open for reading");
+  std::ostringstream ss;
+  ss << in.rdbuf();
+  return ss.str();
+}
+
+StagedDirectory::StagedDirectory(fs::path target) : target_(std::move(target)) {
+  HOVS_REQUIRE(!target_.empty(), "output folder", "empty path");
+  if (target_.filename().empty()) target_ = target_.parent_path();
+  const fs::path parent = target_.has_parent_path() ? target_.parent_path() : fs::path(".");
+  std::error_code ec;
+  fs::create_directories(parent, ec);
+  HOVS_REQUIRE(!ec, parent.string(), "cannot create folder: ", ec.message());
+  staging_ = parent / ("." + target_.filename().string() + ".partial-" + UniqueSuffix());
+  fs::create_directory(staging_, ec);
+  HOVS_REQUIRE(!ec, staging_.string(), "cannot create staging folder: ", ec.message());
+}
+
+StagedDirectory::~StagedDirectory() {
+  if (!committed_) {
+    std::error_code ec;
+    fs::remove_all(staging_, ec);
+  }
+}
+
+void StagedDirectory::Commit() {
+  std::error_code ec;
+  fs::path old;
+  if (fs::exists(target_)) {
+    old = target_.parent_path() / ("." + target_.filename().string() + ".old-" + UniqueSuffix());
+    fs::rename(target_, old, ec);
+    HOVS_REQUIRE(!ec, target_.string(), "cannot move the previous output aside: ", ec.message());
+  }
+  fs::rename(staging_, target_, ec);
+  if (ec) {
+    if (!old.empty()) {
+      std::error_code ec2;
+      fs::rename(old, target_, ec2);
+    }
+    throw Error(target_.string(), "cannot move the finished output into place: " + ec.message());
+  }
+  committed_ = true;
+  if (!old.empty()) fs::remove_all(old, ec);
+}
+
+}  // namespace hovs

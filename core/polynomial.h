@@ -1,0 +1,187 @@
+// The polynomial (Taylor) model of Scaramuzza, as in OCamCalib, in hovs' frames.
+//
+//   pixel (u, v) -> OCamCalib's (row, col) = (v, u)
+//   [row - cy; col - cx] = [[c, d], [e, 1]] * [p_r; p_c]          (affine: c, d, e; centre (cx, cy))
+//   rho = sqrt(p_r^2 + p_c^2),  f(rho) = a0 + a2 rho^2 + ... + aN rho^N   (a1 = 0)
+//   bearing (mirror frame: x along columns, y along rows, z towards the mirror) = normalise(p_c, p_r, f(rho))
+// OCamCalib's cam2world returns (p_r, p_c, f(rho)): hovs swaps the first two components so that the frame is
+// right-handed and matches the exact model's. a0 < 0: the image centre looks down, at the camera.
+//
+// world2cam: theta = atan2(z, |(x, y)|), rho = g(theta) with g the inverse polynomial fitted over the valid
+// annulus [rho_min, rho_max] (OCamCalib's invpol). ImgFromCamFast uses g alone (round trip below the fit's
+// tolerance, 0.01 px by default); ImgFromCam refines rho with Newton on f(rho) |(x, y)| - z rho = 0 and is
+// exact to rounding.
+//
+// Parameters, in order: cx, cy, c, d, e, a0, a1 (held at 0), a2, ..., aN.
+// Valid domain: rho_min <= rho <= rho_max, where theta(rho) = atan2(f(rho), rho) is monotonic.
+#pragma once
+
+#include <Eigen/Dense>
+#include <algorithm>
+#include <cmath>
+#include <string>
+#include <vector>
+
+#include "core/error.h"
+#include "core/newton.h"
+#include "core/types.h"
+
+namespace hovs {
+
+template <class T>
+struct PolynomialModel {
+  int width = 0, height = 0;
+  T cx = T(0), cy = T(0);              // centre: column, row (pixels)
+  T c = T(1), d = T(0), e = T(0);      // affine
+  std::vector<T> poly;                 // a0, a1 (= 0), a2, ..., aN
+  std::vector<double> inv_poly;        // rho = sum inv_poly[i] theta^i
+  double rho_min = 0, rho_max = 0;     // valid annulus (pixels, in the affine-corrected plane)
+
+  int Degree() const { return static_cast<int>(poly.size()) - 1; }
+
+  template <class S>
+  S F(const S& rho) const {
+    S acc = S(0);
+    for (int i = Degree(); i >= 0; --i) acc = acc * rho + ConvertScalar<S>(poly[i]);
+    return acc;
+  }
+
+  // Affine-corrected sensor coordinates (p_r, p_c) of pixel uv.
+  Vec2<T> SensorFromImg(const Vec2<T>& uv) const {
+    const T dr = uv(1) - cy, dc = uv(0) - cx;
+    const T inv_det = T(1) / (c - d * e);
+    return Vec2<T>(inv_det * (dr - d * dc), inv_det * (-e * dr + c * dc));
+  }
+  Vec2<T> ImgFromSensor(const Vec2<T>& p) const {
+    const T row = c * p(0) + d * p(1) + cy;
+    const T col = e * p(0) + p(1) + cx;
+    return Vec2<T>(col, row);
+  }
+
+  bool CamFromImg(const Vec2<T>& uv, Vec3<T>* bearing) const {
+    using std::sqrt;
+    const Vec2<T> p = SensorFromImg(uv);
+    const T r2 = p.squaredNorm();
+    const T rho = ScalarPart(r2) > 0 ? sqrt(r2) : T(0);
+    *bearing = Normalized<T>(Vec3<T>(p(1), p(0), F(rho)));
+    return std::isfinite(ScalarPart((*bearing)(2)));
+  }
+
+  // Exact inverse of CamFromImg (Newton on rho from the inverse polynomial's estimate).
+  bool ImgFromCam(const Vec3<T>& X, Vec2<T>* uv) const {
+    using std::sqrt;
+    const double xd = ScalarPart(X(0)), yd = ScalarPart(X(1)), zd = ScalarPart(X(2));
+    const double nd = std::hypot(xd, yd);
+    if (nd == 0) {
+      if (!(zd * ScalarPart(poly[0]) > 0)) return false;
+      *uv = ImgFromSensor(Vec2<T>(T(0), T(0)));
+      return true;
+    }
+    double rho = EstimateRho(std::atan2(zd, nd));
+    const auto h = [&](const auto& r) { return F(r) * nd - zd * r; };
+    NewtonOptions options;
+    options.residual_tolerance = 1e-13 * (std::abs(ScalarPart(poly[0])) * nd + 1e-300);
+    options.max_step = std::max(1.0, 0.1 * rho_max);
+    double dh = 0;
+    if (!SolveNewton1(h, &rho, &dh, options) || !(rho >= 0)) return false;
+    const T n = sqrt(X(0) * X(0) + X(1) * X(1));
+    const auto h_t = [&](const T& r) { return F(r) * n - X(2) * r; };
+    const T rho_t = LiftNewton1<T>(h_t, rho, dh);
+    *uv = ImgFromSensor(Vec2<T>(X(1) / n * rho_t, X(0) / n * rho_t));
+    return true;
+  }
+
+  // OCamCalib's world2cam: the inverse polynomial only (no refinement).
+  bool ImgFromCamFast(const Vec3<T>& X, Vec2<T>* uv) const {
+    using std::atan2;
+    using std::sqrt;
+    const T n = sqrt(X(0) * X(0) + X(1) * X(1));
+    if (ScalarPart(n) == 0) {
+      *uv = ImgFromSensor(Vec2<T>(T(0), T(0)));
+      return true;
+    }
+    const T theta = atan2(X(2), n);
+    T rho = T(0);
+    for (int i = static_cast<int>(inv_poly.size()) - 1; i >= 0; --i) rho = rho * theta + T(inv_poly[i]);
+    *uv = ImgFromSensor(Vec2<T>(X(1) / n * rho, X(0) / n * rho));
+    return true;
+  }
+
+  // Fits inv_poly over [rho_min, rho_max] with increasing degree until the worst pixel round-trip error is
+  // below max_error_px. Returns the error reached. Throws if theta(rho) is not monotonic or the fit fails.
+  double FitInverse(double max_error_px = 0.01, int max_degree = 24) {
+    static_assert(std::is_same_v<T, double>, "FitInverse works on a double model");
+    HOVS_REQUIRE(rho_max > rho_min && rho_min >= 0, "polynomial model", "invalid annulus [", rho_min, ", ",
+                 rho_max, "]");
+    const int n = 4000;
+    std::vector<double> theta(n), rho(n);
+    for (int i = 0; i < n; ++i) {
+      rho[i] = rho_min + (rho_max - rho_min) * i / (n - 1);
+      theta[i] = std::atan2(F(rho[i]), rho[i]);
+    }
+    for (int i = 1; i < n; ++i)
+      HOVS_REQUIRE((theta[i] - theta[i - 1]) * (theta[n - 1] - theta[0]) > 0, "polynomial model",
+                   "theta(rho) is not monotonic over [", rho_min, ", ", rho_max, "] px: no inverse exists");
+    // Scale of pixel errors: the affine map's largest singular value.
+    Eigen::Matrix2d A;
+    A << c, d, e, 1;
+    const double scale = Eigen::JacobiSVD<Eigen::Matrix2d>(A).singularValues()(0);
+    double err = HUGE_VAL;
+    for (int deg = 2; deg <= max_degree; ++deg) {
+      Eigen::MatrixXd V(n, deg + 1);
+      Eigen::VectorXd b(n);
+      for (int i = 0; i < n; ++i) {
+        double p = 1;
+        for (int k = 0; k <= deg; ++k, p *= theta[i]) V(i, k) = p;
+        b(i) = rho[i];
+      }
+      const Eigen::VectorXd coef = V.colPivHouseholderQr().solve(b);
+      err = ((V * coef - b).cwiseAbs().maxCoeff()) * scale;
+      if (err < max_error_px) {
+        inv_poly.assign(coef.data(), coef.data() + coef.size());
+        return err;
+      }
+    }
+    throw Error("polynomial model", "the inverse polynomial did not reach " + std::to_string(max_error_px) +
+                                        " px up to degree " + std::to_string(max_degree));
+  }
+
+  void Check(const std::string& where = "polynomial model") const {
+    HOVS_REQUIRE(poly.size() >= 2, where, "needs at least a0 and a1");
+    HOVS_REQUIRE(ScalarPart(poly[1]) == 0, where, "a1 must be 0 (got ", ScalarPart(poly[1]), ")");
+    HOVS_REQUIRE(std::abs(ScalarPart(c - d * e)) > 1e-12, where, "the affine matrix is singular");
+    for (const auto& a : poly) HOVS_REQUIRE(std::isfinite(ScalarPart(a)), where, "coefficients must be finite");
+  }
+
+  template <class U>
+  PolynomialModel<U> Cast() const {
+    PolynomialModel<U> m;
+    m.width = width, m.height = height;
+    m.cx = ConvertScalar<U>(cx), m.cy = ConvertScalar<U>(cy);
+    m.c = ConvertScalar<U>(c), m.d = ConvertScalar<U>(d), m.e = ConvertScalar<U>(e);
+    for (const auto& a : poly) m.poly.push_back(ConvertScalar<U>(a));
+    m.inv_poly = inv_poly;
+    m.rho_min = rho_min, m.rho_max = rho_max;
+    return m;
+  }
+
+ private:
+  // Starting rho for Newton: the inverse polynomial if fitted, else a bracketed search over the annulus.
+  double EstimateRho(double theta) const {
+    if (!inv_poly.empty()) {
+      double r = 0;
+      for (int i = static_cast<int>(inv_poly.size()) - 1; i >= 0; --i) r = r * theta + inv_poly[i];
+      if (std::isfinite(r) && r >= 0) return r;
+    }
+    const double hi = rho_max > 0 ? rho_max : 1000.0;
+    double best = hi * 0.5, best_err = HUGE_VAL;
+    for (int i = 0; i <= 64; ++i) {
+      const double r = rho_min + (hi - rho_min) * i / 64.0;
+      const double err = std::abs(std::atan2(ScalarPart(F(r)), r) - theta);
+      if (err < best_err) best_err = err, best = r;
+    }
+    return best;
+  }
+};
+
+}  // namespace hovs

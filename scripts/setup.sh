@@ -1,0 +1,37 @@
+#!/usr/bin/env bash
+# Installs every Debian 12 package hovs needs to build, test and run. Idempotent.
+# Usage: scripts/setup.sh   (as root, or with sudo available)
+set -euo pipefail
+
+PACKAGES=(
+  build-essential cmake ninja-build pkg-config git ca-certificates
+  libeigen3-dev libnlopt-cxx-dev libceres-dev
+  libembree-dev libtbb-dev
+  libopenimageio-dev openimageio-tools libopenexr-dev
+  libopencv-dev libopencv-contrib-dev
+  libvtk9-dev mpi-default-dev xvfb xauth
+  libaravis-dev aravis-tools libusb-1.0-0-dev
+  libcli11-dev nlohmann-json3-dev libyaml-cpp-dev libspdlog-dev libfmt-dev
+  libgtest-dev libgmock-dev libbenchmark-dev
+)
+
+SUDO=""
+if [ "$(id -u)" -ne 0 ]; then SUDO="sudo"; fi
+
+missing=()
+for p in "${PACKAGES[@]}"; do
+  if ! dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed"; then
+    missing+=("$p")
+  fi
+done
+
+if [ "${#missing[@]}" -eq 0 ]; then
+  echo "setup: all ${#PACKAGES[@]} packages already installed"
+  exit 0
+fi
+
+echo "setup: installing ${#missing[@]} packages: ${missing[*]}"
+export DEBIAN_FRONTEND=noninteractive
+$SUDO apt-get update -qq
+$SUDO apt-get install -y -qq --no-install-recommends "${missing[@]}"
+echo "setup: done"

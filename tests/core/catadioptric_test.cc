@@ -1,0 +1,217 @@
+// The exact hyperboloid model: sheet geometry, single-viewpoint property, closed-form and general projection,
+// back-projection round trips, the law of reflection, the mirror mask.
+#include <gtest/gtest.h>
+
+#include "core/catadioptric.h"
+#include "tests/core/test_rigs.h"
+
+namespace hovs {
+namespace {
+
+constexpr double kDeg = M_PI / 180;
+
+double AngleBetween(const Vec3d& a, const Vec3d& b) { return std::atan2(a.cross(b).norm(), a.dot(b)); }
+
+TEST(Hyperboloid, SheetSatisfiesImplicitEquationAndNormalIsPerpendicular) {
+  const auto m = test::ReferenceMirror();
+  for (double r = 0; r <= m.RimRadius(); r += 0.004) {
+    const Vec3d p = m.SurfacePoint(r * 0.6, r * 0.8);
+    const double g = std::pow(p.z() + m.c(), 2) / (m.a * m.a) - (p.x() * p.x() + p.y() * p.y()) / (m.b * m.b);
+    EXPECT_NEAR(g, 1.0, 1e-14);
+    const double h = 1e-7;
+    const Vec3d tx = (m.SurfacePoint(p.x() + h, p.y()) - m.SurfacePoint(p.x() - h, p.y())) / (2 * h);
+    const Vec3d ty = (m.SurfacePoint(p.x(), p.y() + h) - m.SurfacePoint(p.x(), p.y() - h)) / (2 * h);
+    const Vec3d n = m.Normal(p);
+    EXPECT_NEAR(n.norm(), 1.0, 1e-15);
+    EXPECT_NEAR(n.dot(tx.normalized()), 0.0, 1e-8);
+    EXPECT_NEAR(n.dot(ty.normalized()), 0.0, 1e-8);
+    EXPECT_LT(n.z(), 0.0) << "the reflective side faces the camera";
+  }
+  EXPECT_NEAR(m.VertexZ(), m.SheetZ(0.0), 1e-15);
+}
+
+TEST(Hyperboloid, RaysAimedAtTheViewpointReflectThroughTheSecondFocus) {
+  const auto m = test::ReferenceMirror();
+  for (double el = -80; el <= 40; el += 5) {
+    for (double az = 0; az < 360; az += 45) {
+      const Vec3d s(std::cos(el * kDeg) * std::cos(az * kDeg), std::cos(el * kDeg) * std::sin(az * kDeg),
+                    std::sin(el * kDeg));
+      Vec3d M = Vec3d::Zero();
+      if (!m.PointAlong(s, &M)) {
+        EXPECT_GE(s.z(), m.a / m.c() - 1e-12);
+        continue;
+      }
+      const Vec3d incident = -s;  // travelling from the world towards F1
+      const Vec3d n = m.Normal(M);
+      const Vec3d reflected = incident - 2 * incident.dot(n) * n;
+      EXPECT_LT(AngleBetween(reflected, m.SecondFocus() - M), 1e-12);
+      // The sheet intersection from F1 agrees with the closed form.
+      double t = 0;
+      ASSERT_TRUE(m.IntersectSheet(Vec3d::Zero(), s, &t));
+      EXPECT_NEAR((t * s - M).norm(), 0.0, 1e-15);
+    }
+  }
+}
+
+TEST(Hyperboloid, IntersectionFromTheCameraHitsTheSheet) {
+  const auto m = test::ReferenceMirror();
+  const Vec3d C = m.SecondFocus();
+  for (double ang = 0; ang < 20; ang += 0.5) {
+    const Vec3d v(std::sin(ang * kDeg), 0.3 * std::sin(ang * kDeg), std::cos(ang * kDeg));
+    double t = 0;
+    ASSERT_TRUE(m.IntersectSheet(C, v.normalized(), &t));
+    const Vec3d p = C + t * v.normalized();
+    EXPECT_NEAR(p.z(), m.SheetZ(std::hypot(p.x(), p.y())), 1e-15);
+  }
+  double t = 0;
+  EXPECT_FALSE(m.IntersectSheet(C, Vec3d(0, 0, -1), &t)) << "pointing away from the mirror";
+}
+
+TEST(Catadioptric, AlignedRoundTripPixelRayPixel) {
+  const auto rig = test::AlignedRig();
+  ASSERT_TRUE(rig.IsSingleViewpoint());
+  const auto pixels = test::MirrorPixels(rig, 37);
+  ASSERT_GT(pixels.size(), 2000u);
+  double worst = 0;
+  for (const Vec2d& uv : pixels) {
+    Vec3d M = Vec3d::Zero(), d = Vec3d::Zero();
+    ASSERT_TRUE(rig.RayFromImg(uv, &M, &d));
+    EXPECT_NEAR(d.norm(), 1.0, 1e-14);
+    EXPECT_LT(AngleBetween(d, M), 1e-12) << "single viewpoint: the view ray passes through F1";
+    for (double range : {0.3, 3.0, 300.0}) {
+      Vec2d back = Vec2d::Zero();
+      ASSERT_EQ(rig.ImgFromMirror(M + range * d, &back), ProjectionStatus::kOk) << uv.transpose();
+      worst = std::max(worst, (back - uv).norm());
+    }
+  }
+  EXPECT_LT(worst, 1e-9);
+  RecordProperty("worst_round_trip_px", std::to_string(worst));
+}
+
+TEST(Catadioptric, MisalignedRoundTripThroughTheGeneralProjection) {
+  const auto rig = test::MisalignedRig();
+  ASSERT_FALSE(rig.IsSingleViewpoint());
+  const auto pixels = test::MirrorPixels(rig, 53);
+  ASSERT_GT(pixels.size(), 1000u);
+  double worst = 0;
+  for (const Vec2d& uv : pixels) {
+    Vec3d M = Vec3d::Zero(), d = Vec3d::Zero();
+    ASSERT_TRUE(rig.RayFromImg(uv, &M, &d));
+    for (double range : {0.5, 20.0}) {
+      Vec2d back = Vec2d::Zero();
+      ASSERT_EQ(rig.ImgFromMirror(M + range * d, &back), ProjectionStatus::kOk) << uv.transpose();
+      worst = std::max(worst, (back - uv).norm());
+    }
+  }
+  EXPECT_LT(worst, 1e-9);
+}
+
+TEST(Catadioptric, LawOfReflectionHoldsAtTheSolvedMirrorPoint) {
+  const auto rig = test::MisalignedRig();
+  const Vec3d C = rig.CameraCentre();
+  int solved = 0;
+  for (const Vec3d& X : test::WorldPoints(400, 7)) {
+    Vec3d M = Vec3d::Zero();
+    if (rig.SolveReflectionPoint(X, &M) != ProjectionStatus::kOk) continue;
+    ++solved;
+    const Vec3d n = rig.mirror.Normal(M);
+    const Vec3d to_world = (X - M).normalized(), to_camera = (C - M).normalized();
+    // Incidence equals reflection, and the reflected ray passes through the camera pinhole.
+    EXPECT_LT(std::abs(AngleBetween(to_world, n) - AngleBetween(to_camera, n)), 1e-9);
+    const Vec3d incident = -to_world;
+    const Vec3d reflected = incident - 2 * incident.dot(n) * n;
+    EXPECT_LT(AngleBetween(reflected, to_camera), 1e-9);
+    EXPECT_LT((C - M).cross(reflected).norm(), 1e-12) << "distance of the pinhole from the reflected ray";
+    EXPECT_NEAR(M.z(), rig.mirror.SheetZ(std::hypot(M.x(), M.y())), 1e-15);
+  }
+  EXPECT_GT(solved, 350);
+}
+
+TEST(Catadioptric, GeneralProjectionEqualsClosedFormWhenAligned) {
+  const auto rig = test::AlignedRig();
+  int compared = 0;
+  for (const Vec3d& X : test::WorldPoints(500, 11)) {
+    Vec2d a = Vec2d::Zero(), b = Vec2d::Zero();
+    const auto sa = rig.ImgFromMirrorSvp(X, &a);
+    const auto sb = rig.ImgFromMirrorGeneral(X, &b);
+    ASSERT_EQ(sa, sb) << X.transpose();
+    if (sa != ProjectionStatus::kOk) continue;
+    ++compared;
+    EXPECT_LT((a - b).norm(), 1e-9);
+  }
+  EXPECT_GT(compared, 400);
+}
+
+TEST(Catadioptric, LensDistortionIsPartOfTheExactModel) {
+  auto rig = test::AlignedRig();
+  rig.camera.distortion = {-0.08, 0.02, 1e-4, -2e-4};
+  double worst = 0;
+  for (const Vec2d& uv : test::MirrorPixels(rig, 61)) {
+    Vec3d M = Vec3d::Zero(), d = Vec3d::Zero();
+    ASSERT_TRUE(rig.RayFromImg(uv, &M, &d));
+    Vec2d back = Vec2d::Zero();
+    ASSERT_EQ(rig.ImgFromMirror(M + 2.0 * d, &back), ProjectionStatus::kOk);
+    worst = std::max(worst, (back - uv).norm());
+  }
+  EXPECT_LT(worst, 1e-9);
+}
+
+TEST(Catadioptric, MaskSeparatesMirrorRimAndCameraReflection) {
+  const auto rig = test::AlignedRig();
+  const double cx = rig.camera.cx, cy = rig.camera.cy;
+  const auto [rho_min, rho_max] = std::pair<double, double>(
+      [&] {
+        Vec3d M = Vec3d::Zero();
+        rig.mirror.PointAlong(Vec3d(rig.occluder_radius, 0, -2 * rig.mirror.c()), &M);
+        Vec2d uv = Vec2d::Zero();
+        rig.camera.ImgFromCam(rig.cam_from_mirror * M, &uv);
+        return uv.x() - cx;
+      }(),
+      [&] {
+        Vec2d uv = Vec2d::Zero();
+        rig.camera.ImgFromCam(rig.cam_from_mirror * Vec3d(rig.mirror.RimRadius(), 0, rig.mirror.RimZ()), &uv);
+        return uv.x() - cx;
+      }());
+  EXPECT_FALSE(rig.SeesMirror(Vec2d(cx, cy))) << "the centre shows the camera";
+  EXPECT_FALSE(rig.SeesMirror(Vec2d(cx + rho_min - 0.01, cy)));
+  EXPECT_TRUE(rig.SeesMirror(Vec2d(cx + rho_min + 0.01, cy)));
+  EXPECT_TRUE(rig.SeesMirror(Vec2d(cx + rho_max - 0.01, cy)));
+  EXPECT_FALSE(rig.SeesMirror(Vec2d(cx + rho_max + 0.01, cy)));
+  EXPECT_FALSE(rig.SeesMirror(Vec2d(0, 0))) << "image corner, outside the rim";
+  EXPECT_FALSE(rig.SeesMirror(Vec2d(-5, cy))) << "outside the image";
+  // The article's sheet: the rim at about 1084 px.
+  EXPECT_NEAR(rho_max, 1084.0, 1.0);
+}
+
+TEST(Catadioptric, ProjectionReportsWhyAPointIsNotSeen) {
+  const auto aligned = test::AlignedRig();
+  Vec2d uv = Vec2d::Zero();
+  EXPECT_EQ(aligned.ImgFromMirror(Vec3d(0.1, 0, 5.0), &uv), ProjectionStatus::kMissesMirror) << "above";
+  EXPECT_EQ(aligned.ImgFromMirror(Vec3d(0.0, 0.001, -3.0), &uv), ProjectionStatus::kOccluded) << "below";
+  EXPECT_EQ(aligned.ImgFromMirror(Vec3d(0.001, 0.0, -0.005), &uv), ProjectionStatus::kInsideMirror);
+  // The numeric solve says so too, with a failure status rather than a pixel.
+  const auto misaligned = test::MisalignedRig();
+  EXPECT_NE(misaligned.ImgFromMirror(Vec3d(0.1, 0, 5.0), &uv), ProjectionStatus::kOk);
+  EXPECT_EQ(misaligned.ImgFromMirror(Vec3d(0.0, 0.001, -3.0), &uv), ProjectionStatus::kOccluded);
+  EXPECT_NE(misaligned.ImgFromMirror(Vec3d(0.001, 0.0, -0.005), &uv), ProjectionStatus::kOk);
+}
+
+TEST(Catadioptric, CheckRejectsImpossibleRigs) {
+  auto rig = test::AlignedRig();
+  EXPECT_NO_THROW(rig.Check());
+  auto bad = rig;
+  bad.mirror.a = -0.01;
+  EXPECT_THROW(bad.Check(), Error);
+  bad = rig;
+  bad.camera.fx = 0;
+  EXPECT_THROW(bad.Check(), Error);
+  bad = rig;
+  bad.cam_from_mirror = Rigid3d::Translation(Vec3d(0, 0, -0.01));  // pinhole at z = +0.01, inside the mirror
+  EXPECT_THROW(bad.Check(), Error);
+  bad = rig;
+  bad.mirror.b = std::nan("");
+  EXPECT_THROW(bad.Check(), Error);
+}
+
+}  // namespace
+}  // namespace hovs

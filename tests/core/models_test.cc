@@ -1,0 +1,146 @@
+// Pinhole, unified and polynomial models: round trips for every model, the unified model from a design, the
+// polynomial fitted to the exact model.
+#include <gtest/gtest.h>
+
+#include "core/model_fit.h"
+#include "core/pinhole.h"
+#include "core/polynomial.h"
+#include "core/unified.h"
+#include "tests/core/test_rigs.h"
+
+namespace hovs {
+namespace {
+
+// Every model: pixel -> bearing -> pixel over the valid pixels, in double.
+template <class Model, class Valid>
+double WorstRoundTrip(const Model& model, int width, int height, int step, const Valid& valid, int* count) {
+  double worst = 0;
+  *count = 0;
+  for (int v = 0; v < height; v += step)
+    for (int u = 0; u < width; u += step) {
+      const Vec2d uv(u + 0.3, v + 0.6);
+      if (!valid(uv)) continue;
+      Vec3d bearing = Vec3d::Zero();
+      EXPECT_TRUE(model.CamFromImg(uv, &bearing)) << uv.transpose();
+      EXPECT_NEAR(bearing.norm(), 1.0, 1e-14);
+      Vec2d back = Vec2d::Zero();
+      EXPECT_TRUE(model.ImgFromCam(bearing * 3.7, &back)) << uv.transpose();
+      worst = std::max(worst, (back - uv).norm());
+      ++*count;
+    }
+  return worst;
+}
+
+TEST(Pinhole, RoundTripWithDistortion) {
+  auto cam = test::ReferenceCamera();
+  cam.distortion = {-0.12, 0.03, 2e-4, -1e-4};
+  int n = 0;
+  const double worst = WorstRoundTrip(cam, cam.width, cam.height, 41, [](const Vec2d&) { return true; }, &n);
+  EXPECT_GT(n, 3000);
+  EXPECT_LT(worst, 1e-9);
+  Vec2d uv = Vec2d::Zero();
+  EXPECT_FALSE(cam.ImgFromCam(Vec3d(0, 0, -1), &uv)) << "behind the camera";
+}
+
+TEST(Unified, RoundTripWithDistortionAndSkew) {
+  UnifiedModel<double> m;
+  m.width = 1024, m.height = 768;
+  m.xi = 0.96, m.fx = 300, m.fy = 298, m.cx = 512.3, m.cy = 380.1, m.skew = 0.2;
+  m.distortion = {-0.05, 0.01, 1e-3, -5e-4};
+  int n = 0;
+  const auto valid = [&](const Vec2d& uv) { return (uv - Vec2d(m.cx, m.cy)).norm() < 380; };
+  const double worst = WorstRoundTrip(m, m.width, m.height, 7, valid, &n);
+  EXPECT_GT(n, 5000);
+  EXPECT_LT(worst, 1e-9);
+}
+
+TEST(Unified, FromDesignReproducesTheExactProjection) {
+  for (bool with_distortion : {false, true}) {
+    auto rig = test::AlignedRig();
+    if (with_distortion) rig.camera.distortion = {-0.08, 0.02, 1e-4, -2e-4};
+    const UnifiedModel<double> u = UnifiedFromCatadioptric(rig);
+    EXPECT_GT(u.xi, 0.9);
+    EXPECT_LT(u.xi, 1.0);
+    double worst = 0;
+    int compared = 0;
+    for (const Vec3d& X : test::WorldPoints(2000, 3)) {
+      Vec2d exact = Vec2d::Zero(), unified = Vec2d::Zero();
+      if (rig.ImgFromMirror(X, &exact) != ProjectionStatus::kOk) continue;
+      ASSERT_TRUE(u.ImgFromCam(X, &unified));
+      worst = std::max(worst, (exact - unified).norm());
+      ++compared;
+    }
+    EXPECT_GT(compared, 1500);
+    EXPECT_LT(worst, 1e-6) << "distortion " << with_distortion;
+    int n = 0;
+    EXPECT_LT(WorstRoundTrip(u, rig.camera.width, rig.camera.height, 43,
+                             [&](const Vec2d& uv) { return rig.SeesMirror(uv); }, &n),
+              1e-9);
+    EXPECT_GT(n, 1000);
+  }
+  auto tilted = test::MisalignedRig();
+  EXPECT_THROW(UnifiedFromCatadioptric(tilted), Error);
+}
+
+TEST(Polynomial, Degree4FitReproducesTheExactModelOverTheMirror) {
+  const auto rig = test::AlignedRig();
+  const PolynomialModel<double> poly = PolynomialFromCatadioptric(rig, 4);
+  EXPECT_LT(poly.poly[0], 0) << "a0 < 0: the centre looks down";
+  EXPECT_EQ(poly.poly[1], 0);
+  double worst = 0;
+  int compared = 0;
+  for (const Vec3d& X : test::WorldPoints(4000, 5)) {
+    Vec2d exact = Vec2d::Zero(), fitted = Vec2d::Zero();
+    if (rig.ImgFromMirror(X, &exact) != ProjectionStatus::kOk) continue;
+    ASSERT_TRUE(poly.ImgFromCam(X, &fitted));
+    worst = std::max(worst, (exact - fitted).norm());
+    ++compared;
+  }
+  EXPECT_GT(compared, 3000);
+  EXPECT_LT(worst, 0.02);
+  RecordProperty("degree4_worst_px", std::to_string(worst));
+}
+
+TEST(Polynomial, ExactAndFastWorldToCamRoundTrips) {
+  const auto rig = test::AlignedRig();
+  PolynomialModel<double> poly = PolynomialFromCatadioptric(rig, 5);
+  poly.c = 1.0004, poly.d = -0.0003, poly.e = 0.0002;  // a slightly affine sensor
+  const double fit_err = poly.FitInverse(0.01);
+  EXPECT_LT(fit_err, 0.01);
+  const auto in_annulus = [&](const Vec2d& uv) {
+    const double rho = poly.SensorFromImg(uv).norm();
+    return rho >= poly.rho_min && rho <= poly.rho_max;
+  };
+  int n = 0;
+  EXPECT_LT(WorstRoundTrip(poly, rig.camera.width, rig.camera.height, 29, in_annulus, &n), 1e-9);
+  EXPECT_GT(n, 3000);
+  double worst_fast = 0;
+  for (int v = 0; v < rig.camera.height; v += 31)
+    for (int u = 0; u < rig.camera.width; u += 31) {
+      const Vec2d uv(u, v);
+      if (!in_annulus(uv)) continue;
+      Vec3d b = Vec3d::Zero();
+      ASSERT_TRUE(poly.CamFromImg(uv, &b));
+      Vec2d back = Vec2d::Zero();
+      ASSERT_TRUE(poly.ImgFromCamFast(b, &back));
+      worst_fast = std::max(worst_fast, (back - uv).norm());
+    }
+  EXPECT_LT(worst_fast, 0.01);
+}
+
+TEST(Polynomial, CheckAndInverseRejectBadModels) {
+  PolynomialModel<double> m;
+  m.poly = {-200, 0.1, 1e-3};
+  EXPECT_THROW(m.Check(), Error) << "a1 must be zero";
+  m.poly = {-200, 0, 1e-3};
+  EXPECT_NO_THROW(m.Check());
+  m.rho_min = 10, m.rho_max = 5;
+  EXPECT_THROW(m.FitInverse(), Error);
+  // theta(rho) folds back: no inverse over this annulus.
+  m.poly = {-200, 0, 0.01, -2e-5};
+  m.rho_min = 1, m.rho_max = 1000;
+  EXPECT_THROW(m.FitInverse(), Error);
+}
+
+}  // namespace
+}  // namespace hovs
