@@ -1,0 +1,179 @@
+#include "design/config.h"
+
+#include <yaml-cpp/yaml.h>
+
+#include <cmath>
+#include <set>
+
+#include "core/error.h"
+#include "core/io.h"
+
+namespace hovs::design {
+namespace {
+
+class Reader {
+ public:
+  explicit Reader(std::string source) : source_(std::move(source)) {}
+
+  std::string Where(const YAML::Node& n, const std::string& key) const {
+    std::string w = source_;
+    if (n.Mark().line >= 0) w += ":" + std::to_string(n.Mark().line + 1);
+    return w + " (" + key + ")";
+  }
+
+  void OnlyKeys(const YAML::Node& map, const std::string& path, const std::set<std::string>& known) const {
+    HOVS_REQUIRE(map.IsMap(), Where(map, path), "expected a mapping");
+    for (const auto& kv : map) {
+      const std::string k = kv.first.as<std::string>();
+      if (!known.count(k)) {
+        std::string list;
+        for (const auto& s : known) list += (list.empty() ? "" : ", ") + s;
+        throw Error(Where(kv.first, path.empty() ? k : path + "." + k),
+                    "unknown key '" + k + "'" + (path.empty() ? "" : " in '" + path + "'") + " (known: " + list + ")");
+      }
+    }
+  }
+
+  double Number(const YAML::Node& n, const std::string& key) const {
+    HOVS_REQUIRE(n.IsScalar(), Where(n, key), "expected a number");
+    double v = 0;
+    try {
+      v = n.as<double>();
+    } catch (const YAML::Exception&) {
+      throw Error(Where(n, key), "expected a number, got '" + n.Scalar() + "'");
+    }
+    HOVS_REQUIRE(std::isfinite(v), Where(n, key), "must be a finite number (got ", n.Scalar(), ")");
+    return v;
+  }
+
+  int Integer(const YAML::Node& n, const std::string& key) const {
+    const double v = Number(n, key);
+    HOVS_REQUIRE(v == std::floor(v) && std::abs(v) < 1e9, Where(n, key), "expected an integer, got ", n.Scalar());
+    return static_cast<int>(v);
+  }
+
+  bool Bool(const YAML::Node& n, const std::string& key) const {
+    try {
+      return n.as<bool>();
+    } catch (const YAML::Exception&) {
+      throw Error(Where(n, key), "expected true or false");
+    }
+  }
+
+  Range RangeOf(const YAML::Node& n, const std::string& key) const {
+    if (n.IsScalar()) {
+      const double v = Number(n, key);
+      return {v, v};
+    }
+    HOVS_REQUIRE(n.IsSequence() && n.size() == 2, Where(n, key), "expected [min, max] or a single value");
+    return {Number(n[0], key + "[0]"), Number(n[1], key + "[1]")};
+  }
+
+  const std::string& source() const { return source_; }
+
+ private:
+  std::string source_;
+};
+
+}  // namespace
+
+DesignConfig ParseDesignConfig(const std::string& text, const std::string& source) {
+  YAML::Node root;
+  try {
+    root = YAML::Load(text);
+  } catch (const YAML::ParserException& e) {
+    throw Error(source + ":" + std::to_string(e.mark.line + 1), "not valid YAML: " + e.msg);
+  }
+  Reader r(source);
+  HOVS_REQUIRE(root.IsMap(), source, "expected a YAML mapping at the top level");
+  r.OnlyKeys(root, "", {"name", "camera", "mirror", "mounting_height", "constraints", "objective", "search",
+                        "marked_design", "resolution_samples"});
+  DesignConfig cfg;
+  cfg.source = source;
+  cfg.text = text;
+  DesignProblem& p = cfg.problem;
+  if (root["name"]) cfg.name = root["name"].as<std::string>();
+  HOVS_REQUIRE(root["camera"], source, "missing 'camera'");
+  {
+    const YAML::Node c = root["camera"];
+    r.OnlyKeys(c, "camera", {"focal_length", "pixel_pitch", "width", "height", "lens_aperture"});
+    for (const char* k : {"focal_length", "pixel_pitch", "width", "height", "lens_aperture"})
+      HOVS_REQUIRE(c[k], r.Where(c, "camera"), "missing 'camera.", k, "'");
+    p.camera.focal_length = r.Number(c["focal_length"], "camera.focal_length");
+    p.camera.pixel_pitch = r.Number(c["pixel_pitch"], "camera.pixel_pitch");
+    p.camera.width = r.Integer(c["width"], "camera.width");
+    p.camera.height = r.Integer(c["height"], "camera.height");
+    p.camera.lens_aperture = r.Number(c["lens_aperture"], "camera.lens_aperture");
+  }
+  if (root["mirror"]) {
+    const YAML::Node m = root["mirror"];
+    r.OnlyKeys(m, "mirror", {"rim_diameter"});
+    HOVS_REQUIRE(m["rim_diameter"], r.Where(m, "mirror"), "missing 'mirror.rim_diameter'");
+    const double d = r.Number(m["rim_diameter"], "mirror.rim_diameter");
+    p.d = {d, d};
+  }
+  if (root["mounting_height"]) p.mounting_height = r.Number(root["mounting_height"], "mounting_height");
+  if (root["constraints"]) {
+    const YAML::Node k = root["constraints"];
+    r.OnlyKeys(k, "constraints", {"max_upper_elevation_deg", "rim_margin_px", "min_vertical_field_deg",
+                                  "min_rim_radius_px", "max_system_length"});
+    Constraints& c = p.constraints;
+    if (k["max_upper_elevation_deg"]) c.max_upper_elevation_deg = r.Number(k["max_upper_elevation_deg"], "constraints.max_upper_elevation_deg");
+    if (k["rim_margin_px"]) c.rim_margin_px = r.Number(k["rim_margin_px"], "constraints.rim_margin_px");
+    if (k["min_vertical_field_deg"]) c.min_vertical_field_deg = r.Number(k["min_vertical_field_deg"], "constraints.min_vertical_field_deg");
+    if (k["min_rim_radius_px"]) c.min_rim_radius_px = r.Number(k["min_rim_radius_px"], "constraints.min_rim_radius_px");
+    if (k["max_system_length"]) c.max_system_length = r.Number(k["max_system_length"], "constraints.max_system_length");
+  }
+  if (root["objective"]) {
+    const std::string o = root["objective"].as<std::string>();
+    const auto obj = ObjectiveFromString(o);
+    HOVS_REQUIRE(obj.has_value(), r.Where(root["objective"], "objective"), "unknown objective '", o,
+                 "' (known: smallest_system, widest_field, largest_rim)");
+    p.objective = *obj;
+  }
+  if (root["search"]) {
+    const YAML::Node s = root["search"];
+    r.OnlyKeys(s, "search", {"a", "b", "d", "grid", "integer_mm"});
+    if (s["a"]) p.a = r.RangeOf(s["a"], "search.a");
+    if (s["b"]) p.b = r.RangeOf(s["b"], "search.b");
+    if (s["d"]) {
+      HOVS_REQUIRE(!root["mirror"], r.Where(s["d"], "search.d"),
+                   "give the rim diameter either as mirror.rim_diameter (fixed) or as search.d (optimised), not both");
+      p.d = r.RangeOf(s["d"], "search.d");
+    }
+    if (s["grid"]) {
+      const YAML::Node g = s["grid"];
+      HOVS_REQUIRE(g.IsSequence() && (g.size() == 2 || g.size() == 3), r.Where(g, "search.grid"),
+                   "expected [na, nb] or [na, nb, nd]");
+      cfg.sweep.na = r.Integer(g[0], "search.grid[0]");
+      cfg.sweep.nb = r.Integer(g[1], "search.grid[1]");
+      cfg.sweep.nd = g.size() == 3 ? r.Integer(g[2], "search.grid[2]") : 1;
+    }
+    if (s["integer_mm"]) cfg.integer_mm = r.Bool(s["integer_mm"], "search.integer_mm");
+  }
+  HOVS_REQUIRE(root["mirror"] || (root["search"] && root["search"]["d"]), source,
+               "missing the rim diameter: give mirror.rim_diameter or search.d");
+  if (root["marked_design"]) {
+    const YAML::Node m = root["marked_design"];
+    r.OnlyKeys(m, "marked_design", {"a", "b", "d"});
+    HOVS_REQUIRE(m["a"] && m["b"], r.Where(m, "marked_design"), "needs a and b");
+    DesignPoint dp{r.Number(m["a"], "marked_design.a"), r.Number(m["b"], "marked_design.b"),
+                   m["d"] ? r.Number(m["d"], "marked_design.d") : p.d.min};
+    HOVS_REQUIRE(dp.a > 0 && dp.b > 0 && dp.d > 0, r.Where(m, "marked_design"), "a, b and d must be positive");
+    cfg.marked = dp;
+  }
+  if (root["resolution_samples"]) cfg.resolution_samples = r.Integer(root["resolution_samples"], "resolution_samples");
+  HOVS_REQUIRE(cfg.resolution_samples >= 2 && cfg.resolution_samples <= 100000, source + " (resolution_samples)",
+               "must be in 2..100000");
+  if (p.d.Fixed()) cfg.sweep.nd = 1;
+  p.Check(source);
+  cfg.sweep.Check(source + " (search.grid)");
+  return cfg;
+}
+
+DesignConfig LoadDesignConfig(const std::filesystem::path& path) {
+  HOVS_REQUIRE(std::filesystem::is_regular_file(path), path.string(), "config file not found");
+  return ParseDesignConfig(ReadFile(path), path.string());
+}
+
+}  // namespace hovs::design

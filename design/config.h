@@ -1,0 +1,27 @@
+// The design-study configuration: a YAML file, validated on load (unknown keys, wrong types, bad values are
+// errors naming the file and the key). Lengths in metres, angles in degrees where the key says _deg.
+#pragma once
+
+#include <filesystem>
+#include <optional>
+#include <string>
+
+#include "design/design.h"
+
+namespace hovs::design {
+
+struct DesignConfig {
+  std::string name = "design";
+  DesignProblem problem;
+  SweepSpec sweep;
+  bool integer_mm = true;
+  std::optional<DesignPoint> marked;   // a design to mark on the figures (e.g. the article's a = 48, b = 44)
+  int resolution_samples = 200;
+  std::string source;                  // the file it came from
+  std::string text;                    // its text, echoed into reports
+};
+
+DesignConfig ParseDesignConfig(const std::string& yaml_text, const std::string& source);
+DesignConfig LoadDesignConfig(const std::filesystem::path& path);
+
+}  // namespace hovs::design

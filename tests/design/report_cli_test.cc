@@ -1,0 +1,124 @@
+// `hovs design` end to end: the report folder and its figures, and bad input through the command line (one
+// clear error, non-zero exit, no report written, an earlier report left intact). Needs an X display: CTest
+// runs it under xvfb-run.
+#include <gtest/gtest.h>
+
+#include <array>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <nlohmann/json.hpp>
+
+#include "core/io.h"
+#include "results/plot.h"
+
+namespace {
+namespace fs = std::filesystem;
+
+struct CliRun {
+  int exit_code;
+  std::string output;
+};
+
+CliRun Hovs(const std::string& args) {
+  const std::string cmd = std::string(HOVS_BINARY) + " " + args + " 2>&1";
+  CliRun r{-1, ""};
+  FILE* pipe = popen(cmd.c_str(), "r");
+  if (!pipe) return r;
+  std::array<char, 4096> buf;
+  size_t n;
+  while ((n = fread(buf.data(), 1, buf.size(), pipe)) > 0) r.output.append(buf.data(), n);
+  const int status = pclose(pipe);
+  r.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  return r;
+}
+
+fs::path Scratch(const std::string& name) {
+  const fs::path p = fs::temp_directory_path() / ("hovs-design-cli-" + std::to_string(getpid())) / name;
+  fs::remove_all(p);
+  fs::create_directories(p.parent_path());
+  return p;
+}
+
+const std::string kReference = std::string(HOVS_SOURCE_DIR) + "/design/reference.yaml";
+
+TEST(DesignCli, WritesTheCompleteReport) {
+  const fs::path out = Scratch("report");
+  const CliRun r = Hovs("design --config " + kReference + " --out " + out.string());
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_NE(r.output.find("integer-mm optimum   a = 48.0000 mm, b = 44.0000 mm"), std::string::npos) << r.output;
+  for (const char* f : {"config.yaml", "sweep.csv", "design.json", "radial_resolution.csv", "index.html", "summary.txt"})
+    EXPECT_TRUE(fs::is_regular_file(out / f)) << f;
+  const auto j = nlohmann::json::parse(hovs::ReadFile(out / "design.json"));
+  EXPECT_NEAR(j["integer_mm_optimum"]["a"].get<double>(), 0.048, 1e-12);
+  EXPECT_NEAR(j["integer_mm_optimum"]["b"].get<double>(), 0.044, 1e-12);
+  EXPECT_TRUE(j["continuous_optimum"]["feasible"].get<bool>());
+  EXPECT_TRUE(j["versions"].contains("vtk"));
+  EXPECT_TRUE(j["versions"].contains("nlopt"));
+  EXPECT_EQ(j["config"]["objective"], "smallest_system");
+  // Sweep CSV: header plus one row per design.
+  std::ifstream csv(out / "sweep.csv");
+  std::string line;
+  size_t rows = 0;
+  while (std::getline(csv, line)) rows += !line.empty() && line[0] != '#' && line[0] != 'a';
+  EXPECT_EQ(rows, j["sweep"]["points"].get<size_t>());
+  // Figures are pictures, not blank canvases.
+  for (const char* f : {"vertical_field.png", "upper_bound.png", "rim_radius.png", "system_length.png",
+                        "feasible_region.png", "radial_resolution.png"}) {
+    const auto s = hovs::results::PngStats(out / "figures" / f);
+    EXPECT_GE(s.width, 800) << f;
+    EXPECT_GT(s.non_white_fraction, 0.02) << f;
+    EXPECT_GT(s.stddev, 20) << f;
+  }
+  const std::string html = hovs::ReadFile(out / "index.html");
+  for (const char* f : {"figures/vertical_field.png", "figures/feasible_region.png", "integer-mm optimum"})
+    EXPECT_NE(html.find(f), std::string::npos) << f;
+  fs::remove_all(out.parent_path());
+}
+
+void ExpectRejected(const std::string& yaml, const std::string& needle) {
+  const fs::path dir = Scratch("bad");
+  fs::create_directories(dir);
+  const fs::path cfg = dir / "bad.yaml";
+  std::ofstream(cfg) << yaml;
+  const fs::path out = dir / "report";
+  const CliRun r = Hovs("design --config " + cfg.string() + " --out " + out.string());
+  EXPECT_EQ(r.exit_code, 2) << r.output;
+  EXPECT_NE(r.output.find(needle), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("error"), std::string::npos) << r.output;
+  EXPECT_FALSE(fs::exists(out)) << "no report for bad input";
+  size_t entries = 0;
+  for ([[maybe_unused]] const auto& e : fs::directory_iterator(dir)) ++entries;
+  EXPECT_EQ(entries, 1u) << "nothing but the config is left in the folder";
+  fs::remove_all(dir);
+}
+
+const std::string kCamera =
+    "camera: {focal_length: 0.016, pixel_pitch: 4.54e-6, width: 2750, height: 2200, lens_aperture: 0.020}\n";
+
+TEST(DesignCli, BadInputGetsOneClearErrorAndNoReport) {
+  ExpectRejected(kCamera + "mirror: {rim_diameter: 0.08}\nshape: round\n", "unknown key 'shape'");
+  ExpectRejected(kCamera + "mirror: {rim_diameter: -0.08}\n", "must be positive");
+  ExpectRejected(kCamera + "mirror: {rim_diameter: .nan}\n", "finite");
+  ExpectRejected(kCamera + "mirror: {rim_diameter: 0.08}\nsearch: {b: [0, 0.08]}\n", "b minimum must be positive");
+  ExpectRejected(kCamera + "mirror: {rim_diameter: 0.08}\nconstraints: {min_rim_radius_px: 1500}\nsearch: {grid: [21, 21]}\n",
+                 "no design in the search box satisfies the constraints");
+  const CliRun missing = Hovs("design --config /nonexistent.yaml --out /tmp/never");
+  EXPECT_EQ(missing.exit_code, 2);
+  EXPECT_NE(missing.output.find("/nonexistent.yaml: config file not found"), std::string::npos) << missing.output;
+}
+
+TEST(DesignCli, AFailedRunLeavesTheEarlierReportIntact) {
+  const fs::path dir = Scratch("keep");
+  fs::create_directories(dir);
+  const fs::path out = dir / "report";
+  ASSERT_EQ(Hovs("-q design --config " + kReference + " --out " + out.string()).exit_code, 0);
+  const std::string before = hovs::ReadFile(out / "design.json");
+  const fs::path cfg = dir / "empty.yaml";
+  std::ofstream(cfg) << kCamera << "mirror: {rim_diameter: 0.08}\nconstraints: {min_rim_radius_px: 1500}\n";
+  EXPECT_EQ(Hovs("design --config " + cfg.string() + " --out " + out.string()).exit_code, 2);
+  EXPECT_EQ(hovs::ReadFile(out / "design.json"), before);
+  fs::remove_all(dir);
+}
+
+}  // namespace
