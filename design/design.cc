@@ -3,6 +3,7 @@
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
+#include <cstdio>
 #include <cmath>
 #include <limits>
 #include <nlopt.hpp>
@@ -348,6 +349,12 @@ DesignPoint Repair(const DesignPoint& bad, const DesignPoint& anchor, const Desi
   return at(hi);
 }
 
+std::string ShortNumber(double v) {
+  char buf[32];
+  std::snprintf(buf, sizeof buf, "%.3g", v);
+  return buf;
+}
+
 std::string NloptResultName(nlopt::result r) {
   switch (r) {
     case nlopt::SUCCESS: return "success";
@@ -427,13 +434,13 @@ Optimum OptimizeContinuous(const DesignProblem& problem, const SweepResult& swee
     o.evaluations = ctx.evaluations - before;
     o.method = label;
     std::string line = label + ": " + status + ", " + std::to_string(o.evaluations) + " evaluations, max violation " +
-                       std::to_string(o.max_violation);
+                       ShortNumber(o.max_violation);
     if (o.max_violation > 0 && start_feasible) {
       // COBYLA and SLSQP may stop slightly outside the feasible set: pull back towards the feasible start.
       Optimum repaired = MakeOptimum(Repair(o.metrics.p, start, problem), problem);
       repaired.evaluations = o.evaluations;
       repaired.method = label + " + feasibility repair";
-      line += "; repaired to max violation " + std::to_string(repaired.max_violation);
+      line += "; repaired to max violation " + ShortNumber(repaired.max_violation);
       o = repaired;
     }
     log.push_back(line);
