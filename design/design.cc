@@ -20,7 +20,7 @@ constexpr double kDeg = M_PI / 180.0;
 // Everything goes through the core's mirror and camera models.
 template <class T>
 struct Geometry {
-  T c, rim_z, upper, lower, rim_px;
+  T c, rim_z, upper, lower, rim_px, reflection_px;
 };
 
 template <class T>
@@ -34,13 +34,18 @@ Geometry<T> ComputeGeometry(const T& a, const T& b, const T& d, const CameraSpec
   g.rim_z = rig.mirror.RimZ();
   g.upper = atan2(g.rim_z, rig.mirror.RimRadius());
   g.lower = atan2(T(-2) * g.c, rig.occluder_radius);
-  Vec2<T> uv;
-  const Vec3<T> rim_cam = rig.cam_from_mirror * Vec3<T>(rig.mirror.RimRadius(), T(0), g.rim_z);
-  if (!rig.camera.ImgFromCam(rim_cam, &uv)) {
-    g.rim_px = T(std::numeric_limits<double>::infinity());
-  } else {
-    g.rim_px = sqrt((uv(0) - rig.camera.cx) * (uv(0) - rig.camera.cx) + (uv(1) - rig.camera.cy) * (uv(1) - rig.camera.cy));
-  }
+  // Image radius of a mirror point, through the core's camera model.
+  const auto radius_px = [&](const Vec3<T>& M) {
+    Vec2<T> uv;
+    if (!rig.camera.ImgFromCam(rig.cam_from_mirror * M, &uv)) return T(std::numeric_limits<double>::infinity());
+    return sqrt((uv(0) - rig.camera.cx) * (uv(0) - rig.camera.cx) + (uv(1) - rig.camera.cy) * (uv(1) - rig.camera.cy));
+  };
+  g.rim_px = radius_px(Vec3<T>(rig.mirror.RimRadius(), T(0), g.rim_z));
+  // The camera's own reflection: the mirror point seen from F1 towards the lens rim.
+  Vec3<T> M;
+  g.reflection_px = rig.mirror.PointAlong(Vec3<T>(rig.occluder_radius, T(0), T(-2) * g.c), &M)
+                        ? radius_px(M)
+                        : T(std::numeric_limits<double>::infinity());
   return g;
 }
 
@@ -51,6 +56,7 @@ std::vector<T> ConstraintVector(const Geometry<T>& g, const DesignProblem& p) {
   const Constraints& k = p.constraints;
   out.push_back(g.upper / T(kDeg) - T(k.max_upper_elevation_deg));
   out.push_back(g.rim_px - T(p.RimLimitPx()));
+  out.push_back(g.reflection_px - g.rim_px);
   if (k.min_vertical_field_deg) out.push_back(T(*k.min_vertical_field_deg) - (g.upper - g.lower) / T(kDeg));
   if (k.min_rim_radius_px) out.push_back(T(*k.min_rim_radius_px) - g.rim_px);
   if (k.max_system_length) out.push_back(T(2) * g.c - T(*k.max_system_length));
@@ -63,6 +69,7 @@ std::vector<ConstraintValue> DescribeConstraints(const std::vector<double>& v, c
   size_t i = 0;
   out.push_back({"upper_bound_below_limit", v[i++], k.max_upper_elevation_deg, "deg"});
   out.push_back({"rim_inside_image", v[i++], p.RimLimitPx(), "px"});
+  out.push_back({"camera_reflection_inside_rim", v[i++], 0.0, "px"});
   if (k.min_vertical_field_deg) out.push_back({"min_vertical_field", v[i++], *k.min_vertical_field_deg, "deg"});
   if (k.min_rim_radius_px) out.push_back({"min_rim_radius", v[i++], *k.min_rim_radius_px, "px"});
   if (k.max_system_length) out.push_back({"max_system_length", v[i++], *k.max_system_length, "m"});
@@ -81,7 +88,7 @@ T ObjectiveOf(const Geometry<T>& g, Objective o) {
 
 // Scale of each constraint for the solvers (so that a unit of each is comparable).
 std::vector<double> ConstraintScales(const DesignProblem& p) {
-  std::vector<double> s = {1.0, 10.0};
+  std::vector<double> s = {1.0, 10.0, 10.0};
   if (p.constraints.min_vertical_field_deg) s.push_back(1.0);
   if (p.constraints.min_rim_radius_px) s.push_back(10.0);
   if (p.constraints.max_system_length) s.push_back(0.001);
@@ -173,13 +180,7 @@ Metrics Evaluate(const DesignPoint& p, const DesignProblem& problem) {
   m.lower_deg = g.lower / kDeg;
   m.field_deg = m.upper_deg - m.lower_deg;
   m.rim_radius_px = g.rim_px;
-  // The camera's own reflection, through the same core projection as the rim.
-  const auto rig = RigOf(p, problem.camera);
-  Vec3d M;
-  Vec2d uv;
-  if (rig.mirror.PointAlong(Vec3d(rig.occluder_radius, 0, -2 * g.c), &M) &&
-      rig.camera.ImgFromCam(rig.cam_from_mirror * M, &uv))
-    m.reflection_radius_px = std::hypot(uv(0) - rig.camera.cx, uv(1) - rig.camera.cy);
+  m.reflection_radius_px = g.reflection_px;
   m.ground_radius_inner = problem.mounting_height / std::tan(-g.lower);
   m.ground_radius_outer = g.upper < 0 ? problem.mounting_height / std::tan(-g.upper)
                                       : std::numeric_limits<double>::infinity();

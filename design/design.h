@@ -9,7 +9,12 @@
 //   system length                       2c (viewpoint to pinhole)
 //   ground radii (mounting height h)    h / tan(-lower) .. h / tan(-upper)   (infinite if upper >= 0)
 //   radial resolution                   d(rho) / d(elevation), px per degree, through ceres::Jet
-// Constraints are written g <= 0 (feasible) in natural units (degrees, pixels, metres).
+// Constraints are written g <= 0 (feasible) in natural units (degrees, pixels, metres):
+//   upper_bound_below_limit        upper - max_upper_elevation_deg           (the article: below the horizon)
+//   rim_inside_image               rim radius - (min(W, H) / 2 - margin)     (the whole rim on the sensor, which
+//                                                                             is also "the camera sees the mirror")
+//   camera_reflection_inside_rim   camera reflection radius - rim radius     (the lower bound point is imaged)
+//   optional: min_vertical_field, min_rim_radius, max_system_length
 #pragma once
 
 #include <optional>

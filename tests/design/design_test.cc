@@ -39,6 +39,18 @@ TEST(DesignMetrics, MatchTheReferenceSheetFormulas) {
   EXPECT_GT(m.rim_radius_px, 1080);
 }
 
+TEST(DesignMetrics, ALensWiderThanTheMirrorViolatesTheReflectionConstraint) {
+  DesignConfig cfg = Reference();
+  const DesignPoint p{0.048, 0.044, 0.080};
+  auto g = EvaluateConstraints(Evaluate(p, cfg.problem), cfg.problem);
+  ASSERT_EQ(g.size(), 3u);
+  EXPECT_EQ(g[2].name, "camera_reflection_inside_rim");
+  EXPECT_LT(g[2].value, 0);
+  cfg.problem.camera.lens_aperture = 0.5;  // the camera hides the whole mirror
+  g = EvaluateConstraints(Evaluate(p, cfg.problem), cfg.problem);
+  EXPECT_GT(g[2].value, 0);
+}
+
 TEST(DesignMetrics, RadialResolutionIsTheDerivativeOfTheImageRadius) {
   const DesignConfig cfg = Reference();
   const DesignPoint p{0.048, 0.044, 0.080};
