@@ -46,8 +46,9 @@ TEST(DesignMetrics, ALensWiderThanTheMirrorViolatesTheReflectionConstraint) {
   ASSERT_EQ(g.size(), 3u);
   EXPECT_EQ(g[2].name, "camera_reflection_inside_rim");
   EXPECT_LT(g[2].value, 0);
-  cfg.problem.camera.lens_aperture = 0.5;  // the camera hides the whole mirror
-  g = EvaluateConstraints(Evaluate(p, cfg.problem), cfg.problem);
+  // A deep mirror (upper bound -56 deg) with a 30 cm lens: the lens rim is seen above the mirror's rim ray.
+  cfg.problem.camera.lens_aperture = 0.30;
+  g = EvaluateConstraints(Evaluate(DesignPoint{0.020, 0.080, 0.080}, cfg.problem), cfg.problem);
   EXPECT_GT(g[2].value, 0);
 }
 
@@ -74,8 +75,12 @@ TEST(DesignStudy, ArticleAcceptance) {
   const Optimum opt = OptimizeContinuous(cfg.problem, sweep);
   // Every constraint satisfied to 1e-6 (in its unit: degrees, pixels).
   for (const auto& g : opt.constraints) EXPECT_LE(g.value, 1e-6) << g.name;
-  // Both constraints are active at the smallest system.
-  for (const auto& g : opt.constraints) EXPECT_GT(g.value, -1e-3) << g.name << " should be active";
+  // The horizon and rim constraints are both active at the smallest system.
+  ASSERT_GE(opt.constraints.size(), 2u);
+  EXPECT_EQ(opt.constraints[0].name, "upper_bound_below_limit");
+  EXPECT_EQ(opt.constraints[1].name, "rim_inside_image");
+  EXPECT_GT(opt.constraints[0].value, -1e-3);
+  EXPECT_GT(opt.constraints[1].value, -1e-3);
   // No feasible grid point beats it.
   for (size_t i = 0; i < sweep.size(); ++i) {
     if (sweep.violated[i] == 0) {
