@@ -5,6 +5,8 @@ namespace hovs::apps {
 const std::vector<Command>& Commands() {
   static const std::vector<Command> table = {
       {"design", "Mirror design study: sweep (a, b[, d]), constrained optima, report with figures", SetupDesign},
+      {"render", "Render a scene through its catadioptric units, with ground truth (EXR + JSON)", SetupRender},
+      {"dataset", "Render a dataset (a monocular calibration set) with ground truth and a manifest", SetupDataset},
       {"version", "Print the versions of hovs and its libraries", SetupVersion},
   };
   return table;

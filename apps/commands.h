@@ -27,5 +27,7 @@ const std::vector<Command>& Commands();
 // One entry per subcommand, defined in cmd_<name>.cc.
 Runner SetupDesign(CLI::App* sub, const GlobalOptions* global);
 Runner SetupVersion(CLI::App* sub, const GlobalOptions* global);
+Runner SetupRender(CLI::App* sub, const GlobalOptions* global);
+Runner SetupDataset(CLI::App* sub, const GlobalOptions* global);
 
 }  // namespace hovs::apps

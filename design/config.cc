@@ -3,88 +3,26 @@
 #include <yaml-cpp/yaml.h>
 
 #include <cmath>
-#include <set>
 
 #include "core/error.h"
 #include "core/io.h"
+#include "core/yaml_reader.h"
 
 namespace hovs::design {
 namespace {
-
-class Reader {
- public:
-  explicit Reader(std::string source) : source_(std::move(source)) {}
-
-  std::string Where(const YAML::Node& n, const std::string& key) const {
-    std::string w = source_;
-    if (n.Mark().line >= 0) w += ":" + std::to_string(n.Mark().line + 1);
-    return w + " (" + key + ")";
+Range RangeOf(const YamlReader& r, const YAML::Node& n, const std::string& key) {
+  if (n.IsScalar()) {
+    const double v = r.Number(n, key);
+    return {v, v};
   }
-
-  void OnlyKeys(const YAML::Node& map, const std::string& path, const std::set<std::string>& known) const {
-    HOVS_REQUIRE(map.IsMap(), Where(map, path), "expected a mapping");
-    for (const auto& kv : map) {
-      const std::string k = kv.first.as<std::string>();
-      if (!known.count(k)) {
-        std::string list;
-        for (const auto& s : known) list += (list.empty() ? "" : ", ") + s;
-        throw Error(Where(kv.first, path.empty() ? k : path + "." + k),
-                    "unknown key '" + k + "'" + (path.empty() ? "" : " in '" + path + "'") + " (known: " + list + ")");
-      }
-    }
-  }
-
-  double Number(const YAML::Node& n, const std::string& key) const {
-    HOVS_REQUIRE(n.IsScalar(), Where(n, key), "expected a number");
-    double v = 0;
-    try {
-      v = n.as<double>();
-    } catch (const YAML::Exception&) {
-      throw Error(Where(n, key), "expected a number, got '" + n.Scalar() + "'");
-    }
-    HOVS_REQUIRE(std::isfinite(v), Where(n, key), "must be a finite number (got ", n.Scalar(), ")");
-    return v;
-  }
-
-  int Integer(const YAML::Node& n, const std::string& key) const {
-    const double v = Number(n, key);
-    HOVS_REQUIRE(v == std::floor(v) && std::abs(v) < 1e9, Where(n, key), "expected an integer, got ", n.Scalar());
-    return static_cast<int>(v);
-  }
-
-  bool Bool(const YAML::Node& n, const std::string& key) const {
-    try {
-      return n.as<bool>();
-    } catch (const YAML::Exception&) {
-      throw Error(Where(n, key), "expected true or false");
-    }
-  }
-
-  Range RangeOf(const YAML::Node& n, const std::string& key) const {
-    if (n.IsScalar()) {
-      const double v = Number(n, key);
-      return {v, v};
-    }
-    HOVS_REQUIRE(n.IsSequence() && n.size() == 2, Where(n, key), "expected [min, max] or a single value");
-    return {Number(n[0], key + "[0]"), Number(n[1], key + "[1]")};
-  }
-
-  const std::string& source() const { return source_; }
-
- private:
-  std::string source_;
-};
-
+  HOVS_REQUIRE(n.IsSequence() && n.size() == 2, r.Where(n, key), "expected [min, max] or a single value");
+  return {r.Number(n[0], key + "[0]"), r.Number(n[1], key + "[1]")};
+}
 }  // namespace
 
 DesignConfig ParseDesignConfig(const std::string& text, const std::string& source) {
-  YAML::Node root;
-  try {
-    root = YAML::Load(text);
-  } catch (const YAML::ParserException& e) {
-    throw Error(source + ":" + std::to_string(e.mark.line + 1), "not valid YAML: " + e.msg);
-  }
-  Reader r(source);
+  const YamlReader r(source);
+  const YAML::Node root = r.Load(text);
   HOVS_REQUIRE(root.IsMap(), source, "expected a YAML mapping at the top level");
   r.OnlyKeys(root, "", {"name", "camera", "mirror", "mounting_height", "constraints", "objective", "search",
                         "marked_design", "resolution_samples"});
@@ -92,7 +30,7 @@ DesignConfig ParseDesignConfig(const std::string& text, const std::string& sourc
   cfg.source = source;
   cfg.text = text;
   DesignProblem& p = cfg.problem;
-  if (root["name"]) cfg.name = root["name"].as<std::string>();
+  if (root["name"]) cfg.name = r.String(root["name"], "name");
   HOVS_REQUIRE(root["camera"], source, "missing 'camera'");
   {
     const YAML::Node c = root["camera"];
@@ -125,7 +63,7 @@ DesignConfig ParseDesignConfig(const std::string& text, const std::string& sourc
     if (k["max_system_length"]) c.max_system_length = r.Number(k["max_system_length"], "constraints.max_system_length");
   }
   if (root["objective"]) {
-    const std::string o = root["objective"].as<std::string>();
+    const std::string o = r.String(root["objective"], "objective");
     const auto obj = ObjectiveFromString(o);
     HOVS_REQUIRE(obj.has_value(), r.Where(root["objective"], "objective"), "unknown objective '", o,
                  "' (known: smallest_system, widest_field, largest_rim)");
@@ -134,12 +72,12 @@ DesignConfig ParseDesignConfig(const std::string& text, const std::string& sourc
   if (root["search"]) {
     const YAML::Node s = root["search"];
     r.OnlyKeys(s, "search", {"a", "b", "d", "grid", "integer_mm"});
-    if (s["a"]) p.a = r.RangeOf(s["a"], "search.a");
-    if (s["b"]) p.b = r.RangeOf(s["b"], "search.b");
+    if (s["a"]) p.a = RangeOf(r, s["a"], "search.a");
+    if (s["b"]) p.b = RangeOf(r, s["b"], "search.b");
     if (s["d"]) {
       HOVS_REQUIRE(!root["mirror"], r.Where(s["d"], "search.d"),
                    "give the rim diameter either as mirror.rim_diameter (fixed) or as search.d (optimised), not both");
-      p.d = r.RangeOf(s["d"], "search.d");
+      p.d = RangeOf(r, s["d"], "search.d");
     }
     if (s["grid"]) {
       const YAML::Node g = s["grid"];

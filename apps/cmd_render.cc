@@ -1,0 +1,59 @@
+#include <iostream>
+
+#include "apps/commands.h"
+#include "core/error.h"
+#include "design/study.h"
+#include "scenes/dataset.h"
+#include "scenes/scene_config.h"
+
+namespace hovs::apps {
+
+Runner SetupRender(CLI::App* sub, const GlobalOptions* global) {
+  struct Options {
+    std::string scene = "scenes/reference_board.yaml";
+    std::string out = "results/render";
+    int samples = 0;
+    long long seed = -1;
+  };
+  auto o = std::make_shared<Options>();
+  sub->add_option("-s,--scene", o->scene, "scene file (YAML)")->capture_default_str();
+  sub->add_option("-o,--out", o->out, "output folder (replaced atomically)")->capture_default_str();
+  sub->add_option("--samples", o->samples, "samples per pixel (overrides the scene)");
+  sub->add_option("--seed", o->seed, "render seed (overrides the scene)");
+  return [o, global]() {
+    scenes::SceneConfig cfg = scenes::LoadSceneConfig(o->scene);
+    if (o->samples != 0) cfg.render.samples = o->samples;
+    if (o->seed >= 0) cfg.render.seed = static_cast<uint64_t>(o->seed);
+    cfg.render.Check("--samples/--seed");
+    scenes::RenderSceneFolder(cfg, o->out, !global->quiet, design::DesignVersions());
+    if (!global->quiet) std::cout << "hovs render: " << cfg.name << " -> " << o->out << "/dataset.json\n";
+    return 0;
+  };
+}
+
+Runner SetupDataset(CLI::App* sub, const GlobalOptions* global) {
+  struct Options {
+    std::string scene = "scenes/reference_calibration.yaml";
+    std::string out = "results/dataset";
+    scenes::DatasetOptions d;
+    int samples = 0;
+  };
+  auto o = std::make_shared<Options>();
+  sub->add_option("-s,--scene", o->scene, "base scene: units, background (its boards are replaced)")->capture_default_str();
+  sub->add_option("-o,--out", o->out, "output folder (replaced atomically)")->capture_default_str();
+  sub->add_option("--kind", o->d.kind, "mono_calibration")->capture_default_str();
+  sub->add_option("-n,--count", o->d.count, "frames")->capture_default_str();
+  sub->add_option("--seed", o->d.seed, "seed of the board poses")->capture_default_str();
+  sub->add_option("--samples", o->samples, "samples per pixel (overrides the scene)");
+  return [o, global]() {
+    scenes::SceneConfig cfg = scenes::LoadSceneConfig(o->scene);
+    if (o->samples != 0) cfg.render.samples = o->samples;
+    cfg.render.Check("--samples");
+    o->d.progress = !global->quiet;
+    scenes::WriteCalibrationDataset(cfg, o->d, o->out, design::DesignVersions());
+    if (!global->quiet) std::cout << "hovs dataset: " << o->d.count << " frames -> " << o->out << "/dataset.json\n";
+    return 0;
+  };
+}
+
+}  // namespace hovs::apps

@@ -1,0 +1,42 @@
+// Validating access to YAML config files: every error names the file, the line and the key, unknown keys are
+// rejected with the list of known ones, numbers must be finite.
+#pragma once
+
+#include <yaml-cpp/yaml.h>
+
+#include <array>
+#include <set>
+#include <string>
+
+#include "core/types.h"
+
+namespace hovs {
+
+class YamlReader {
+ public:
+  explicit YamlReader(std::string source) : source_(std::move(source)) {}
+
+  // Parses text; throws hovs::Error with the line of a syntax error.
+  YAML::Node Load(const std::string& text) const;
+
+  // "file:line (key)"
+  std::string Where(const YAML::Node& n, const std::string& key) const;
+  void OnlyKeys(const YAML::Node& map, const std::string& path, const std::set<std::string>& known) const;
+  const YAML::Node& Require(const YAML::Node& map, const std::string& path, const std::string& key,
+                            YAML::Node* out) const;
+
+  double Number(const YAML::Node& n, const std::string& key) const;
+  double Positive(const YAML::Node& n, const std::string& key) const;
+  int Integer(const YAML::Node& n, const std::string& key) const;
+  bool Bool(const YAML::Node& n, const std::string& key) const;
+  std::string String(const YAML::Node& n, const std::string& key) const;
+  Vec3d Vector3(const YAML::Node& n, const std::string& key) const;
+  std::array<float, 3> Colour(const YAML::Node& n, const std::string& key) const;  // [r, g, b] in [0, 1]
+
+  const std::string& source() const { return source_; }
+
+ private:
+  std::string source_;
+};
+
+}  // namespace hovs

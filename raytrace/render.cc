@@ -1,0 +1,339 @@
+#include "raytrace/render.h"
+
+#include <OpenImageIO/imageio.h>
+#include <tbb/parallel_for.h>
+#include <unistd.h>
+
+#include <atomic>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <limits>
+#include <random>
+
+#include "core/error.h"
+
+namespace hovs::raytrace {
+
+const char* const GroundTruth::kNames[GroundTruth::kChannels] = {"Z",   "P.X", "P.Y", "P.Z", "N.X", "N.Y",
+                                                                 "N.Z", "id",  "mask", "M.X", "M.Y", "M.Z"};
+
+void SensorOptions::Check(const std::string& where) const {
+  HOVS_REQUIRE(std::isfinite(gain) && gain > 0, where + ".gain", "must be positive");
+  HOVS_REQUIRE(vignetting >= 0 && vignetting < 1, where + ".vignetting", "must be in [0, 1)");
+  HOVS_REQUIRE(std::isfinite(full_well) && full_well >= 0, where + ".full_well", "must be >= 0");
+  HOVS_REQUIRE(std::isfinite(read_noise) && read_noise >= 0, where + ".read_noise", "must be >= 0");
+  HOVS_REQUIRE(read_noise == 0 || full_well > 0, where + ".read_noise", "needs full_well > 0");
+  HOVS_REQUIRE(bit_depth == 8 || bit_depth == 16, where + ".bit_depth", "must be 8 or 16 (got ", bit_depth, ")");
+}
+
+void RenderOptions::Check(const std::string& where) const {
+  HOVS_REQUIRE(samples >= 1 && samples <= 4096, where + ".samples", "must be in 1..4096 (got ", samples, ")");
+  sensor.Check(where + ".sensor");
+}
+
+namespace {
+
+uint64_t SplitMix(uint64_t x) {
+  x += 0x9E3779B97F4A7C15ull;
+  x = (x ^ (x >> 30)) * 0xBF58476D1CE4E5B9ull;
+  x = (x ^ (x >> 27)) * 0x94D049BB133111EBull;
+  return x ^ (x >> 31);
+}
+double Uniform(uint64_t h) { return (h >> 11) * (1.0 / 9007199254740992.0); }
+
+struct RayRequest {
+  Vec3d origin, direction;
+  double tnear = 0;
+  bool valid = false;
+  bool via_mirror = false;
+  Vec3d mirror_point = Vec3d::Zero();  // mirror frame
+};
+
+class RayMaker {
+ public:
+  RayMaker(const RayScene& scene, const ViewCamera& cam) : scene_(scene), cam_(cam) {
+    if (cam.unit >= 0) {
+      HOVS_REQUIRE(cam.unit < static_cast<int>(scene.description().units.size()), "render",
+                   "the scene has no unit ", cam.unit);
+      unit_ = &scene.description().units[cam.unit];
+      world_from_cam_ = unit_->world_from_mirror * unit_->rig.cam_from_mirror.Inverse();
+      viewpoint_ = unit_->world_from_mirror.translation;
+      width_ = unit_->rig.camera.width, height_ = unit_->rig.camera.height;
+    } else {
+      cam.pinhole.Check("render camera");
+      world_from_cam_ = cam.world_from_cam;
+      viewpoint_ = cam.world_from_cam.translation;
+      width_ = cam.pinhole.width, height_ = cam.pinhole.height;
+    }
+    HOVS_REQUIRE(width_ > 0 && height_ > 0, "render", "the camera has no image size");
+  }
+  int width() const { return width_; }
+  int height() const { return height_; }
+  const Vec3d& viewpoint() const { return viewpoint_; }
+
+  RayRequest Make(const Vec2d& uv) const {
+    RayRequest r;
+    Vec3d bearing;
+    if (unit_) {
+      Vec3d M, d;
+      if (unit_->rig.RayFromImg(uv, &M, &d)) {
+        r.valid = r.via_mirror = true;
+        r.mirror_point = M;
+        r.origin = unit_->world_from_mirror * M;
+        r.direction = unit_->world_from_mirror.Rotate(d);
+        r.tnear = 1e-5;  // clears the float rounding of the origin on the sheet (the mirror is convex)
+        return r;
+      }
+      if (!unit_->rig.camera.CamFromImg(uv, &bearing)) return r;
+    } else if (!cam_.pinhole.CamFromImg(uv, &bearing)) {
+      return r;
+    }
+    r.valid = true;
+    r.origin = world_from_cam_.translation;
+    r.direction = world_from_cam_.Rotate(bearing);
+    return r;
+  }
+
+ private:
+  const RayScene& scene_;
+  const ViewCamera& cam_;
+  const CatadioptricUnit* unit_ = nullptr;
+  Rigid3d world_from_cam_;
+  Vec3d viewpoint_ = Vec3d::Zero();
+  int width_ = 0, height_ = 0;
+};
+
+// Collects ray requests and traces them 16 at a time.
+class Batch {
+ public:
+  explicit Batch(const RayScene& scene) : scene_(scene) {}
+  template <class OnHit>
+  void Add(const RayRequest& r, int tag, const OnHit& on_hit) {
+    if (!r.valid) {
+      Hit miss;
+      on_hit(tag, r, miss);
+      return;
+    }
+    reqs_[n_] = r, tags_[n_] = tag, o_[n_] = r.origin, d_[n_] = r.direction, tn_[n_] = r.tnear;
+    if (++n_ == 16) Flush(on_hit);
+  }
+  template <class OnHit>
+  void Flush(const OnHit& on_hit) {
+    if (n_ == 0) return;
+    scene_.Trace16(n_, o_, d_, tn_, hits_);
+    rays_ += n_;
+    for (int i = 0; i < n_; ++i) on_hit(tags_[i], reqs_[i], hits_[i]);
+    n_ = 0;
+  }
+  uint64_t rays() const { return rays_; }
+
+ private:
+  const RayScene& scene_;
+  RayRequest reqs_[16];
+  int tags_[16];
+  Vec3d o_[16], d_[16];
+  double tn_[16];
+  Hit hits_[16];
+  int n_ = 0;
+  uint64_t rays_ = 0;
+};
+
+}  // namespace
+
+Frame Render(const RayScene& scene, const ViewCamera& camera, const RenderOptions& options) {
+  options.Check("render");
+  const auto start = std::chrono::steady_clock::now();
+  const RayMaker maker(scene, camera);
+  Frame f;
+  f.width = maker.width(), f.height = maker.height();
+  const size_t npx = static_cast<size_t>(f.width) * f.height;
+  f.rgb.assign(npx * 3, 0.0f);
+  if (options.ground_truth) f.truth.data.assign(npx * GroundTruth::kChannels, 0.0f);
+
+  const int tile = 16;
+  const int tiles_x = (f.width + tile - 1) / tile, tiles_y = (f.height + tile - 1) / tile;
+  const int ntiles = tiles_x * tiles_y;
+  const int n = options.samples;
+  const int grid = static_cast<int>(std::lround(std::sqrt(n)));
+  const bool stratified = grid * grid == n;
+  const float weight = 1.0f / n;
+  std::atomic<uint64_t> rays{0};
+  std::atomic<int> done{0};
+  const bool progress = options.progress && isatty(STDERR_FILENO);
+  int last_percent = -1;
+
+  tbb::parallel_for(tbb::blocked_range<int>(0, ntiles), [&](const tbb::blocked_range<int>& range) {
+    Batch batch(scene);
+    for (int ti = range.begin(); ti != range.end(); ++ti) {
+      const int x0 = (ti % tiles_x) * tile, y0 = (ti / tiles_x) * tile;
+      const int x1 = std::min(x0 + tile, f.width), y1 = std::min(y0 + tile, f.height);
+      const auto accumulate = [&](int px, const RayRequest&, const Hit& h) {
+        float* c = &f.rgb[3 * static_cast<size_t>(px)];
+        for (int k = 0; k < 3; ++k) c[k] += weight * h.colour[k];
+      };
+      for (int y = y0; y < y1; ++y)
+        for (int x = x0; x < x1; ++x) {
+          const int px = y * f.width + x;
+          for (int s = 0; s < n; ++s) {
+            const uint64_t h = SplitMix(options.seed * 0x100000001B3ull ^ (static_cast<uint64_t>(px) * 4096 + s));
+            const double ju = Uniform(h), jv = Uniform(SplitMix(h));
+            double du, dv;
+            if (stratified) {
+              du = (s % grid + ju) / grid - 0.5;
+              dv = (s / grid + jv) / grid - 0.5;
+            } else {
+              du = ju - 0.5, dv = jv - 0.5;
+            }
+            batch.Add(maker.Make(Vec2d(x + du, y + dv)), px, accumulate);
+          }
+        }
+      batch.Flush(accumulate);
+      if (options.ground_truth) {
+        const auto record = [&](int px, const RayRequest& r, const Hit& h) {
+          float* g = &f.truth.data[static_cast<size_t>(px) * GroundTruth::kChannels];
+          if (!h.hit) {
+            g[0] = std::numeric_limits<float>::infinity();
+            return;
+          }
+          g[0] = static_cast<float>((h.point - maker.viewpoint()).norm());
+          for (int k = 0; k < 3; ++k) g[1 + k] = static_cast<float>(h.point(k)), g[4 + k] = static_cast<float>(h.normal(k));
+          g[7] = static_cast<float>(h.object_id);
+          g[8] = r.via_mirror && h.object_id != kCameraBodyId ? 1.0f : 0.0f;
+          if (r.via_mirror)
+            for (int k = 0; k < 3; ++k) g[9 + k] = static_cast<float>(r.mirror_point(k));
+        };
+        for (int y = y0; y < y1; ++y)
+          for (int x = x0; x < x1; ++x) {
+            const int px = y * f.width + x;
+            const RayRequest r = maker.Make(Vec2d(x, y));
+            if (!r.valid) f.truth.data[static_cast<size_t>(px) * GroundTruth::kChannels] = std::numeric_limits<float>::infinity();
+            batch.Add(r, px, record);
+          }
+        batch.Flush(record);
+      }
+      const int d = ++done;
+      if (progress) {
+        const int percent = static_cast<int>(100.0 * d / ntiles);
+        if (percent != last_percent && percent % 5 == 0) {
+          last_percent = percent;
+          std::fprintf(stderr, "\rrender [%-20s] %3d%%", std::string(percent / 5, '#').c_str(), percent);
+          if (d == ntiles) std::fprintf(stderr, "\n");
+        }
+      }
+    }
+    rays += batch.rays();
+  });
+  f.rays = rays;
+  f.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  return f;
+}
+
+std::vector<float> ApplySensor(const Frame& f, const SensorOptions& s, uint64_t seed, int* channels) {
+  s.Check("sensor");
+  *channels = s.bayer ? 1 : 3;
+  std::vector<float> out(static_cast<size_t>(f.width) * f.height * *channels);
+  // Vignetting: cos^4 falloff reaching 1 - v at the corner.
+  const double k = s.vignetting > 0 ? std::tan(std::acos(std::pow(1.0 - s.vignetting, 0.25))) : 0.0;
+  const double cx = 0.5 * (f.width - 1), cy = 0.5 * (f.height - 1), corner = std::hypot(cx, cy);
+  tbb::parallel_for(0, f.height, [&](int y) {
+    std::mt19937_64 rng(SplitMix(seed ^ (0xA5A5A5A5ull + static_cast<uint64_t>(y))));
+    std::normal_distribution<double> normal(0.0, 1.0);
+    for (int x = 0; x < f.width; ++x) {
+      double vig = 1.0;
+      if (k > 0) {
+        const double c = std::cos(std::atan(k * std::hypot(x - cx, y - cy) / corner));
+        vig = c * c * c * c;
+      }
+      const size_t p = static_cast<size_t>(y) * f.width + x;
+      const auto sensor_value = [&](int ch) {
+        double v = f.rgb[3 * p + ch] * s.gain * vig;
+        if (s.full_well > 0) {
+          const double e = std::max(0.0, v * s.full_well);
+          double noisy = e < 20 ? static_cast<double>(std::poisson_distribution<int>(std::max(e, 1e-12))(rng))
+                                : e + std::sqrt(e) * normal(rng);
+          noisy += s.read_noise * normal(rng);
+          v = noisy / s.full_well;
+        }
+        return static_cast<float>(std::clamp(v, 0.0, 1.0));
+      };
+      if (s.bayer) {
+        const int ch = (y % 2 == 0) ? (x % 2 == 0 ? 0 : 1) : (x % 2 == 0 ? 1 : 2);  // RGGB
+        out[p] = sensor_value(ch);
+      } else {
+        for (int ch = 0; ch < 3; ++ch) out[3 * p + ch] = sensor_value(ch);
+      }
+    }
+  });
+  return out;
+}
+
+namespace {
+std::filesystem::path TempSibling(const std::filesystem::path& path) {
+  const auto parent = path.has_parent_path() ? path.parent_path() : std::filesystem::path(".");
+  return parent / ("." + path.stem().string() + ".tmp-" + std::to_string(::getpid()) + path.extension().string());
+}
+
+void Publish(const std::filesystem::path& tmp, const std::filesystem::path& path) {
+  std::error_code ec;
+  std::filesystem::rename(tmp, path, ec);
+  if (ec) {
+    std::filesystem::remove(tmp, ec);
+    throw Error(path.string(), "cannot rename into place");
+  }
+}
+}  // namespace
+
+void WriteImage(const std::filesystem::path& path, int width, int height, int channels, const std::vector<float>& values,
+                int bit_depth) {
+  HOVS_REQUIRE(values.size() == static_cast<size_t>(width) * height * channels, path.string(), "image buffer size mismatch");
+  if (path.has_parent_path()) std::filesystem::create_directories(path.parent_path());
+  const auto tmp = TempSibling(path);
+  auto out = OIIO::ImageOutput::create(path.string());
+  HOVS_REQUIRE(out != nullptr, path.string(), "no image writer for this extension: ", OIIO::geterror());
+  OIIO::ImageSpec spec(width, height, channels, bit_depth == 16 ? OIIO::TypeDesc::UINT16 : OIIO::TypeDesc::UINT8);
+  spec.attribute("Software", "hovs");
+  const bool ok = out->open(tmp.string(), spec) && out->write_image(OIIO::TypeDesc::FLOAT, values.data()) && out->close();
+  if (!ok) {
+    std::error_code ec;
+    std::filesystem::remove(tmp, ec);
+    throw Error(path.string(), "cannot write image: " + out->geterror());
+  }
+  Publish(tmp, path);
+}
+
+void WriteGroundTruthExr(const std::filesystem::path& path, const Frame& frame,
+                         const std::vector<std::pair<std::string, std::string>>& metadata) {
+  HOVS_REQUIRE(!frame.truth.data.empty(), path.string(), "the frame has no ground truth");
+  if (path.has_parent_path()) std::filesystem::create_directories(path.parent_path());
+  const auto tmp = TempSibling(path);
+  auto out = OIIO::ImageOutput::create("exr");
+  HOVS_REQUIRE(out != nullptr, path.string(), "no OpenEXR writer: ", OIIO::geterror());
+  OIIO::ImageSpec spec(frame.width, frame.height, GroundTruth::kChannels, OIIO::TypeDesc::FLOAT);
+  spec.channelnames.assign(GroundTruth::kNames, GroundTruth::kNames + GroundTruth::kChannels);
+  spec.attribute("compression", "zip");
+  spec.attribute("Software", "hovs");
+  for (const auto& [k, v] : metadata) spec.attribute("hovs:" + k, v);
+  const bool ok = out->open(tmp.string(), spec) && out->write_image(OIIO::TypeDesc::FLOAT, frame.truth.data.data()) &&
+                  out->close();
+  if (!ok) {
+    std::error_code ec;
+    std::filesystem::remove(tmp, ec);
+    throw Error(path.string(), "cannot write OpenEXR: " + out->geterror());
+  }
+  Publish(tmp, path);
+}
+
+std::vector<float> ReadImage(const std::filesystem::path& path, int* width, int* height, int* channels) {
+  auto in = OIIO::ImageInput::open(path.string());
+  HOVS_REQUIRE(in != nullptr, path.string(), "cannot read image: ", OIIO::geterror());
+  const OIIO::ImageSpec& spec = in->spec();
+  *width = spec.width, *height = spec.height, *channels = spec.nchannels;
+  std::vector<float> data(static_cast<size_t>(spec.width) * spec.height * spec.nchannels);
+  const bool ok = in->read_image(0, 0, 0, spec.nchannels, OIIO::TypeDesc::FLOAT, data.data());
+  in->close();
+  HOVS_REQUIRE(ok, path.string(), "cannot decode image");
+  return data;
+}
+
+}  // namespace hovs::raytrace

@@ -1,0 +1,81 @@
+// Rendering: stratified supersampling with the core's pixel convention, ground truth at pixel centres,
+// multithreaded over tiles (TBB) with 16-ray packets, and a sensor model (vignetting, seeded shot and read
+// noise, RGGB Bayer mosaic, 8- or 16-bit output).
+#pragma once
+
+#include <cstdint>
+#include <filesystem>
+#include <string>
+#include <vector>
+
+#include "raytrace/scene.h"
+
+namespace hovs::raytrace {
+
+struct SensorOptions {
+  double gain = 1.0;             // linear scale before quantisation
+  double vignetting = 0.0;       // 0: none; v: brightness (1 - v) at the image corner, cos^4-shaped
+  double full_well = 0.0;        // electrons at white; > 0 enables shot noise
+  double read_noise = 0.0;       // electrons (standard deviation); needs full_well > 0
+  bool bayer = false;            // write one RGGB mosaic channel instead of RGB
+  int bit_depth = 8;             // 8 or 16
+  void Check(const std::string& where) const;
+};
+
+struct RenderOptions {
+  int samples = 4;               // per pixel; a perfect square gives a stratified grid, otherwise jittered
+  uint64_t seed = 1;             // sample jitter and sensor noise
+  bool ground_truth = true;      // per-pixel ground truth from the pixel-centre ray
+  bool progress = false;         // progress bar on stderr
+  SensorOptions sensor;
+  void Check(const std::string& where) const;
+};
+
+// What looks: a catadioptric unit of the scene, or a plain pinhole camera anywhere.
+struct ViewCamera {
+  int unit = 0;                       // >= 0: the scene's unit
+  PinholeCamera<double> pinhole;      // used when unit < 0
+  Rigid3d world_from_cam;             // used when unit < 0
+  static ViewCamera Unit(int u) { return ViewCamera{u, {}, {}}; }
+  static ViewCamera Pinhole(const PinholeCamera<double>& cam, const Rigid3d& world_from_cam) {
+    return ViewCamera{-1, cam, world_from_cam};
+  }
+};
+
+// Ground truth channels (pixel centres). Frames and meaning:
+//   Z       range (m) from the unit's viewpoint F1 (pinhole: the camera centre) to the surface seen; +inf: sky
+//   P.X/Y/Z world point seen (world frame); 0 for sky
+//   N.X/Y/Z surface normal (world frame), facing the viewer; 0 for sky
+//   id      object id (0 sky, 1 mirror mount, 2 camera body, 3 mirror back, 4.. scene objects in order)
+//   mask    1 where the pixel's ray is reflected by the mirror (inside the rim) and does not see the camera
+//   M.X/Y/Z the mirror reflection point in the unit's mirror frame (0 where mask is 0 and the rim is missed)
+struct GroundTruth {
+  static constexpr int kChannels = 12;
+  static const char* const kNames[kChannels];
+  std::vector<float> data;  // interleaved, kChannels per pixel
+};
+
+struct Frame {
+  int width = 0, height = 0;
+  std::vector<float> rgb;   // linear radiance, 3 per pixel, before the sensor model
+  GroundTruth truth;        // empty if not requested
+  uint64_t rays = 0;        // rays traced through Embree
+  double seconds = 0;
+};
+
+Frame Render(const RayScene& scene, const ViewCamera& camera, const RenderOptions& options);
+
+// The sensor model applied to a frame: 3 channels (or 1 for Bayer), values in [0, 1] before quantisation.
+std::vector<float> ApplySensor(const Frame& frame, const SensorOptions& sensor, uint64_t seed, int* channels);
+
+// Writers, atomic (temporary file + rename). PNG for 8/16-bit images; OpenEXR (float) for ground truth,
+// with `metadata` stored as string attributes.
+void WriteImage(const std::filesystem::path& path, int width, int height, int channels, const std::vector<float>& values,
+                int bit_depth);
+void WriteGroundTruthExr(const std::filesystem::path& path, const Frame& frame,
+                         const std::vector<std::pair<std::string, std::string>>& metadata);
+
+// Reads an image (any OpenImageIO format) as float channels. Throws hovs::Error naming the file.
+std::vector<float> ReadImage(const std::filesystem::path& path, int* width, int* height, int* channels);
+
+}  // namespace hovs::raytrace

@@ -1,0 +1,370 @@
+#include "raytrace/scene.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+#include "core/error.h"
+
+namespace hovs::raytrace {
+
+Rgb Sky::Eval(const Vec3d& d) const {
+  const double z = std::clamp(d.z(), -1.0, 1.0);
+  const auto mix = [](const Rgb& a, const Rgb& b, double t) {
+    const float f = static_cast<float>(t);
+    return Rgb{a[0] + f * (b[0] - a[0]), a[1] + f * (b[1] - a[1]), a[2] + f * (b[2] - a[2])};
+  };
+  return z >= 0 ? mix(horizon, zenith, std::sqrt(z)) : mix(horizon, nadir, std::sqrt(-z));
+}
+
+// Analytic shapes as Embree user geometry. Intersections run in double in the shape's own frame.
+struct RayScene::UserGeometry {
+  enum class Kind { kMirror, kAnnulus } kind = Kind::kMirror;
+  int object_id = kMirrorId;
+  int unit = -1;
+  Rigid3d world_from_local, local_from_world;
+  HyperboloidMirror<double> mirror;  // kMirror: local frame = mirror frame
+  double r_inner = 0, r_outer = 0;   // kAnnulus: disc in local z = 0
+  Rgb colour = {0, 0, 0}, back_colour = {0, 0, 0};
+
+  // Ray in world coordinates; t along the given (not necessarily unit) direction.
+  bool Intersect(const Vec3d& o_w, const Vec3d& d_w, double tnear, double tfar, double* t, Vec3d* n_w) const {
+    const Vec3d o = local_from_world * o_w, d = local_from_world.Rotate(d_w);
+    if (kind == Kind::kMirror) {
+      double tt = 0;
+      if (!mirror.IntersectSheet(o, d, &tt, tnear) || !(tt < tfar)) return false;
+      const Vec3d p = o + tt * d;
+      if (!mirror.WithinRim(p)) return false;
+      *t = tt;
+      if (n_w) *n_w = world_from_local.Rotate(mirror.Normal(p));
+      return true;
+    }
+    if (d.z() == 0) return false;
+    const double tt = -o.z() / d.z();
+    if (!(tt > tnear && tt < tfar)) return false;
+    const Vec3d p = o + tt * d;
+    const double r2 = p.x() * p.x() + p.y() * p.y();
+    if (r2 < r_inner * r_inner || r2 > r_outer * r_outer) return false;
+    *t = tt;
+    if (n_w) *n_w = world_from_local.Rotate(Vec3d(0, 0, 1));
+    return true;
+  }
+
+  void Bounds(RTCBounds* b) const {
+    Vec3d lo_l, hi_l;
+    if (kind == Kind::kMirror) {
+      const double R = mirror.RimRadius();
+      lo_l = Vec3d(-R, -R, mirror.VertexZ());
+      hi_l = Vec3d(R, R, mirror.RimZ());
+    } else {
+      lo_l = Vec3d(-r_outer, -r_outer, 0);
+      hi_l = Vec3d(r_outer, r_outer, 0);
+    }
+    Vec3d lo = Vec3d::Constant(HUGE_VAL), hi = Vec3d::Constant(-HUGE_VAL);
+    for (int k = 0; k < 8; ++k) {
+      const Vec3d c((k & 1) ? hi_l.x() : lo_l.x(), (k & 2) ? hi_l.y() : lo_l.y(), (k & 4) ? hi_l.z() : lo_l.z());
+      const Vec3d w = world_from_local * c;
+      lo = lo.cwiseMin(w), hi = hi.cwiseMax(w);
+    }
+    const double pad = 1e-6;
+    b->lower_x = static_cast<float>(lo.x() - pad), b->lower_y = static_cast<float>(lo.y() - pad);
+    b->lower_z = static_cast<float>(lo.z() - pad);
+    b->upper_x = static_cast<float>(hi.x() + pad), b->upper_y = static_cast<float>(hi.y() + pad);
+    b->upper_z = static_cast<float>(hi.z() + pad);
+  }
+};
+
+namespace {
+
+using UG = RayScene::UserGeometry;
+
+void UserBounds(const RTCBoundsFunctionArguments* args) {
+  static_cast<const UG*>(args->geometryUserPtr)->Bounds(args->bounds_o);
+}
+
+void UserIntersect(const RTCIntersectFunctionNArguments* args) {
+  const auto* g = static_cast<const UG*>(args->geometryUserPtr);
+  const unsigned N = args->N;
+  RTCRayN* ray = RTCRayHitN_RayN(args->rayhit, N);
+  RTCHitN* hit = RTCRayHitN_HitN(args->rayhit, N);
+  for (unsigned i = 0; i < N; ++i) {
+    if (!args->valid[i]) continue;
+    const Vec3d o(RTCRayN_org_x(ray, N, i), RTCRayN_org_y(ray, N, i), RTCRayN_org_z(ray, N, i));
+    const Vec3d d(RTCRayN_dir_x(ray, N, i), RTCRayN_dir_y(ray, N, i), RTCRayN_dir_z(ray, N, i));
+    double t = 0;
+    Vec3d n;
+    if (!g->Intersect(o, d, RTCRayN_tnear(ray, N, i), RTCRayN_tfar(ray, N, i), &t, &n)) continue;
+    RTCRayN_tfar(ray, N, i) = static_cast<float>(t);
+    RTCHitN_Ng_x(hit, N, i) = static_cast<float>(n.x());
+    RTCHitN_Ng_y(hit, N, i) = static_cast<float>(n.y());
+    RTCHitN_Ng_z(hit, N, i) = static_cast<float>(n.z());
+    RTCHitN_u(hit, N, i) = 0;
+    RTCHitN_v(hit, N, i) = 0;
+    RTCHitN_primID(hit, N, i) = args->primID;
+    RTCHitN_geomID(hit, N, i) = args->geomID;
+    RTCHitN_instID(hit, N, i, 0) = args->context->instID[0];
+  }
+}
+
+void UserOccluded(const RTCOccludedFunctionNArguments* args) {
+  const auto* g = static_cast<const UG*>(args->geometryUserPtr);
+  const unsigned N = args->N;
+  RTCRayN* ray = args->ray;
+  for (unsigned i = 0; i < N; ++i) {
+    if (!args->valid[i]) continue;
+    const Vec3d o(RTCRayN_org_x(ray, N, i), RTCRayN_org_y(ray, N, i), RTCRayN_org_z(ray, N, i));
+    const Vec3d d(RTCRayN_dir_x(ray, N, i), RTCRayN_dir_y(ray, N, i), RTCRayN_dir_z(ray, N, i));
+    double t = 0;
+    if (g->Intersect(o, d, RTCRayN_tnear(ray, N, i), RTCRayN_tfar(ray, N, i), &t, nullptr))
+      RTCRayN_tfar(ray, N, i) = -std::numeric_limits<float>::infinity();
+  }
+}
+
+// Radius of the mount ring that hides everything the camera sees past the rim.
+double DefaultMountRadius(const CatadioptricUnit& u) {
+  const auto& cam = u.rig.camera;
+  const double half_w = 0.5 * cam.width / cam.fx, half_h = 0.5 * cam.height / cam.fy;
+  const double tan_diag = std::hypot(half_w, half_h);
+  const double height = u.rig.mirror.RimZ() + 2 * u.rig.mirror.c();
+  return std::max(u.rig.mirror.RimRadius() + 0.015, 1.1 * height * tan_diag + 0.01);
+}
+
+}  // namespace
+
+RayScene::RayScene(SceneDescription description) : desc_(std::move(description)) {
+  device_ = rtcNewDevice(nullptr);
+  HOVS_REQUIRE(device_ != nullptr, "embree", "cannot create a device (error ", static_cast<int>(rtcGetDeviceError(nullptr)), ")");
+  scene_ = rtcNewScene(device_);
+  rtcSetSceneBuildQuality(scene_, RTC_BUILD_QUALITY_HIGH);
+
+  // Camera bodies of the units become rectangles (a box behind the lens face).
+  for (size_t ui = 0; ui < desc_.units.size(); ++ui) {
+    const CatadioptricUnit& u = desc_.units[ui];
+    u.rig.Check("unit " + u.name);
+    const Rigid3d world_from_cam = u.world_from_mirror * u.rig.cam_from_mirror.Inverse();
+    const double half = 0.7 * u.rig.occluder_radius, len = u.body_length;
+    Texture body;
+    body.colour_a = u.body_colour;
+    // Faces of the box: centres and orientations in the camera frame (z forward; the box spans z in [-len, 0]).
+    struct Face {
+      Vec3d centre, axis_angle;
+      double w, h;
+    };
+    const double pi = M_PI;
+    const Face faces[] = {{Vec3d(half, 0, -len / 2), Vec3d(0, pi / 2, 0), len, 2 * half},
+                          {Vec3d(-half, 0, -len / 2), Vec3d(0, -pi / 2, 0), len, 2 * half},
+                          {Vec3d(0, half, -len / 2), Vec3d(-pi / 2, 0, 0), 2 * half, len},
+                          {Vec3d(0, -half, -len / 2), Vec3d(pi / 2, 0, 0), 2 * half, len},
+                          {Vec3d(0, 0, -len), Vec3d(pi, 0, 0), 2 * half, 2 * half}};
+    for (const Face& f : faces) {
+      Rect r;
+      r.object_id = kCameraBodyId;
+      r.world_from_rect = world_from_cam * Rigid3d(QuaternionFromAngleAxis<double>(f.axis_angle), f.centre);
+      r.width = f.w, r.height = f.h;
+      r.front = body;
+      r.back = u.body_colour;
+      r.double_sided = true;
+      desc_.rects.push_back(r);
+    }
+  }
+
+  // All rectangles: one quad mesh; primID = index into rects.
+  if (!desc_.rects.empty()) {
+    RTCGeometry g = rtcNewGeometry(device_, RTC_GEOMETRY_TYPE_QUAD);
+    auto* v = static_cast<float*>(rtcSetNewGeometryBuffer(g, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3,
+                                                          3 * sizeof(float), 4 * desc_.rects.size()));
+    auto* idx = static_cast<unsigned*>(rtcSetNewGeometryBuffer(g, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT4,
+                                                               4 * sizeof(unsigned), desc_.rects.size()));
+    for (size_t i = 0; i < desc_.rects.size(); ++i) {
+      const Rect& r = desc_.rects[i];
+      HOVS_REQUIRE(r.width > 0 && r.height > 0 && std::isfinite(r.width) && std::isfinite(r.height), "scene object",
+                   "rectangle ", i, " has a non-positive size");
+      const double hw = 0.5 * r.width, hh = 0.5 * r.height;
+      const Vec3d corners[4] = {Vec3d(-hw, -hh, 0), Vec3d(hw, -hh, 0), Vec3d(hw, hh, 0), Vec3d(-hw, hh, 0)};
+      for (int k = 0; k < 4; ++k) {
+        const Vec3d w = r.world_from_rect * corners[k];
+        for (int c = 0; c < 3; ++c) v[(4 * i + k) * 3 + c] = static_cast<float>(w(c));
+        idx[4 * i + k] = static_cast<unsigned>(4 * i + k);
+      }
+    }
+    rtcCommitGeometry(g);
+    rect_geom_ = rtcAttachGeometry(scene_, g);
+    rtcReleaseGeometry(g);
+  }
+
+  const auto attach = [&](std::unique_ptr<UserGeometry> ug) {
+    RTCGeometry g = rtcNewGeometry(device_, RTC_GEOMETRY_TYPE_USER);
+    rtcSetGeometryUserPrimitiveCount(g, 1);
+    rtcSetGeometryUserData(g, ug.get());
+    rtcSetGeometryBoundsFunction(g, UserBounds, nullptr);
+    rtcSetGeometryIntersectFunction(g, UserIntersect);
+    rtcSetGeometryOccludedFunction(g, UserOccluded);
+    rtcCommitGeometry(g);
+    const unsigned id = rtcAttachGeometry(scene_, g);
+    rtcReleaseGeometry(g);
+    if (geom_to_user_.size() <= id) geom_to_user_.resize(id + 1, -1);
+    geom_to_user_[id] = static_cast<int>(user_.size());
+    user_.push_back(std::move(ug));
+  };
+  for (size_t ui = 0; ui < desc_.units.size(); ++ui) {
+    CatadioptricUnit& u = desc_.units[ui];
+    if (u.mount_outer_radius <= 0) u.mount_outer_radius = DefaultMountRadius(u);
+    auto mirror = std::make_unique<UserGeometry>();
+    mirror->kind = UserGeometry::Kind::kMirror;
+    mirror->object_id = kMirrorId;
+    mirror->unit = static_cast<int>(ui);
+    mirror->mirror = u.rig.mirror;
+    mirror->world_from_local = u.world_from_mirror;
+    mirror->local_from_world = u.world_from_mirror.Inverse();
+    mirror->back_colour = u.mirror_back_colour;
+    attach(std::move(mirror));
+    auto mount = std::make_unique<UserGeometry>();
+    mount->kind = UserGeometry::Kind::kAnnulus;
+    mount->object_id = kMountId;
+    mount->unit = static_cast<int>(ui);
+    mount->r_inner = u.rig.mirror.RimRadius();
+    mount->r_outer = u.mount_outer_radius;
+    mount->world_from_local = u.world_from_mirror * Rigid3d::Translation(Vec3d(0, 0, u.rig.mirror.RimZ()));
+    mount->local_from_world = mount->world_from_local.Inverse();
+    mount->colour = mount->back_colour = u.mount_colour;
+    attach(std::move(mount));
+    auto lens = std::make_unique<UserGeometry>();
+    lens->kind = UserGeometry::Kind::kAnnulus;
+    lens->object_id = kCameraBodyId;
+    lens->unit = static_cast<int>(ui);
+    lens->r_inner = 0;
+    lens->r_outer = u.rig.occluder_radius;
+    lens->world_from_local = u.world_from_mirror * u.rig.cam_from_mirror.Inverse();
+    lens->local_from_world = lens->world_from_local.Inverse();
+    lens->colour = lens->back_colour = u.body_colour;
+    attach(std::move(lens));
+  }
+  rtcCommitScene(scene_);
+}
+
+RayScene::~RayScene() {
+  if (scene_) rtcReleaseScene(scene_);
+  if (device_) rtcReleaseDevice(device_);
+}
+
+void RayScene::Shade(const Vec3d& o, const Vec3d& d, unsigned geom_id, unsigned prim_id, Hit* h) const {
+  if (geom_id == rect_geom_) {
+    const Rect& r = desc_.rects[prim_id];
+    const Vec3d n = r.world_from_rect.Rotate(Vec3d(0, 0, 1));
+    const Vec3d c = r.world_from_rect.translation;
+    const double denom = d.dot(n);
+    if (denom == 0) return;
+    const double t = (c - o).dot(n) / denom;
+    const Vec3d X = o + t * d;
+    const Vec3d local = r.world_from_rect.rotation.conjugate() * (X - c);
+    const bool front = denom < 0;
+    h->hit = true;
+    h->object_id = r.object_id;
+    h->t = t;
+    h->point = X;
+    h->normal = front ? n : Vec3d(-n);
+    h->colour = front || r.double_sided ? r.front.Eval(local.x(), local.y()) : r.back;
+    return;
+  }
+  if (geom_id >= geom_to_user_.size() || geom_to_user_[geom_id] < 0) return;
+  const UserGeometry& g = *user_[geom_to_user_[geom_id]];
+  double t = 0;
+  Vec3d n;
+  if (!g.Intersect(o, d, 0.0, HUGE_VAL, &t, &n)) {
+    // Embree's float ray and the double ray disagree at a silhouette: take the float distance.
+    n = Vec3d(0, 0, 1);
+  }
+  h->hit = true;
+  h->object_id = g.object_id;
+  h->unit = g.unit;
+  h->t = t;
+  h->point = o + t * d;
+  const bool front = d.dot(n) < 0;
+  h->normal = front ? n : Vec3d(-n);
+  h->colour = g.kind == UserGeometry::Kind::kMirror ? g.back_colour : g.colour;
+  (void)prim_id;
+}
+
+void RayScene::Trace16(int count, const Vec3d* o, const Vec3d* d, const double* tnear, Hit* hits) const {
+  alignas(64) RTCRayHit16 rh;
+  alignas(64) int valid[16];
+  for (int i = 0; i < 16; ++i) {
+    valid[i] = i < count ? -1 : 0;
+    const int k = i < count ? i : 0;
+    rh.ray.org_x[i] = static_cast<float>(o[k].x());
+    rh.ray.org_y[i] = static_cast<float>(o[k].y());
+    rh.ray.org_z[i] = static_cast<float>(o[k].z());
+    rh.ray.dir_x[i] = static_cast<float>(d[k].x());
+    rh.ray.dir_y[i] = static_cast<float>(d[k].y());
+    rh.ray.dir_z[i] = static_cast<float>(d[k].z());
+    rh.ray.tnear[i] = static_cast<float>(tnear ? tnear[k] : 0.0);
+    rh.ray.tfar[i] = std::numeric_limits<float>::infinity();
+    rh.ray.mask[i] = 0xFFFFFFFFu;
+    rh.ray.flags[i] = 0;
+    rh.ray.time[i] = 0;
+    rh.ray.id[i] = static_cast<unsigned>(i);
+    rh.hit.geomID[i] = RTC_INVALID_GEOMETRY_ID;
+    rh.hit.instID[0][i] = RTC_INVALID_GEOMETRY_ID;
+  }
+  RTCIntersectContext ctx;
+  rtcInitIntersectContext(&ctx);
+  rtcIntersect16(valid, scene_, &ctx, &rh);
+  for (int i = 0; i < count; ++i) {
+    Hit& h = hits[i];
+    h = Hit();
+    if (rh.hit.geomID[i] == RTC_INVALID_GEOMETRY_ID) {
+      h.colour = desc_.sky.Eval(d[i]);
+      continue;
+    }
+    Shade(o[i], d[i], rh.hit.geomID[i], rh.hit.primID[i], &h);
+  }
+}
+
+Hit RayScene::Trace(const Vec3d& origin, const Vec3d& direction, double tnear) const {
+  Hit h;
+  Trace16(1, &origin, &direction, &tnear, &h);
+  return h;
+}
+
+bool RayScene::Occluded(const Vec3d& a, const Vec3d& b, double eps) const {
+  const Vec3d seg = b - a;
+  const double len = seg.norm();
+  if (len <= 2 * eps) return false;
+  const Vec3d d = seg / len;
+  RTCRay ray;
+  ray.org_x = static_cast<float>(a.x()), ray.org_y = static_cast<float>(a.y()), ray.org_z = static_cast<float>(a.z());
+  ray.dir_x = static_cast<float>(d.x()), ray.dir_y = static_cast<float>(d.y()), ray.dir_z = static_cast<float>(d.z());
+  ray.tnear = static_cast<float>(eps);
+  ray.tfar = static_cast<float>(len - eps);
+  ray.mask = 0xFFFFFFFFu;
+  ray.flags = 0;
+  ray.time = 0;
+  ray.id = 0;
+  RTCIntersectContext ctx;
+  rtcInitIntersectContext(&ctx);
+  rtcOccluded1(scene_, &ctx, &ray);
+  return ray.tfar < 0;
+}
+
+void RayScene::IntersectOnly16(int count, const Vec3d* o, const Vec3d* d, unsigned* geom_ids) const {
+  alignas(64) RTCRayHit16 rh;
+  alignas(64) int valid[16];
+  for (int i = 0; i < 16; ++i) {
+    valid[i] = i < count ? -1 : 0;
+    const int k = i < count ? i : 0;
+    rh.ray.org_x[i] = static_cast<float>(o[k].x()), rh.ray.org_y[i] = static_cast<float>(o[k].y());
+    rh.ray.org_z[i] = static_cast<float>(o[k].z());
+    rh.ray.dir_x[i] = static_cast<float>(d[k].x()), rh.ray.dir_y[i] = static_cast<float>(d[k].y());
+    rh.ray.dir_z[i] = static_cast<float>(d[k].z());
+    rh.ray.tnear[i] = 0, rh.ray.tfar[i] = std::numeric_limits<float>::infinity();
+    rh.ray.mask[i] = 0xFFFFFFFFu, rh.ray.flags[i] = 0, rh.ray.time[i] = 0, rh.ray.id[i] = 0;
+    rh.hit.geomID[i] = RTC_INVALID_GEOMETRY_ID;
+    rh.hit.instID[0][i] = RTC_INVALID_GEOMETRY_ID;
+  }
+  RTCIntersectContext ctx;
+  rtcInitIntersectContext(&ctx);
+  rtcIntersect16(valid, scene_, &ctx, &rh);
+  for (int i = 0; i < count; ++i) geom_ids[i] = rh.hit.geomID[i];
+}
+
+}  // namespace hovs::raytrace

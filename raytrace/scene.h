@@ -1,0 +1,107 @@
+// The renderer's world: textured rectangles (boards, walls, boxes, the ground), catadioptric units (the exact
+// mirror of core/ as Embree user geometry with analytic double-precision intersection and normals, the
+// mirror's mount ring, the camera's lens face and body as occluders), and a sky. World frame: z up, metres.
+#pragma once
+
+#include <embree3/rtcore.h>
+
+#include <memory>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "core/catadioptric.h"
+#include "core/rigid.h"
+#include "raytrace/texture.h"
+
+namespace hovs::raytrace {
+
+// Object ids written to the ground truth. Scene objects number from kFirstObjectId in the order given.
+enum ObjectId : int { kSkyId = 0, kMountId = 1, kCameraBodyId = 2, kMirrorId = 3, kFirstObjectId = 4 };
+
+// A rectangle: centred at world_from_rect's origin, spanning x in [-w/2, w/2], y in [-h/2, h/2]; its front
+// face looks along +z of its frame. Texture coordinates (s, t) are (x, y) in metres.
+struct Rect {
+  int object_id = kFirstObjectId;
+  Rigid3d world_from_rect;
+  double width = 1, height = 1;
+  Texture front;
+  Rgb back = {0.55f, 0.55f, 0.57f};  // aluminium
+  bool double_sided = false;         // back shows the front texture mirrored
+};
+
+struct CatadioptricUnit {
+  std::string name = "unit0";
+  CatadioptricCamera<double> rig;  // mirror-frame model: mirror, camera, cam_from_mirror, occluder radius
+  Rigid3d world_from_mirror;       // places the viewpoint F1 in the world
+  double mount_outer_radius = 0;   // the mount ring around the rim (0: rim diameter / 2 + 15 mm)
+  double body_length = 0.12;       // camera body behind the lens face
+  Rgb mount_colour = {0.03f, 0.03f, 0.035f};
+  Rgb body_colour = {0.08f, 0.08f, 0.09f};
+  Rgb mirror_back_colour = {0.25f, 0.25f, 0.27f};
+};
+
+struct Sky {
+  Rgb zenith = {0.35f, 0.55f, 0.9f};
+  Rgb horizon = {0.85f, 0.9f, 0.95f};
+  Rgb nadir = {0.3f, 0.28f, 0.25f};
+  Rgb Eval(const Vec3d& direction_world) const;
+};
+
+struct SceneObjectInfo {
+  int id;
+  std::string name, type;
+};
+
+struct SceneDescription {
+  std::vector<Rect> rects;
+  std::vector<CatadioptricUnit> units;
+  std::vector<SceneObjectInfo> objects;  // id -> name, for the ground truth
+  Sky sky;
+};
+
+// A hit of a double-precision ray, shaded.
+struct Hit {
+  bool hit = false;
+  int object_id = kSkyId;
+  double t = 0;       // along the ray (unit direction)
+  Vec3d point = Vec3d::Zero();
+  Vec3d normal = Vec3d::Zero();  // world, facing the ray
+  Rgb colour = {0, 0, 0};
+  int unit = -1;      // for mirror / mount / body hits: which unit
+};
+
+// The Embree scene built from a description. Thread-safe for tracing once built.
+class RayScene {
+ public:
+  explicit RayScene(SceneDescription description);
+  ~RayScene();
+  RayScene(const RayScene&) = delete;
+  RayScene& operator=(const RayScene&) = delete;
+
+  const SceneDescription& description() const { return desc_; }
+
+  // Traces up to 16 rays as one packet (rtcIntersect16). Directions must be unit vectors. Hits are
+  // recomputed in double on the analytic surface that Embree found, then shaded.
+  void Trace16(int count, const Vec3d* origins, const Vec3d* directions, const double* tnear, Hit* hits) const;
+  Hit Trace(const Vec3d& origin, const Vec3d& direction, double tnear = 0) const;
+  // True if anything blocks the open segment from a to b (rtcOccluded1).
+  bool Occluded(const Vec3d& a, const Vec3d& b, double eps = 1e-7) const;
+
+  // Raw Embree throughput reference: rtcIntersect16 only, no shading (for the benchmark's comparison).
+  void IntersectOnly16(int count, const Vec3d* origins, const Vec3d* directions, unsigned* geom_ids) const;
+
+  struct UserGeometry;  // mirror, annulus (mount, lens face): analytic shapes, defined in scene.cc
+
+ private:
+  void Shade(const Vec3d& o, const Vec3d& d, unsigned geom_id, unsigned prim_id, Hit* hit) const;
+
+  SceneDescription desc_;
+  RTCDevice device_ = nullptr;
+  RTCScene scene_ = nullptr;
+  unsigned rect_geom_ = RTC_INVALID_GEOMETRY_ID;
+  std::vector<std::unique_ptr<UserGeometry>> user_;  // index = user geometry slot
+  std::vector<int> geom_to_user_;                    // geomID -> slot in user_, or -1
+};
+
+}  // namespace hovs::raytrace

@@ -1,0 +1,157 @@
+#include "scenes/ground_truth.h"
+
+#include "core/error.h"
+#include "raytrace/render.h"
+
+namespace hovs::scenes {
+
+std::vector<CornerTruth> BoardCornerTruth(const raytrace::RayScene& scene, const BoardInstance& board, int unit) {
+  const auto& units = scene.description().units;
+  HOVS_REQUIRE(unit >= 0 && unit < static_cast<int>(units.size()), "ground truth", "no unit ", unit);
+  const raytrace::CatadioptricUnit& u = units[unit];
+  const Rigid3d mirror_from_world = u.world_from_mirror.Inverse();
+  const Vec3d normal = board.world_from_board.Rotate(Vec3d(0, 0, 1));
+  std::vector<CornerTruth> out;
+  for (const auto& [id, xy] : board.spec.Corners()) {
+    CornerTruth c;
+    c.id = id;
+    c.board_xy = xy;
+    c.world = board.world_from_board * Vec3d(xy.x(), xy.y(), 0);
+    const Vec3d X = mirror_from_world * c.world;
+    Vec2d uv;
+    Vec3d M;
+    const ProjectionStatus s = u.rig.ImgFromMirror(X, &uv, &M);
+    if (s != ProjectionStatus::kOk) {
+      c.status = ToString(s);
+      out.push_back(c);
+      continue;
+    }
+    c.pixel = uv;
+    c.mirror_point = M;
+    const Vec3d M_world = u.world_from_mirror * M;
+    if (normal.dot(M_world - c.world) <= 0) {
+      c.status = "facing_away";
+    } else if (scene.Occluded(c.world, M_world, 1e-6)) {
+      c.status = "occluded";
+    } else {
+      c.status = "visible";
+    }
+    out.push_back(c);
+  }
+  return out;
+}
+
+nlohmann::json PoseToJson(const Rigid3d& p) {
+  return {{"q", {p.rotation.w(), p.rotation.x(), p.rotation.y(), p.rotation.z()}},
+          {"t", {p.translation.x(), p.translation.y(), p.translation.z()}}};
+}
+
+Rigid3d PoseFromJson(const nlohmann::json& j, const std::string& where) {
+  HOVS_REQUIRE(j.is_object() && j.contains("q") && j.contains("t") && j["q"].size() == 4 && j["t"].size() == 3, where,
+               "a pose needs q [w, x, y, z] and t [x, y, z]");
+  const Eigen::Quaterniond q(j["q"][0].get<double>(), j["q"][1].get<double>(), j["q"][2].get<double>(), j["q"][3].get<double>());
+  HOVS_REQUIRE(std::abs(q.norm() - 1) < 1e-6, where, "the quaternion is not unit length");
+  return Rigid3d(q.normalized(), Vec3d(j["t"][0].get<double>(), j["t"][1].get<double>(), j["t"][2].get<double>()));
+}
+
+nlohmann::json UnitToJson(const raytrace::CatadioptricUnit& u) {
+  const auto& c = u.rig.camera;
+  return {{"name", u.name},
+          {"model", "hyperboloid"},
+          {"mirror", {{"a", u.rig.mirror.a}, {"b", u.rig.mirror.b}, {"rim_diameter", u.rig.mirror.rim_diameter}}},
+          {"camera", {{"model", "pinhole_radtan"}, {"width", c.width}, {"height", c.height}, {"fx", c.fx}, {"fy", c.fy},
+                      {"cx", c.cx}, {"cy", c.cy},
+                      {"distortion", {c.distortion.k1, c.distortion.k2, c.distortion.p1, c.distortion.p2}}}},
+          {"cam_from_mirror", PoseToJson(u.rig.cam_from_mirror)},
+          {"world_from_mirror", PoseToJson(u.world_from_mirror)},
+          {"occluder_radius", u.rig.occluder_radius},
+          {"single_viewpoint", u.rig.IsSingleViewpoint()}};
+}
+
+raytrace::CatadioptricUnit UnitFromJson(const nlohmann::json& j, const std::string& where) {
+  try {
+    raytrace::CatadioptricUnit u;
+    u.name = j.at("name").get<std::string>();
+    const auto& m = j.at("mirror");
+    u.rig.mirror = {m.at("a").get<double>(), m.at("b").get<double>(), m.at("rim_diameter").get<double>()};
+    const auto& c = j.at("camera");
+    auto& cam = u.rig.camera;
+    cam.width = c.at("width").get<int>(), cam.height = c.at("height").get<int>();
+    cam.fx = c.at("fx").get<double>(), cam.fy = c.at("fy").get<double>();
+    cam.cx = c.at("cx").get<double>(), cam.cy = c.at("cy").get<double>();
+    const auto& d = c.at("distortion");
+    cam.distortion = {d.at(0).get<double>(), d.at(1).get<double>(), d.at(2).get<double>(), d.at(3).get<double>()};
+    u.rig.cam_from_mirror = PoseFromJson(j.at("cam_from_mirror"), where + ".cam_from_mirror");
+    u.world_from_mirror = PoseFromJson(j.at("world_from_mirror"), where + ".world_from_mirror");
+    u.rig.occluder_radius = j.at("occluder_radius").get<double>();
+    u.rig.Check(where);
+    return u;
+  } catch (const nlohmann::json::exception& e) {
+    throw Error(where, std::string("bad unit description: ") + e.what());
+  }
+}
+
+nlohmann::json BoardToJson(const BoardInstance& b) {
+  nlohmann::json j = {{"name", b.name}, {"object_id", b.object_id}, {"margin", b.spec.margin},
+                      {"width", b.spec.Width()}, {"height", b.spec.Height()}, {"world_from_board", PoseToJson(b.world_from_board)}};
+  if (b.spec.kind == BoardSpec::Kind::kChecker) {
+    j["type"] = "checker";
+    j["squares"] = {b.spec.squares_x, b.spec.squares_y};
+    j["square"] = b.spec.square;
+    j["inner_corners"] = {b.spec.squares_x - 1, b.spec.squares_y - 1};
+  } else {
+    j["type"] = "aruco";
+    j["markers"] = {b.spec.markers_x, b.spec.markers_y};
+    j["marker_length"] = b.spec.marker_length;
+    j["separation"] = b.spec.marker_separation;
+    j["dictionary"] = b.spec.dictionary;
+  }
+  return j;
+}
+
+nlohmann::json FrameSidecar(const SceneConfig& cfg, const raytrace::RayScene& scene, int unit) {
+  nlohmann::json j;
+  j["format"] = "hovs-frame-truth";
+  j["version"] = 1;
+  j["scene"] = cfg.name;
+  j["unit"] = UnitToJson(scene.description().units.at(unit));
+  nlohmann::json channels = nlohmann::json::array();
+  const char* meaning[raytrace::GroundTruth::kChannels] = {
+      "range (m) from the unit's viewpoint F1 to the surface seen; +inf for sky",
+      "world point x (m)", "world point y (m)", "world point z (m)",
+      "surface normal x (world)", "surface normal y (world)", "surface normal z (world)",
+      "object id (0 sky, 1 mount, 2 camera body, 3 mirror back, 4.. scene objects)",
+      "1 where the pixel sees the scene through the mirror, 0 outside the rim and on the camera's reflection",
+      "mirror reflection point x (mirror frame, m)", "mirror reflection point y (mirror frame, m)",
+      "mirror reflection point z (mirror frame, m)"};
+  for (int c = 0; c < raytrace::GroundTruth::kChannels; ++c)
+    channels.push_back({{"name", raytrace::GroundTruth::kNames[c]}, {"meaning", meaning[c]}});
+  j["exr_channels"] = channels;
+  j["pixel_convention"] = "u = column, v = row, centre of the top-left pixel at (0, 0); ground truth at pixel centres";
+  nlohmann::json objects = nlohmann::json::array();
+  for (const auto& o : scene.description().objects) objects.push_back({{"id", o.id}, {"name", o.name}, {"type", o.type}});
+  j["objects"] = objects;
+  nlohmann::json boards = nlohmann::json::array();
+  for (const BoardInstance& b : cfg.boards) {
+    nlohmann::json bj = BoardToJson(b);
+    nlohmann::json corners = nlohmann::json::array();
+    int visible = 0;
+    for (const CornerTruth& c : BoardCornerTruth(scene, b, unit)) {
+      nlohmann::json cj = {{"id", c.id}, {"board", {c.board_xy.x(), c.board_xy.y()}},
+                           {"world", {c.world.x(), c.world.y(), c.world.z()}}, {"status", c.status}};
+      if (c.status == "visible") {
+        cj["pixel"] = {c.pixel.x(), c.pixel.y()};
+        cj["mirror_point"] = {c.mirror_point.x(), c.mirror_point.y(), c.mirror_point.z()};
+        ++visible;
+      }
+      corners.push_back(cj);
+    }
+    bj["corners"] = corners;
+    bj["visible_corners"] = visible;
+    boards.push_back(bj);
+  }
+  j["boards"] = boards;
+  return j;
+}
+
+}  // namespace hovs::scenes

@@ -1,0 +1,36 @@
+// Ground truth of rendered frames: exact image positions of board corners through the core's projection
+// (closed form for single-viewpoint rigs, the law-of-reflection solve otherwise) with their visibility, and the
+// JSON forms of rigs and poses shared by sidecars and dataset manifests.
+#pragma once
+
+#include <nlohmann/json.hpp>
+#include <string>
+#include <vector>
+
+#include "raytrace/scene.h"
+#include "scenes/scene_config.h"
+
+namespace hovs::scenes {
+
+struct CornerTruth {
+  int id = 0;
+  Vec2d board_xy = Vec2d::Zero();  // board frame, m
+  Vec3d world = Vec3d::Zero();
+  Vec2d pixel = Vec2d::Zero();     // valid when status == "visible"
+  Vec3d mirror_point = Vec3d::Zero();
+  std::string status;              // visible | facing_away | occluded | <core projection status>
+};
+
+// Projects every corner of the board into the unit's image and classifies its visibility.
+std::vector<CornerTruth> BoardCornerTruth(const raytrace::RayScene& scene, const BoardInstance& board, int unit);
+
+nlohmann::json PoseToJson(const Rigid3d& pose);  // {"q": [w, x, y, z], "t": [x, y, z]}
+Rigid3d PoseFromJson(const nlohmann::json& j, const std::string& where);
+nlohmann::json UnitToJson(const raytrace::CatadioptricUnit& unit);
+raytrace::CatadioptricUnit UnitFromJson(const nlohmann::json& j, const std::string& where);
+nlohmann::json BoardToJson(const BoardInstance& board);
+
+// The per-frame sidecar: rig, board poses, corner truth, channel documentation.
+nlohmann::json FrameSidecar(const SceneConfig& config, const raytrace::RayScene& scene, int unit);
+
+}  // namespace hovs::scenes

@@ -1,0 +1,66 @@
+// Scene files (YAML, validated on load): catadioptric units with their exact rigs, textured objects
+// (checkerboards, ArUco boards drawn with OpenCV, planes, boxes, the ground), the sky and render options.
+// Lengths in metres; angles in degrees where the key says _deg. Texture image paths are relative to the file.
+#pragma once
+
+#include <filesystem>
+#include <string>
+#include <vector>
+
+#include "raytrace/render.h"
+#include "raytrace/scene.h"
+
+namespace hovs::scenes {
+
+// A calibration target. Board frame: origin at the board centre, x along its width (squares_x / markers_x),
+// y along its height, z out of the printed face.
+struct BoardSpec {
+  enum class Kind { kChecker, kAruco } kind = Kind::kChecker;
+  int squares_x = 8, squares_y = 6;  // checker: squares (inner corners: (sx - 1) x (sy - 1))
+  double square = 0.03;              // m
+  int markers_x = 5, markers_y = 5;  // aruco grid
+  double marker_length = 0.2, marker_separation = 0.04;
+  std::string dictionary = "DICT_6X6_250";
+  double margin = 0.02;              // white border around the pattern, m
+
+  double Width() const;   // printed pattern plus margins
+  double Height() const;
+  // Corners with ids, in the board frame (z = 0): checker inner corners (id = j * (sx - 1) + i, i along x),
+  // or ArUco marker corners (id = 4 * marker id + k, k in OpenCV's corner order).
+  std::vector<std::pair<int, Vec2d>> Corners() const;
+};
+
+struct BoardInstance {
+  std::string name;
+  int object_id = 0;
+  int rect_index = 0;      // in SceneDescription::rects
+  BoardSpec spec;
+  Rigid3d world_from_board;
+};
+
+struct SceneConfig {
+  std::string name = "scene";
+  std::string source, text;
+  raytrace::SceneDescription description;
+  std::vector<BoardInstance> boards;
+  raytrace::RenderOptions render;
+};
+
+SceneConfig ParseSceneConfig(const std::string& yaml_text, const std::string& source,
+                             const std::filesystem::path& base_dir);
+SceneConfig LoadSceneConfig(const std::filesystem::path& path);
+
+// The rect and texture for a board (ArUco boards are drawn with OpenCV's aruco module).
+raytrace::Rect MakeBoardRect(const BoardSpec& spec, const Rigid3d& world_from_board, int object_id);
+void CheckBoard(const BoardSpec& spec, const std::string& where);
+
+// A rotation whose z axis points from `position` to `target`, x horizontal (world z up), then rolled.
+Rigid3d LookAt(const Vec3d& position, const Vec3d& target, double roll_rad = 0);
+
+// The camera placement of a unit: ideal (pinhole at F2) plus a misalignment: the camera centre displaced by
+// `offset` (mirror frame) and `height_error` along -z (further from the mirror), and tilted by `tilt` (axis-angle,
+// radians) about its own centre. Returns cam_from_mirror.
+Rigid3d MisalignedCamFromMirror(const HyperboloidMirror<double>& mirror, const Vec3d& tilt, const Vec3d& offset,
+                                double height_error);
+
+}  // namespace hovs::scenes
