@@ -22,8 +22,10 @@ std::string YamlReader::Where(const YAML::Node& n, const std::string& key) const
 
 void YamlReader::OnlyKeys(const YAML::Node& map, const std::string& path, const std::set<std::string>& known) const {
   HOVS_REQUIRE(map.IsMap(), Where(map, path), "expected a mapping");
+  std::set<std::string> seen;
   for (const auto& kv : map) {
     const std::string k = kv.first.as<std::string>();
+    HOVS_REQUIRE(seen.insert(k).second, Where(kv.first, path.empty() ? k : path + "." + k), "duplicate key '", k, "'");
     if (known.count(k)) continue;
     std::string list;
     for (const auto& s : known) list += (list.empty() ? "" : ", ") + s;

@@ -152,7 +152,12 @@ Frame Render(const RayScene& scene, const ViewCamera& camera, const RenderOption
   if (options.ground_truth) f.truth.data.assign(npx * GroundTruth::kChannels, 0.0f);
 
   const int tile = 16;
-  const int tiles_x = (f.width + tile - 1) / tile, tiles_y = (f.height + tile - 1) / tile;
+  RenderOptions::Region roi = options.region;
+  if (roi.Empty()) roi = {0, 0, f.width, f.height};
+  roi.x0 = std::max(0, roi.x0), roi.y0 = std::max(0, roi.y0);
+  roi.x1 = std::min(f.width, roi.x1), roi.y1 = std::min(f.height, roi.y1);
+  HOVS_REQUIRE(!roi.Empty(), "render.region", "the region does not overlap the image");
+  const int tiles_x = (roi.x1 - roi.x0 + tile - 1) / tile, tiles_y = (roi.y1 - roi.y0 + tile - 1) / tile;
   const int ntiles = tiles_x * tiles_y;
   const int n = options.samples;
   const int grid = static_cast<int>(std::lround(std::sqrt(n)));
@@ -166,8 +171,8 @@ Frame Render(const RayScene& scene, const ViewCamera& camera, const RenderOption
   tbb::parallel_for(tbb::blocked_range<int>(0, ntiles), [&](const tbb::blocked_range<int>& range) {
     Batch batch(scene);
     for (int ti = range.begin(); ti != range.end(); ++ti) {
-      const int x0 = (ti % tiles_x) * tile, y0 = (ti / tiles_x) * tile;
-      const int x1 = std::min(x0 + tile, f.width), y1 = std::min(y0 + tile, f.height);
+      const int x0 = roi.x0 + (ti % tiles_x) * tile, y0 = roi.y0 + (ti / tiles_x) * tile;
+      const int x1 = std::min(x0 + tile, roi.x1), y1 = std::min(y0 + tile, roi.y1);
       const auto accumulate = [&](int px, const RayRequest&, const Hit& h) {
         float* c = &f.rgb[3 * static_cast<size_t>(px)];
         for (int k = 0; k < 3; ++k) c[k] += weight * h.colour[k];
@@ -192,6 +197,9 @@ Frame Render(const RayScene& scene, const ViewCamera& camera, const RenderOption
       if (options.ground_truth) {
         const auto record = [&](int px, const RayRequest& r, const Hit& h) {
           float* g = &f.truth.data[static_cast<size_t>(px) * GroundTruth::kChannels];
+          g[8] = r.via_mirror && h.object_id != kCameraBodyId ? 1.0f : 0.0f;
+          if (r.via_mirror)
+            for (int k = 0; k < 3; ++k) g[9 + k] = static_cast<float>(r.mirror_point(k));
           if (!h.hit) {
             g[0] = std::numeric_limits<float>::infinity();
             return;
@@ -199,9 +207,6 @@ Frame Render(const RayScene& scene, const ViewCamera& camera, const RenderOption
           g[0] = static_cast<float>((h.point - maker.viewpoint()).norm());
           for (int k = 0; k < 3; ++k) g[1 + k] = static_cast<float>(h.point(k)), g[4 + k] = static_cast<float>(h.normal(k));
           g[7] = static_cast<float>(h.object_id);
-          g[8] = r.via_mirror && h.object_id != kCameraBodyId ? 1.0f : 0.0f;
-          if (r.via_mirror)
-            for (int k = 0; k < 3; ++k) g[9 + k] = static_cast<float>(r.mirror_point(k));
         };
         for (int y = y0; y < y1; ++y)
           for (int x = x0; x < x1; ++x) {
@@ -334,6 +339,32 @@ std::vector<float> ReadImage(const std::filesystem::path& path, int* width, int*
   in->close();
   HOVS_REQUIRE(ok, path.string(), "cannot decode image");
   return data;
+}
+
+const std::vector<float>& ExrChannels::at(const std::string& name) const {
+  const auto it = channels.find(name);
+  HOVS_REQUIRE(it != channels.end(), "ground truth", "no channel '", name, "'");
+  return it->second;
+}
+
+ExrChannels ReadExr(const std::filesystem::path& path) {
+  auto in = OIIO::ImageInput::open(path.string());
+  HOVS_REQUIRE(in != nullptr, path.string(), "cannot read OpenEXR: ", OIIO::geterror());
+  const OIIO::ImageSpec& spec = in->spec();
+  ExrChannels out;
+  out.width = spec.width, out.height = spec.height;
+  std::vector<float> data(static_cast<size_t>(spec.width) * spec.height * spec.nchannels);
+  const bool ok = in->read_image(0, 0, 0, spec.nchannels, OIIO::TypeDesc::FLOAT, data.data());
+  HOVS_REQUIRE(ok, path.string(), "cannot decode OpenEXR: ", in->geterror());
+  for (int c = 0; c < spec.nchannels; ++c) {
+    std::vector<float>& ch = out.channels[spec.channelnames[c]];
+    ch.resize(static_cast<size_t>(spec.width) * spec.height);
+    for (size_t i = 0; i < ch.size(); ++i) ch[i] = data[i * spec.nchannels + c];
+  }
+  for (const auto& p : spec.extra_attribs)
+    if (p.type() == OIIO::TypeDesc::STRING) out.attributes[p.name().string()] = p.get_string();
+  in->close();
+  return out;
 }
 
 }  // namespace hovs::raytrace

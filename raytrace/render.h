@@ -5,6 +5,7 @@
 
 #include <cstdint>
 #include <filesystem>
+#include <map>
 #include <string>
 #include <vector>
 
@@ -27,6 +28,11 @@ struct RenderOptions {
   uint64_t seed = 1;             // sample jitter and sensor noise
   bool ground_truth = true;      // per-pixel ground truth from the pixel-centre ray
   bool progress = false;         // progress bar on stderr
+  // Render only pixels with x0 <= x < x1, y0 <= y < y1 (others stay black, ground truth zero). Empty: all.
+  struct Region {
+    int x0 = 0, y0 = 0, x1 = 0, y1 = 0;
+    bool Empty() const { return x1 <= x0 || y1 <= y0; }
+  } region;
   SensorOptions sensor;
   void Check(const std::string& where) const;
 };
@@ -77,5 +83,14 @@ void WriteGroundTruthExr(const std::filesystem::path& path, const Frame& frame,
 
 // Reads an image (any OpenImageIO format) as float channels. Throws hovs::Error naming the file.
 std::vector<float> ReadImage(const std::filesystem::path& path, int* width, int* height, int* channels);
+
+// Reads named channels of an OpenEXR file (channel order in the file does not matter).
+struct ExrChannels {
+  int width = 0, height = 0;
+  std::map<std::string, std::vector<float>> channels;
+  std::map<std::string, std::string> attributes;  // string attributes, e.g. "hovs:unit"
+  const std::vector<float>& at(const std::string& name) const;
+};
+ExrChannels ReadExr(const std::filesystem::path& path);
 
 }  // namespace hovs::raytrace

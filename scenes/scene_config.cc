@@ -53,13 +53,14 @@ std::vector<std::pair<int, Vec2d>> BoardSpec::Corners() const {
                          Vec2d((i - 0.5 * squares_x) * square, (j - 0.5 * squares_y) * square));
     return out;
   }
-  // OpenCV's GridBoard object points: origin at the pattern's bottom-left, y up; centre them.
+  // OpenCV 4.6's GridBoard object points: origin at the pattern's top-left as printed, y down the print;
+  // hovs' board frame has y up and z out of the print, so t = h / 2 - y.
   const auto board = MakeGridBoard(*this);
   const double w = Width() - 2 * margin, h = Height() - 2 * margin;
   for (size_t m = 0; m < board->objPoints.size(); ++m)
     for (int k = 0; k < 4; ++k) {
       const cv::Point3f& p = board->objPoints[m][k];
-      out.emplace_back(4 * board->ids[m] + k, Vec2d(p.x - 0.5 * w, p.y - 0.5 * h));
+      out.emplace_back(4 * board->ids[m] + k, Vec2d(p.x - 0.5 * w, 0.5 * h - p.y));
     }
   return out;
 }

@@ -162,6 +162,7 @@ TEST(DesignConfig, AcceptsAMinimalConfig) {
 
 TEST(DesignConfig, RejectsBadInput) {
   ExpectError(RefText() + "colour: red\n", "unknown key 'colour'");
+  ExpectError(RefText() + "mirror: {rim_diameter: 0.06}\n", "duplicate key 'mirror'");
   ExpectError(RefText() + "constraints: {max_upper_elevation: 0}\n", "unknown key 'max_upper_elevation'");
   ExpectError("camera: {focal_length: -0.016, pixel_pitch: 4.54e-6, width: 2750, height: 2200, lens_aperture: 0.02}\n"
               "mirror: {rim_diameter: 0.080}\n", "focal length must be positive");

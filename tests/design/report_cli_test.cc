@@ -10,35 +10,15 @@
 #include <nlohmann/json.hpp>
 
 #include "core/io.h"
+#include "tests/cli_helper.h"
 #include "results/plot.h"
 
 namespace {
 namespace fs = std::filesystem;
 
-struct CliRun {
-  int exit_code;
-  std::string output;
-};
-
-CliRun Hovs(const std::string& args) {
-  const std::string cmd = std::string(HOVS_BINARY) + " " + args + " 2>&1";
-  CliRun r{-1, ""};
-  FILE* pipe = popen(cmd.c_str(), "r");
-  if (!pipe) return r;
-  std::array<char, 4096> buf;
-  size_t n;
-  while ((n = fread(buf.data(), 1, buf.size(), pipe)) > 0) r.output.append(buf.data(), n);
-  const int status = pclose(pipe);
-  r.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-  return r;
-}
-
-fs::path Scratch(const std::string& name) {
-  const fs::path p = fs::temp_directory_path() / ("hovs-design-cli-" + std::to_string(getpid())) / name;
-  fs::remove_all(p);
-  fs::create_directories(p.parent_path());
-  return p;
-}
+using hovs::test::CliRun;
+using hovs::test::Hovs;
+fs::path Scratch(const std::string& name) { return hovs::test::Scratch("design-cli", name); }
 
 const std::string kReference = std::string(HOVS_SOURCE_DIR) + "/design/reference.yaml";
 

@@ -1,0 +1,114 @@
+// Datasets and the render/dataset commands: manifest, files, ground truth of every frame; bad input through
+// the command line leaves nothing behind.
+#include <gtest/gtest.h>
+
+#include <fstream>
+#include <nlohmann/json.hpp>
+
+#include "core/io.h"
+#include "raytrace/render.h"
+#include "scenes/dataset.h"
+#include "tests/cli_helper.h"
+
+namespace hovs {
+namespace {
+namespace fs = std::filesystem;
+
+scenes::SceneConfig SmallCalibrationScene() {
+  auto cfg = scenes::LoadSceneConfig(std::string(HOVS_SOURCE_DIR) + "/scenes/reference_calibration.yaml");
+  // The reference optics at a quarter of the resolution: same field of view, 16 x fewer pixels.
+  cfg.description.units[0].rig.camera = PinholeCamera<double>::FromPhysical(0.016, 4 * 4.54e-6, 688, 550);
+  cfg.render.samples = 1;
+  return cfg;
+}
+
+TEST(Dataset, BoardPosesAreSeededAndKeepEveryCornerVisible) {
+  const auto cfg = SmallCalibrationScene();
+  scenes::DatasetOptions o;
+  o.count = 5;
+  o.seed = 42;
+  const auto a = scenes::DrawBoardPoses(cfg, o), b = scenes::DrawBoardPoses(cfg, o);
+  o.seed = 43;
+  const auto c = scenes::DrawBoardPoses(cfg, o);
+  ASSERT_EQ(a.size(), 5u);
+  for (size_t i = 0; i < a.size(); ++i) EXPECT_EQ((a[i].translation - b[i].translation).norm(), 0.0);
+  EXPECT_GT((a[0].translation - c[0].translation).norm(), 1e-6);
+}
+
+TEST(Dataset, CalibrationSetHasManifestImagesAndGroundTruth) {
+  const auto cfg = SmallCalibrationScene();
+  scenes::DatasetOptions o;
+  o.count = 3;
+  const fs::path out = test::Scratch("dataset", "calib");
+  scenes::WriteCalibrationDataset(cfg, o, out, {{"hovs", "test"}});
+  const auto m = nlohmann::json::parse(ReadFile(out / "dataset.json"));
+  EXPECT_EQ(m["format"], "hovs-dataset");
+  EXPECT_EQ(m["kind"], "mono_calibration");
+  EXPECT_EQ(m["seed"], 1);
+  ASSERT_EQ(m["frames"].size(), 3u);
+  EXPECT_EQ(m["boards"][0]["inner_corners"], nlohmann::json({7, 5}));
+  for (const auto& fr : m["frames"]) {
+    const auto& v = fr["views"][0];
+    int w = 0, h = 0, ch = 0;
+    raytrace::ReadImage(out / v["image"].get<std::string>(), &w, &h, &ch);
+    EXPECT_EQ(w, 688);
+    EXPECT_EQ(h, 550);
+    const auto side = nlohmann::json::parse(ReadFile(out / v["ground_truth"]["sidecar"].get<std::string>()));
+    EXPECT_EQ(side["boards"][0]["visible_corners"], 35);
+    const auto exr = raytrace::ReadExr(out / v["ground_truth"]["exr"].get<std::string>());
+    EXPECT_EQ(exr.width, 688);
+    for (const char* name : {"Z", "P.X", "P.Y", "P.Z", "N.X", "N.Y", "N.Z", "id", "mask", "M.X", "M.Y", "M.Z"})
+      EXPECT_EQ(exr.at(name).size(), 688u * 550u) << name;
+    EXPECT_EQ(exr.attributes.at("hovs:unit"), "unit0");
+    // Each visible corner's pixel has the board's id in the id channel.
+    const int board_id = side["boards"][0]["object_id"];
+    for (const auto& c : side["boards"][0]["corners"]) {
+      const int x = static_cast<int>(std::lround(c["pixel"][0].get<double>()));
+      const int y = static_cast<int>(std::lround(c["pixel"][1].get<double>()));
+      EXPECT_EQ(static_cast<int>(exr.at("id")[static_cast<size_t>(y) * 688 + x]), board_id);
+    }
+  }
+  fs::remove_all(out.parent_path());
+}
+
+TEST(RenderCli, RendersAndRejectsBadInput) {
+  const fs::path dir = test::Scratch("render-cli", "work");
+  fs::create_directories(dir);
+  // A small scene: reference unit at low resolution, one board.
+  std::string scene = ReadFile(std::string(HOVS_SOURCE_DIR) + "/scenes/reference_board.yaml");
+  const std::string cam = "camera: {focal_length: 0.016, pixel_pitch: 4.54e-6, width: 2750, height: 2200, lens_aperture: 0.020}";
+  scene.replace(scene.find(cam), cam.size(),
+                "camera: {focal_length: 0.016, pixel_pitch: 3.632e-5, width: 344, height: 275, lens_aperture: 0.020}");
+  std::ofstream(dir / "small.yaml") << scene;
+  const auto ok = test::Hovs("-q render --scene " + (dir / "small.yaml").string() + " --out " + (dir / "out").string() + " --samples 1");
+  ASSERT_EQ(ok.exit_code, 0) << ok.output;
+  EXPECT_TRUE(fs::is_regular_file(dir / "out" / "dataset.json"));
+  EXPECT_TRUE(fs::is_regular_file(dir / "out" / "truth" / "unit0.exr"));
+
+  const auto rejected = [&](const std::string& yaml, const std::string& needle, const std::string& extra = "") {
+    std::ofstream(dir / "bad.yaml") << yaml;
+    const auto r = test::Hovs("render --scene " + (dir / "bad.yaml").string() + " --out " + (dir / "bad_out").string() + extra);
+    EXPECT_EQ(r.exit_code, 2) << r.output;
+    EXPECT_NE(r.output.find(needle), std::string::npos) << r.output;
+    EXPECT_FALSE(fs::exists(dir / "bad_out"));
+  };
+  rejected(scene + "fog: true\n", "unknown key 'fog'");
+  rejected(scene + "render: {samples: 0}\n", "duplicate key 'render'");
+  std::string zero = scene;
+  zero.replace(zero.find("render: {samples: 16"), 20, "render: {samples: 0");
+  rejected(zero, "samples");
+  rejected(scene, "samples", " --samples -3");
+  std::string inside = scene;
+  inside.insert(inside.find("    pose: {position: [0, 0, 1.3]}"), "    misalignment: {height_error: -0.2}\n");
+  rejected(inside, "inside the mirror");
+  std::string missing = scene;
+  missing.replace(missing.find("texture: {noise: {scale: 0.03"), 29, "texture: {image: {path: gone.png, width: 1, height: 1}, noise: {scale: 0.03");
+  rejected(missing, "exactly one of");
+  const auto nofile = test::Hovs("render --scene " + (dir / "nope.yaml").string() + " --out " + (dir / "bad_out").string());
+  EXPECT_EQ(nofile.exit_code, 2);
+  EXPECT_NE(nofile.output.find("scene file not found"), std::string::npos);
+  fs::remove_all(dir.parent_path());
+}
+
+}  // namespace
+}  // namespace hovs
