@@ -47,6 +47,7 @@ struct RayRequest {
   double tnear = 0;
   bool valid = false;
   bool via_mirror = false;
+  int from_mirror = -1;                // unit whose mirror the ray leaves
   Vec3d mirror_point = Vec3d::Zero();  // mirror frame
 };
 
@@ -79,6 +80,7 @@ class RayMaker {
       Vec3d M, d;
       if (unit_->rig.RayFromImg(uv, &M, &d)) {
         r.valid = r.via_mirror = true;
+        r.from_mirror = cam_.unit;
         r.mirror_point = M;
         r.origin = unit_->world_from_mirror * M;
         r.direction = unit_->world_from_mirror.Rotate(d);
@@ -116,12 +118,13 @@ class Batch {
       return;
     }
     reqs_[n_] = r, tags_[n_] = tag, o_[n_] = r.origin, d_[n_] = r.direction, tn_[n_] = r.tnear;
+    from_[n_] = r.from_mirror;
     if (++n_ == 16) Flush(on_hit);
   }
   template <class OnHit>
   void Flush(const OnHit& on_hit) {
     if (n_ == 0) return;
-    scene_.Trace16(n_, o_, d_, tn_, hits_);
+    scene_.Trace16(n_, o_, d_, tn_, hits_, from_);
     rays_ += n_;
     for (int i = 0; i < n_; ++i) on_hit(tags_[i], reqs_[i], hits_[i]);
     n_ = 0;
@@ -134,6 +137,7 @@ class Batch {
   int tags_[16];
   Vec3d o_[16], d_[16];
   double tn_[16];
+  int from_[16];
   Hit hits_[16];
   int n_ = 0;
   uint64_t rays_ = 0;

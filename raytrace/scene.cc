@@ -89,6 +89,8 @@ void UserIntersect(const RTCIntersectFunctionNArguments* args) {
   RTCHitN* hit = RTCRayHitN_HitN(args->rayhit, N);
   for (unsigned i = 0; i < N; ++i) {
     if (!args->valid[i]) continue;
+    // A ray leaving this unit's (convex) mirror cannot meet it again: its id says where it started.
+    if (g->kind == UG::Kind::kMirror && RTCRayN_id(ray, N, i) == static_cast<unsigned>(g->unit + 1)) continue;
     const Vec3d o(RTCRayN_org_x(ray, N, i), RTCRayN_org_y(ray, N, i), RTCRayN_org_z(ray, N, i));
     const Vec3d d(RTCRayN_dir_x(ray, N, i), RTCRayN_dir_y(ray, N, i), RTCRayN_dir_z(ray, N, i));
     double t = 0;
@@ -112,6 +114,7 @@ void UserOccluded(const RTCOccludedFunctionNArguments* args) {
   RTCRayN* ray = args->ray;
   for (unsigned i = 0; i < N; ++i) {
     if (!args->valid[i]) continue;
+    if (g->kind == UG::Kind::kMirror && RTCRayN_id(ray, N, i) == static_cast<unsigned>(g->unit + 1)) continue;
     const Vec3d o(RTCRayN_org_x(ray, N, i), RTCRayN_org_y(ray, N, i), RTCRayN_org_z(ray, N, i));
     const Vec3d d(RTCRayN_dir_x(ray, N, i), RTCRayN_dir_y(ray, N, i), RTCRayN_dir_z(ray, N, i));
     double t = 0;
@@ -285,7 +288,8 @@ void RayScene::Shade(const Vec3d& o, const Vec3d& d, unsigned geom_id, unsigned 
   (void)prim_id;
 }
 
-void RayScene::Trace16(int count, const Vec3d* o, const Vec3d* d, const double* tnear, Hit* hits) const {
+void RayScene::Trace16(int count, const Vec3d* o, const Vec3d* d, const double* tnear, Hit* hits,
+                       const int* from_mirror) const {
   alignas(64) RTCRayHit16 rh;
   alignas(64) int valid[16];
   for (int i = 0; i < 16; ++i) {
@@ -302,12 +306,13 @@ void RayScene::Trace16(int count, const Vec3d* o, const Vec3d* d, const double* 
     rh.ray.mask[i] = 0xFFFFFFFFu;
     rh.ray.flags[i] = 0;
     rh.ray.time[i] = 0;
-    rh.ray.id[i] = static_cast<unsigned>(i);
+    rh.ray.id[i] = from_mirror ? static_cast<unsigned>(from_mirror[k] + 1) : 0u;
     rh.hit.geomID[i] = RTC_INVALID_GEOMETRY_ID;
     rh.hit.instID[0][i] = RTC_INVALID_GEOMETRY_ID;
   }
   RTCIntersectContext ctx;
   rtcInitIntersectContext(&ctx);
+  ctx.flags = RTC_INTERSECT_CONTEXT_FLAG_COHERENT;
   rtcIntersect16(valid, scene_, &ctx, &rh);
   for (int i = 0; i < count; ++i) {
     Hit& h = hits[i];
@@ -320,9 +325,9 @@ void RayScene::Trace16(int count, const Vec3d* o, const Vec3d* d, const double* 
   }
 }
 
-Hit RayScene::Trace(const Vec3d& origin, const Vec3d& direction, double tnear) const {
+Hit RayScene::Trace(const Vec3d& origin, const Vec3d& direction, double tnear, int from_mirror) const {
   Hit h;
-  Trace16(1, &origin, &direction, &tnear, &h);
+  Trace16(1, &origin, &direction, &tnear, &h, &from_mirror);
   return h;
 }
 
@@ -346,7 +351,8 @@ bool RayScene::Occluded(const Vec3d& a, const Vec3d& b, double eps) const {
   return ray.tfar < 0;
 }
 
-void RayScene::IntersectOnly16(int count, const Vec3d* o, const Vec3d* d, unsigned* geom_ids) const {
+void RayScene::IntersectOnly16(int count, const Vec3d* o, const Vec3d* d, unsigned* geom_ids,
+                               const int* from_mirror) const {
   alignas(64) RTCRayHit16 rh;
   alignas(64) int valid[16];
   for (int i = 0; i < 16; ++i) {
@@ -357,12 +363,14 @@ void RayScene::IntersectOnly16(int count, const Vec3d* o, const Vec3d* d, unsign
     rh.ray.dir_x[i] = static_cast<float>(d[k].x()), rh.ray.dir_y[i] = static_cast<float>(d[k].y());
     rh.ray.dir_z[i] = static_cast<float>(d[k].z());
     rh.ray.tnear[i] = 0, rh.ray.tfar[i] = std::numeric_limits<float>::infinity();
-    rh.ray.mask[i] = 0xFFFFFFFFu, rh.ray.flags[i] = 0, rh.ray.time[i] = 0, rh.ray.id[i] = 0;
+    rh.ray.mask[i] = 0xFFFFFFFFu, rh.ray.flags[i] = 0, rh.ray.time[i] = 0;
+    rh.ray.id[i] = from_mirror ? static_cast<unsigned>(from_mirror[k] + 1) : 0u;
     rh.hit.geomID[i] = RTC_INVALID_GEOMETRY_ID;
     rh.hit.instID[0][i] = RTC_INVALID_GEOMETRY_ID;
   }
   RTCIntersectContext ctx;
   rtcInitIntersectContext(&ctx);
+  ctx.flags = RTC_INTERSECT_CONTEXT_FLAG_COHERENT;
   rtcIntersect16(valid, scene_, &ctx, &rh);
   for (int i = 0; i < count; ++i) geom_ids[i] = rh.hit.geomID[i];
 }

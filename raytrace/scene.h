@@ -82,14 +82,17 @@ class RayScene {
   const SceneDescription& description() const { return desc_; }
 
   // Traces up to 16 rays as one packet (rtcIntersect16). Directions must be unit vectors. Hits are
-  // recomputed in double on the analytic surface that Embree found, then shaded.
-  void Trace16(int count, const Vec3d* origins, const Vec3d* directions, const double* tnear, Hit* hits) const;
-  Hit Trace(const Vec3d& origin, const Vec3d& direction, double tnear = 0) const;
+  // recomputed in double on the analytic surface that Embree found, then shaded. from_mirror (optional): per
+  // ray, the unit whose mirror it leaves (-1: none), which it cannot hit again (the mirror is convex).
+  void Trace16(int count, const Vec3d* origins, const Vec3d* directions, const double* tnear, Hit* hits,
+               const int* from_mirror = nullptr) const;
+  Hit Trace(const Vec3d& origin, const Vec3d& direction, double tnear = 0, int from_mirror = -1) const;
   // True if anything blocks the open segment from a to b (rtcOccluded1).
   bool Occluded(const Vec3d& a, const Vec3d& b, double eps = 1e-7) const;
 
   // Raw Embree throughput reference: rtcIntersect16 only, no shading (for the benchmark's comparison).
-  void IntersectOnly16(int count, const Vec3d* origins, const Vec3d* directions, unsigned* geom_ids) const;
+  void IntersectOnly16(int count, const Vec3d* origins, const Vec3d* directions, unsigned* geom_ids,
+                       const int* from_mirror = nullptr) const;
 
   struct UserGeometry;  // mirror, annulus (mount, lens face): analytic shapes, defined in scene.cc
 

@@ -7,7 +7,11 @@
 #include "core/error.h"
 #include "core/io.h"
 #include "raytrace/render.h"
+#include "results/html.h"
 #include "scenes/ground_truth.h"
+
+#include <OpenImageIO/imagebuf.h>
+#include <OpenImageIO/imagebufalgo.h>
 
 namespace hovs::scenes {
 namespace fs = std::filesystem;
@@ -57,6 +61,22 @@ ViewRecord RenderView(const SceneConfig& cfg, const raytrace::RayScene& scene, i
     (*stats)["seconds"] = frame.seconds;
   }
   return v;
+}
+
+// A thumbnail (longest side `size` px) of an image file, written next to it under thumbs/.
+std::string Thumbnail(const fs::path& dir, const std::string& image, int size) {
+  OIIO::ImageBuf src((dir / image).string());
+  HOVS_REQUIRE(src.read(0, 0, true, OIIO::TypeDesc::FLOAT), image, "cannot read for the thumbnail");
+  const auto& spec = src.spec();
+  const double scale = static_cast<double>(size) / std::max(spec.width, spec.height);
+  const int w = std::max(1, static_cast<int>(spec.width * scale)), h = std::max(1, static_cast<int>(spec.height * scale));
+  OIIO::ImageBuf dst = OIIO::ImageBufAlgo::resize(src, "", 0, OIIO::ROI(0, w, 0, h, 0, 1, 0, spec.nchannels));
+  const std::string rel = "thumbs/" + fs::path(image).filename().string();
+  fs::create_directories(dir / "thumbs");
+  const fs::path tmp = dir / "thumbs" / (".tmp-" + fs::path(image).filename().string());
+  HOVS_REQUIRE(dst.write(tmp.string(), OIIO::TypeDesc::UINT8), rel, "cannot write thumbnail: ", dst.geterror());
+  fs::rename(tmp, dir / rel);
+  return rel;
 }
 
 nlohmann::json ViewJson(const ViewRecord& v) {
@@ -185,13 +205,39 @@ void WriteCalibrationDataset(const SceneConfig& base, const DatasetOptions& o, c
     char stem[64];
     std::snprintf(stem, sizeof stem, "%s_%04zu", cfg.description.units[0].name.c_str(), i);
     if (o.progress) std::fprintf(stderr, "frame %zu/%zu\n", i + 1, poses.size());
-    const ViewRecord v = RenderView(cfg, scene, 0, stage.staging(), stem, o.progress, nullptr);
-    frames.push_back({{"id", i}, {"views", {ViewJson(v)}}, {"world_from_board", PoseToJson(poses[i])}});
+    nlohmann::json stats;
+    const ViewRecord v = RenderView(cfg, scene, 0, stage.staging(), stem, o.progress, &stats);
+    frames.push_back({{"id", i}, {"views", {ViewJson(v)}}, {"world_from_board", PoseToJson(poses[i])},
+                      {"render_seconds", stats["seconds"]}, {"rays", stats["rays"]}});
     if (i == 0) boards.push_back(BoardToJson(b));
   }
   m["boards"] = boards;
   m["frames"] = frames;
   WriteFileAtomic(stage.staging() / "dataset.json", m.dump(2) + "\n");
+
+  // A report page: thumbnails and the per-frame facts.
+  results::HtmlPage page("hovs dataset: " + base.name + " (" + o.kind + ")");
+  page.Paragraph(std::to_string(frames.size()) + " frames of unit " + base.description.units[0].name +
+                 ", board poses drawn with seed " + std::to_string(o.seed) + " so that every corner is visible; "
+                 "render seed " + std::to_string(base.render.seed) + ", " + std::to_string(base.render.samples) +
+                 " samples per pixel. Ground truth per frame: truth/*.exr (channels Z, P, N, id, mask, M) and "
+                 "truth/*.json (rig, board pose, exact corner pixels).");
+  std::vector<std::vector<std::string>> rows;
+  for (const auto& fr : frames) {
+    const auto& view = fr["views"][0];
+    const std::string thumb = Thumbnail(stage.staging(), view["image"].get<std::string>(), 320);
+    page.Figure(thumb, "frame " + std::to_string(fr["id"].get<int>()), 320);
+    const auto side = nlohmann::json::parse(ReadFile(stage.staging() / view["ground_truth"]["sidecar"].get<std::string>()));
+    char secs[32];
+    std::snprintf(secs, sizeof secs, "%.2f", fr["render_seconds"].get<double>());
+    rows.push_back({std::to_string(fr["id"].get<int>()), view["image"].get<std::string>(),
+                    std::to_string(side["boards"][0]["visible_corners"].get<int>()), secs});
+  }
+  page.Table({"frame", "image", "visible corners", "render (s)"}, rows);
+  page.Heading("Manifest");
+  page.Paragraph("dataset.json lists frames, images, ground truth and the rig; real captures use the same "
+                 "manifest without ground truth.");
+  WriteFileAtomic(stage.staging() / "index.html", page.Render());
   stage.Commit();
 }
 

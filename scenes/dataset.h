@@ -23,7 +23,7 @@ struct DatasetOptions {
   int count = 9;                          // frames
   uint64_t seed = 1;                      // board poses (the render seed comes from the scene's render options)
   BoardSpec board;                        // the calibration board (default: 8 x 6 squares of 30 mm: 7 x 5 corners)
-  double min_distance = 0.35, max_distance = 0.8;  // board centre from the viewpoint, m
+  double min_distance = 0.3, max_distance = 0.6;   // board centre from the viewpoint, m
   double min_elevation_deg = -55, max_elevation_deg = -12;
   double max_tilt_deg = 35;                        // board tilt away from facing the viewpoint
   double edge_margin_px = 8;                       // corners at least this far inside the valid annulus

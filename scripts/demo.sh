@@ -6,4 +6,7 @@ cd "$(dirname "$0")/.."
 bash scripts/setup.sh
 bash scripts/build.sh
 xvfb-run -a build/apps/hovs design --config design/reference.yaml --out results/design-reference
-echo "demo: report in results/design-reference/index.html"
+# A small monocular calibration set of the reference unit, rendered with exact ground truth.
+build/apps/hovs dataset --scene scenes/reference_calibration.yaml --count 9 --seed 1 --samples 4 \
+  --out results/calibration-set
+echo "demo: reports in results/design-reference/index.html and results/calibration-set/index.html"

@@ -57,7 +57,7 @@ TEST_P(GroundTruth, CornerProjectionAgreesWithTracingBackThroughTheMirror) {
     const auto trace = [&](const Vec2d& uv) {
       Vec3d M, d;
       EXPECT_TRUE(unit.rig.RayFromImg(uv, &M, &d));
-      return scene.Trace(unit.world_from_mirror * M, unit.world_from_mirror.Rotate(d), 1e-5);
+      return scene.Trace(unit.world_from_mirror * M, unit.world_from_mirror.Rotate(d), 1e-5, 0);
     };
     const raytrace::Hit h = trace(c.pixel);
     ASSERT_EQ(h.object_id, cfg.boards[0].object_id) << "corner " << c.id << " traces to another object";
