@@ -163,11 +163,15 @@ struct CatadioptricCamera {
   bool RayFromImg(const Vec2<T>& uv, Vec3<T>* mirror_point, Vec3<T>* direction) const {
     Vec3<T> bearing_cam;
     if (!camera.CamFromImg(uv, &bearing_cam)) return false;
-    const Vec3<T> C = CameraCentre();
-    const Vec3<T> v = cam_from_mirror.rotation.conjugate() * bearing_cam;
+    return ReflectCameraRay(CameraCentre(), cam_from_mirror.rotation.conjugate() * bearing_cam, mirror_point, direction);
+  }
+
+  // Reflection of a ray leaving the camera side (origin o, direction v, mirror frame; e.g. from a point of a
+  // thin lens): the mirror point within the rim and the unit reflected direction. False if it misses.
+  bool ReflectCameraRay(const Vec3<T>& o, const Vec3<T>& v, Vec3<T>* mirror_point, Vec3<T>* direction) const {
     T t;
-    if (!mirror.IntersectSheet(C, v, &t)) return false;
-    const Vec3<T> M = C + t * v;
+    if (!mirror.IntersectSheet(o, v, &t)) return false;
+    const Vec3<T> M = o + t * v;
     if (!mirror.WithinRim(M)) return false;
     const Vec3<T> n = mirror.Normal(M);
     *mirror_point = M;

@@ -29,6 +29,9 @@ void SensorOptions::Check(const std::string& where) const {
 
 void RenderOptions::Check(const std::string& where) const {
   HOVS_REQUIRE(samples >= 1 && samples <= 4096, where + ".samples", "must be in 1..4096 (got ", samples, ")");
+  HOVS_REQUIRE(std::isfinite(lens_radius) && lens_radius >= 0, where + ".lens_radius", "must be >= 0");
+  HOVS_REQUIRE(std::isfinite(focus_distance) && focus_distance > 0, where + ".focus_distance", "must be positive");
+  HOVS_REQUIRE(std::isfinite(exposure_time) && exposure_time >= 0, where + ".exposure_time", "must be >= 0");
   sensor.Check(where + ".sensor");
 }
 
@@ -53,7 +56,8 @@ struct RayRequest {
 
 class RayMaker {
  public:
-  RayMaker(const RayScene& scene, const ViewCamera& cam) : scene_(scene), cam_(cam) {
+  RayMaker(const RayScene& scene, const ViewCamera& cam, const RenderOptions& o)
+      : scene_(scene), cam_(cam), lens_radius_(o.lens_radius), focus_distance_(o.focus_distance) {
     if (cam.unit >= 0) {
       HOVS_REQUIRE(cam.unit < static_cast<int>(scene.description().units.size()), "render",
                    "the scene has no unit ", cam.unit);
@@ -73,33 +77,49 @@ class RayMaker {
   int height() const { return height_; }
   const Vec3d& viewpoint() const { return viewpoint_; }
 
-  RayRequest Make(const Vec2d& uv) const {
+  // The ray of image point uv. lens: a point on the unit disc (thin lens), tau: time in the exposure.
+  RayRequest Make(const Vec2d& uv, const Vec2d& lens = Vec2d::Zero(), double tau = 0) const {
     RayRequest r;
     Vec3d bearing;
+    const PinholeCamera<double>& cam = unit_ ? unit_->rig.camera : cam_.pinhole;
+    if (!cam.CamFromImg(uv, &bearing)) return r;
+    // Thin lens: from a point of the aperture towards the point of the pinhole ray on the plane in focus.
+    Vec3d origin_cam = Vec3d::Zero(), dir_cam = bearing;
+    if (lens_radius_ > 0) {
+      origin_cam = Vec3d(lens_radius_ * lens.x(), lens_radius_ * lens.y(), 0);
+      dir_cam = (bearing * (focus_distance_ / bearing.z()) - origin_cam).normalized();
+    }
     if (unit_) {
+      const Rigid3d world_from_mirror = unit_->WorldFromMirrorAt(tau);
+      const Rigid3d mirror_from_cam = unit_->rig.cam_from_mirror.Inverse();
+      const Vec3d o = mirror_from_cam * origin_cam, v = mirror_from_cam.Rotate(dir_cam);
       Vec3d M, d;
-      if (unit_->rig.RayFromImg(uv, &M, &d)) {
+      const bool hit = lens_radius_ > 0 ? unit_->rig.ReflectCameraRay(o, v, &M, &d) : unit_->rig.RayFromImg(uv, &M, &d);
+      if (hit) {
         r.valid = r.via_mirror = true;
         r.from_mirror = cam_.unit;
         r.mirror_point = M;
-        r.origin = unit_->world_from_mirror * M;
-        r.direction = unit_->world_from_mirror.Rotate(d);
+        r.origin = world_from_mirror * M;
+        r.direction = world_from_mirror.Rotate(d);
         r.tnear = 1e-5;  // clears the float rounding of the origin on the sheet (the mirror is convex)
         return r;
       }
-      if (!unit_->rig.camera.CamFromImg(uv, &bearing)) return r;
-    } else if (!cam_.pinhole.CamFromImg(uv, &bearing)) {
+      const Rigid3d world_from_cam = world_from_mirror * mirror_from_cam;
+      r.valid = true;
+      r.origin = world_from_cam * origin_cam;
+      r.direction = world_from_cam.Rotate(dir_cam);
       return r;
     }
     r.valid = true;
-    r.origin = world_from_cam_.translation;
-    r.direction = world_from_cam_.Rotate(bearing);
+    r.origin = world_from_cam_ * origin_cam;
+    r.direction = world_from_cam_.Rotate(dir_cam);
     return r;
   }
 
  private:
   const RayScene& scene_;
   const ViewCamera& cam_;
+  double lens_radius_ = 0, focus_distance_ = 1;
   const CatadioptricUnit* unit_ = nullptr;
   Rigid3d world_from_cam_;
   Vec3d viewpoint_ = Vec3d::Zero();
@@ -148,7 +168,8 @@ class Batch {
 Frame Render(const RayScene& scene, const ViewCamera& camera, const RenderOptions& options) {
   options.Check("render");
   const auto start = std::chrono::steady_clock::now();
-  const RayMaker maker(scene, camera);
+  const RayMaker maker(scene, camera, options);
+  const bool lens = options.lens_radius > 0, blur = options.exposure_time > 0 && camera.unit >= 0;
   Frame f;
   f.width = maker.width(), f.height = maker.height();
   const size_t npx = static_cast<size_t>(f.width) * f.height;
@@ -194,7 +215,17 @@ Frame Render(const RayScene& scene, const ViewCamera& camera, const RenderOption
             } else {
               du = ju - 0.5, dv = jv - 0.5;
             }
-            batch.Add(maker.Make(Vec2d(x + du, y + dv)), px, accumulate);
+            Vec2d disc = Vec2d::Zero();
+            double tau = 0;
+            if (lens || blur) {
+              const uint64_t h2 = SplitMix(h ^ 0xD1B54A32D192ED03ull);
+              if (lens) {  // uniform on the unit disc
+                const double rr = std::sqrt(Uniform(h2)), phi = 2 * M_PI * Uniform(SplitMix(h2));
+                disc = Vec2d(rr * std::cos(phi), rr * std::sin(phi));
+              }
+              if (blur) tau = options.exposure_time * Uniform(SplitMix(h2 ^ 0x9E3779B97F4A7C15ull));
+            }
+            batch.Add(maker.Make(Vec2d(x + du, y + dv), disc, tau), px, accumulate);
           }
         }
       batch.Flush(accumulate);

@@ -26,7 +26,15 @@ struct SensorOptions {
 struct RenderOptions {
   int samples = 4;               // per pixel; a perfect square gives a stratified grid, otherwise jittered
   uint64_t seed = 1;             // sample jitter and sensor noise
-  bool ground_truth = true;      // per-pixel ground truth from the pixel-centre ray
+  bool ground_truth = true;      // per-pixel ground truth from the pixel-centre ray (pinhole, time 0)
+  // Thin-lens defocus of the camera (catadioptric or pinhole): lens radius in metres (0: pinhole) and the
+  // distance from the lens along its optical axis to the plane in focus (for a catadioptric camera, the mirror's
+  // virtual image lies a little beyond the mirror: about 2c).
+  double lens_radius = 0.0;
+  double focus_distance = 0.13;
+  // Motion blur: the exposure time (s); each sample sees the unit at a random time in [0, exposure] moving
+  // with the unit's velocity and angular velocity.
+  double exposure_time = 0.0;
   bool progress = false;         // progress bar on stderr
   // Render only pixels with x0 <= x < x1, y0 <= y < y1 (others stay black, ground truth zero). Empty: all.
   struct Region {

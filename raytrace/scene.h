@@ -36,6 +36,14 @@ struct CatadioptricUnit {
   Rigid3d world_from_mirror;       // places the viewpoint F1 in the world
   double mount_outer_radius = 0;   // the mount ring around the rim (0: rim diameter / 2 + 15 mm)
   double body_length = 0.12;       // camera body behind the lens face
+  Vec3d velocity = Vec3d::Zero();          // m/s, world frame (motion blur)
+  Vec3d angular_velocity = Vec3d::Zero();  // rad/s, world frame, about the viewpoint (motion blur)
+  // The unit's pose at time tau after the start of the exposure.
+  Rigid3d WorldFromMirrorAt(double tau) const {
+    if (tau == 0) return world_from_mirror;
+    return Rigid3d(QuaternionFromAngleAxis<double>(Vec3d(angular_velocity * tau)) * world_from_mirror.rotation,
+                   world_from_mirror.translation + velocity * tau);
+  }
   Rgb mount_colour = {0.03f, 0.03f, 0.035f};
   Rgb body_colour = {0.08f, 0.08f, 0.09f};
   Rgb mirror_back_colour = {0.25f, 0.25f, 0.27f};

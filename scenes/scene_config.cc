@@ -219,7 +219,8 @@ SceneConfig ParseSceneConfig(const std::string& text, const std::string& source,
   for (size_t i = 0; i < units.size(); ++i) {
     const YAML::Node u = units[i];
     const std::string k = "units[" + std::to_string(i) + "]";
-    r.OnlyKeys(u, k, {"name", "mirror", "camera", "pose", "misalignment", "body_length"});
+    r.OnlyKeys(u, k, {"name", "mirror", "camera", "pose", "misalignment", "body_length", "velocity",
+                      "angular_velocity_deg"});
     raytrace::CatadioptricUnit unit;
     unit.name = u["name"] ? r.String(u["name"], k + ".name") : "unit" + std::to_string(i);
     YAML::Node m, c, pose;
@@ -263,6 +264,8 @@ SceneConfig ParseSceneConfig(const std::string& text, const std::string& source,
     }
     unit.world_from_mirror = ReadPose(r, r.Require(u, k, "pose", &pose), k + ".pose");
     if (u["body_length"]) unit.body_length = r.Positive(u["body_length"], k + ".body_length");
+    if (u["velocity"]) unit.velocity = r.Vector3(u["velocity"], k + ".velocity");
+    if (u["angular_velocity_deg"]) unit.angular_velocity = r.Vector3(u["angular_velocity_deg"], k + ".angular_velocity_deg") * kDeg;
     unit.rig.Check(r.Where(u, k));
     desc.units.push_back(unit);
   }
@@ -378,7 +381,10 @@ SceneConfig ParseSceneConfig(const std::string& text, const std::string& source,
   }
   if (root["render"]) {
     const YAML::Node rn = root["render"];
-    r.OnlyKeys(rn, "render", {"samples", "seed", "ground_truth", "sensor"});
+    r.OnlyKeys(rn, "render", {"samples", "seed", "ground_truth", "sensor", "lens_radius", "focus_distance", "exposure_time"});
+    if (rn["lens_radius"]) cfg.render.lens_radius = r.Number(rn["lens_radius"], "render.lens_radius");
+    if (rn["focus_distance"]) cfg.render.focus_distance = r.Number(rn["focus_distance"], "render.focus_distance");
+    if (rn["exposure_time"]) cfg.render.exposure_time = r.Number(rn["exposure_time"], "render.exposure_time");
     if (rn["samples"]) cfg.render.samples = r.Integer(rn["samples"], "render.samples");
     if (rn["seed"]) cfg.render.seed = static_cast<uint64_t>(r.Integer(rn["seed"], "render.seed"));
     if (rn["ground_truth"]) cfg.render.ground_truth = r.Bool(rn["ground_truth"], "render.ground_truth");

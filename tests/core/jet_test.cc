@@ -115,7 +115,7 @@ TEST(Jets, UnifiedBothDirections) {
     using T = typename std::decay_t<decltype(p)>::value_type;
     auto m = base.template Cast<T>();
     m.xi = p[0], m.distortion.k1 = p[1];
-    Vec3<T> b;
+    Vec3<T> b = Vec3<T>::Zero();
     EXPECT_TRUE(m.CamFromImg(Vec2<T>(p[2], p[3]), &b));
     return Vec2<T>(b(0) / b(2), b(1) / b(2));
   };

@@ -152,6 +152,77 @@ TEST(Render, MirrorMaskIsTheCoreMask) {
   EXPECT_LT(seen, total);
 }
 
+// Sum of squared differences between neighbouring 4 x 4 block means of the red channel: falls when an image
+// blurs, and the block means keep the Monte Carlo noise of lens and time sampling out of it.
+double GradientEnergy(const raytrace::Frame& f, const raytrace::RenderOptions::Region& r) {
+  const int bw = (r.x1 - r.x0) / 4, bh = (r.y1 - r.y0) / 4;
+  std::vector<double> m(static_cast<size_t>(bw) * bh, 0.0);
+  for (int by = 0; by < bh; ++by)
+    for (int bx = 0; bx < bw; ++bx)
+      for (int k = 0; k < 16; ++k)
+        m[static_cast<size_t>(by) * bw + bx] +=
+            f.rgb[3 * (static_cast<size_t>(r.y0 + 4 * by + k / 4) * f.width + r.x0 + 4 * bx + k % 4)] / 16.0;
+  double e = 0;
+  for (int by = 0; by + 1 < bh; ++by)
+    for (int bx = 0; bx + 1 < bw; ++bx) {
+      const size_t p = static_cast<size_t>(by) * bw + bx;
+      e += std::pow(m[p + 1] - m[p], 2) + std::pow(m[p + bw] - m[p], 2);
+    }
+  return e;
+}
+
+TEST(Render, ThinLensDefocusAndMotionBlurSoftenTheImage) {
+  SceneConfig cfg = BoardScene(false);
+  // The board alone against the sky, so the measure sees only its edges.
+  cfg.description.rects = {cfg.description.rects[cfg.boards[0].rect_index]};
+  cfg.boards[0].rect_index = 0;
+  const RayScene still(cfg.description);
+  const auto corners = scenes::BoardCornerTruth(still, cfg.boards[0], 0);
+  raytrace::RenderOptions ro;
+  ro.samples = 36;
+  ro.ground_truth = false;
+  ro.region = CornerRegion(corners, 5);
+  const auto sharp = raytrace::Render(still, raytrace::ViewCamera::Unit(0), ro);
+  const double e_sharp = GradientEnergy(sharp, ro.region);
+  // A wide aperture focused far from the mirror's virtual image blurs; focused on it, it barely does.
+  ro.lens_radius = 0.002;
+  ro.focus_distance = 1.0;
+  const double e_defocus = GradientEnergy(raytrace::Render(still, raytrace::ViewCamera::Unit(0), ro), ro.region);
+  ro.focus_distance = 0.135;
+  const double e_focused = GradientEnergy(raytrace::Render(still, raytrace::ViewCamera::Unit(0), ro), ro.region);
+  EXPECT_LT(e_defocus, 0.6 * e_sharp);
+  EXPECT_GT(e_focused, 2 * e_defocus);
+  // Motion blur is the time average: a unit turning about its axis during the exposure renders as the mean of
+  // still frames of the unit at instants spread over the exposure.
+  ro.lens_radius = 0;
+  const double omega = 20 * kDeg, exposure = 0.05;
+  cfg.description.units[0].angular_velocity = Vec3d(0, 0, omega);
+  const RayScene turning(cfg.description);
+  ro.exposure_time = exposure;
+  ro.samples = 64;
+  const auto blurred = raytrace::Render(turning, raytrace::ViewCamera::Unit(0), ro);
+  ro.exposure_time = 0;
+  ro.samples = 16;
+  std::vector<double> mean(blurred.rgb.size(), 0.0);
+  const int instants = 16;
+  for (int k = 0; k < instants; ++k) {
+    SceneConfig at = cfg;
+    at.description.units[0].world_from_mirror = cfg.description.units[0].WorldFromMirrorAt((k + 0.5) * exposure / instants);
+    at.description.units[0].angular_velocity = Vec3d::Zero();
+    const auto f = raytrace::Render(RayScene(at.description), raytrace::ViewCamera::Unit(0), ro);
+    for (size_t i = 0; i < mean.size(); ++i) mean[i] += f.rgb[i] / instants;
+  }
+  double to_mean = 0, to_sharp = 0;
+  for (size_t i = 0; i < mean.size(); ++i) {
+    to_mean += std::abs(blurred.rgb[i] - mean[i]);
+    to_sharp += std::abs(blurred.rgb[i] - sharp.rgb[i]);
+  }
+  EXPECT_LT(to_mean, 0.25 * to_sharp) << "the blurred frame is the time average of still frames";
+  ro.samples = 36;
+  const auto no_exposure = raytrace::Render(turning, raytrace::ViewCamera::Unit(0), ro);
+  EXPECT_EQ(no_exposure.rgb, sharp.rgb) << "zero exposure is the still frame";
+}
+
 TEST(Sensor, BayerNoiseAndVignettingDoWhatTheySay) {
   raytrace::Frame f;
   f.width = 64, f.height = 48;
