@@ -35,23 +35,28 @@ Runner SetupDataset(CLI::App* sub, const GlobalOptions* global) {
   struct Options {
     std::string scene = "scenes/reference_calibration.yaml";
     std::string out = "results/dataset";
-    scenes::DatasetOptions d;
+    std::string kind = "mono_calibration";
+    int count = 0;
+    uint64_t seed = 1;
     int samples = 0;
   };
   auto o = std::make_shared<Options>();
   sub->add_option("-s,--scene", o->scene, "base scene: units, background (its boards are replaced)")->capture_default_str();
   sub->add_option("-o,--out", o->out, "output folder (replaced atomically)")->capture_default_str();
-  sub->add_option("--kind", o->d.kind, "mono_calibration")->capture_default_str();
-  sub->add_option("-n,--count", o->d.count, "frames")->capture_default_str();
-  sub->add_option("--seed", o->d.seed, "seed of the board poses")->capture_default_str();
+  sub->add_option("--kind", o->kind, "mono_calibration | stereo_aruco")->capture_default_str();
+  sub->add_option("-n,--count", o->count, "frames (default: 9 mono, 12 stereo)");
+  sub->add_option("--seed", o->seed, "seed of the board poses")->capture_default_str();
   sub->add_option("--samples", o->samples, "samples per pixel (overrides the scene)");
   return [o, global]() {
     scenes::SceneConfig cfg = scenes::LoadSceneConfig(o->scene);
     if (o->samples != 0) cfg.render.samples = o->samples;
     cfg.render.Check("--samples");
-    o->d.progress = !global->quiet;
-    scenes::WriteCalibrationDataset(cfg, o->d, o->out, design::DesignVersions());
-    if (!global->quiet) std::cout << "hovs dataset: " << o->d.count << " frames -> " << o->out << "/dataset.json\n";
+    scenes::DatasetOptions d = scenes::DatasetOptions::ForKind(o->kind);
+    if (o->count != 0) d.count = o->count;
+    d.seed = o->seed;
+    d.progress = !global->quiet;
+    scenes::WriteCalibrationDataset(cfg, d, o->out, design::DesignVersions());
+    if (!global->quiet) std::cout << "hovs dataset: " << d.count << " frames (" << d.kind << ") -> " << o->out << "/dataset.json\n";
     return 0;
   };
 }

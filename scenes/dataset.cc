@@ -17,8 +17,28 @@ namespace hovs::scenes {
 namespace fs = std::filesystem;
 constexpr double kDeg = M_PI / 180.0;
 
+DatasetOptions DatasetOptions::ForKind(const std::string& kind) {
+  DatasetOptions o;
+  o.kind = kind;
+  if (kind == "stereo_aruco") {
+    o.count = 12;
+    o.board.kind = BoardSpec::Kind::kAruco;
+    o.board.markers_x = o.board.markers_y = 5;
+    o.board.marker_length = 0.2;
+    o.board.marker_separation = 0.05;  // 5 x 0.2 + 4 x 0.05 = 1.2 m, the article's board
+    o.board.margin = 0.02;
+    o.min_distance = 1.5, o.max_distance = 3.5;
+    o.min_elevation_deg = -35, o.max_elevation_deg = -6;
+    o.max_tilt_deg = 30;
+    o.min_visible_fraction = 0.6;
+  }
+  return o;
+}
+
 void DatasetOptions::Check(const std::string& where) const {
-  HOVS_REQUIRE(kind == "mono_calibration", where + ".kind", "unknown dataset kind '", kind, "' (known: mono_calibration)");
+  HOVS_REQUIRE(kind == "mono_calibration" || kind == "stereo_aruco", where + ".kind", "unknown dataset kind '", kind,
+               "' (known: mono_calibration, stereo_aruco)");
+  HOVS_REQUIRE(min_visible_fraction > 0 && min_visible_fraction <= 1, where + ".min_visible_fraction", "must be in (0, 1]");
   HOVS_REQUIRE(count >= 1 && count <= 10000, where + ".count", "must be in 1..10000");
   HOVS_REQUIRE(min_distance > 0 && max_distance >= min_distance, where + ".distance", "needs 0 < min <= max");
   HOVS_REQUIRE(min_elevation_deg < max_elevation_deg && max_elevation_deg < 90 && min_elevation_deg > -90,
@@ -128,43 +148,62 @@ void RenderSceneFolder(const SceneConfig& cfg, const fs::path& out, bool progres
 
 std::vector<Rigid3d> DrawBoardPoses(const SceneConfig& base, const DatasetOptions& o) {
   o.Check("dataset");
-  HOVS_REQUIRE(!base.description.units.empty(), "dataset", "the scene has no unit");
-  // The board alone, over the base scene without its own boards.
+  const auto& units = base.description.units;
+  HOVS_REQUIRE(!units.empty(), "dataset", "the scene has no unit");
+  const bool stereo = o.kind == "stereo_aruco";
+  HOVS_REQUIRE(!stereo || units.size() >= 2, "dataset", "a stereo dataset needs a scene with two units (it has ",
+               units.size(), ")");
+  const size_t n_units = stereo ? units.size() : 1;
   std::mt19937_64 rng(o.seed);
   std::uniform_real_distribution<double> U(0, 1);
-  const auto& unit = base.description.units[0];
-  const Vec3d F1 = unit.world_from_mirror.translation;
-  const Rigid3d mirror_from_world = unit.world_from_mirror.Inverse();
+  // Poses are drawn around the units' mean viewpoint, in the frame of unit 0's mirror axis.
+  Vec3d centre = Vec3d::Zero();
+  for (size_t u = 0; u < n_units; ++u) centre += units[u].world_from_mirror.translation / static_cast<double>(n_units);
   const auto corners = o.board.Corners();
+  // The rest of the scene (without its own boards) may hide the board: the ground, boxes, the other unit.
+  SceneConfig rest = base;
+  rest.description.rects.clear();
+  for (size_t k = 0; k < base.description.rects.size(); ++k) {
+    bool is_board = false;
+    for (const auto& b : base.boards) is_board |= b.rect_index == static_cast<int>(k);
+    if (!is_board) rest.description.rects.push_back(base.description.rects[k]);
+  }
+  const raytrace::RayScene occluders(rest.description);
   std::vector<Rigid3d> poses;
   int tries = 0;
   while (static_cast<int>(poses.size()) < o.count) {
-    HOVS_REQUIRE(++tries < 2000 * o.count, "dataset", "cannot place the board with every corner visible; "
+    HOVS_REQUIRE(++tries < 4000 * o.count, "dataset", "cannot place the board visibly often enough; "
                  "check the distance and elevation ranges against the mirror's field of view");
     const double az = (U(rng) * 2 - 1) * M_PI;
     const double el = (o.min_elevation_deg + U(rng) * (o.max_elevation_deg - o.min_elevation_deg)) * kDeg;
     const double dist = o.min_distance + U(rng) * (o.max_distance - o.min_distance);
-    const Vec3d dir_mirror(std::cos(el) * std::cos(az), std::cos(el) * std::sin(az), std::sin(el));
-    const Vec3d centre = F1 + dist * unit.world_from_mirror.Rotate(dir_mirror);
-    // Face the viewpoint, then tilt about a random in-plane axis and roll.
-    Rigid3d pose = LookAt(centre, F1, (U(rng) * 2 - 1) * M_PI);
+    const Vec3d dir(std::cos(el) * std::cos(az), std::cos(el) * std::sin(az), std::sin(el));
+    const Vec3d board_centre = centre + dist * units[0].world_from_mirror.Rotate(dir);
+    // Face the viewpoints (LookAt's z, the printed face, points at them), then tilt and roll.
+    Rigid3d pose = LookAt(board_centre, centre, (U(rng) * 2 - 1) * M_PI);
     const double tilt_axis = U(rng) * 2 * M_PI, tilt = U(rng) * o.max_tilt_deg * kDeg;
     pose.rotation = pose.rotation * QuaternionFromAngleAxis<double>(Vec3d(std::cos(tilt_axis), std::sin(tilt_axis), 0) * tilt);
-    // LookAt's z points at the viewpoint: the printed face (+z) faces it.
     bool ok = true;
-    for (const auto& [id, xy] : corners) {
-      const Vec3d X = mirror_from_world * (pose * Vec3d(xy.x(), xy.y(), 0));
-      Vec2d uv;
-      Vec3d M;
-      if (unit.rig.ImgFromMirror(X, &uv, &M) != ProjectionStatus::kOk) {
-        ok = false;
-        break;
+    for (size_t u = 0; u < n_units && ok; ++u) {
+      const auto& unit = units[u];
+      const Rigid3d mirror_from_world = unit.world_from_mirror.Inverse();
+      const Vec3d normal = pose.Rotate(Vec3d(0, 0, 1));
+      size_t visible = 0;
+      for (const auto& [id, xy] : corners) {
+        const Vec3d Xw = pose * Vec3d(xy.x(), xy.y(), 0);
+        Vec2d uv;
+        Vec3d M;
+        if (unit.rig.ImgFromMirror(mirror_from_world * Xw, &uv, &M) != ProjectionStatus::kOk) continue;
+        const Vec3d Mw = unit.world_from_mirror * M;
+        if (normal.dot(Mw - Xw) <= 0) continue;
+        if (occluders.Occluded(Xw, Mw, 1e-6)) continue;
+        bool inside = true;
+        for (const Vec2d& off : {Vec2d(o.edge_margin_px, 0), Vec2d(-o.edge_margin_px, 0), Vec2d(0, o.edge_margin_px),
+                                 Vec2d(0, -o.edge_margin_px)})
+          inside = inside && unit.rig.SeesMirror(uv + off);
+        visible += inside;
       }
-      // Keep a margin inside the valid region: the pixels around must see the mirror too.
-      for (const Vec2d& off : {Vec2d(o.edge_margin_px, 0), Vec2d(-o.edge_margin_px, 0), Vec2d(0, o.edge_margin_px),
-                               Vec2d(0, -o.edge_margin_px)})
-        if (!unit.rig.SeesMirror(uv + off)) ok = false;
-      if (!ok) break;
+      ok = visible >= o.min_visible_fraction * corners.size() - 1e-9;
     }
     if (ok) poses.push_back(pose);
   }
@@ -177,6 +216,7 @@ void WriteCalibrationDataset(const SceneConfig& base, const DatasetOptions& o, c
   StagedDirectory stage(out);
   nlohmann::json m = ManifestHead(base, o.kind, o.seed, versions);
   m["generator"] = {{"count", o.count}, {"distance", {o.min_distance, o.max_distance}},
+                    {"min_visible_fraction", o.min_visible_fraction},
                     {"elevation_deg", {o.min_elevation_deg, o.max_elevation_deg}}, {"max_tilt_deg", o.max_tilt_deg},
                     {"edge_margin_px", o.edge_margin_px}};
   nlohmann::json frames = nlohmann::json::array();
@@ -193,7 +233,7 @@ void WriteCalibrationDataset(const SceneConfig& base, const DatasetOptions& o, c
     cfg.description.rects = rects;
     cfg.boards.clear();
     BoardInstance b;
-    b.name = "calibration_board";
+    b.name = o.kind == "stereo_aruco" ? "aruco_board" : "calibration_board";
     b.object_id = raytrace::kFirstObjectId + static_cast<int>(cfg.description.objects.size());
     b.spec = o.board;
     b.world_from_board = poses[i];
@@ -202,13 +242,21 @@ void WriteCalibrationDataset(const SceneConfig& base, const DatasetOptions& o, c
     cfg.description.objects.push_back({b.object_id, b.name, "board"});
     cfg.boards.push_back(b);
     const raytrace::RayScene scene(cfg.description);
-    char stem[64];
-    std::snprintf(stem, sizeof stem, "%s_%04zu", cfg.description.units[0].name.c_str(), i);
     if (o.progress) std::fprintf(stderr, "frame %zu/%zu\n", i + 1, poses.size());
-    nlohmann::json stats;
-    const ViewRecord v = RenderView(cfg, scene, 0, stage.staging(), stem, o.progress, &stats);
-    frames.push_back({{"id", i}, {"views", {ViewJson(v)}}, {"world_from_board", PoseToJson(poses[i])},
-                      {"render_seconds", stats["seconds"]}, {"rays", stats["rays"]}});
+    const size_t n_units = o.kind == "stereo_aruco" ? cfg.description.units.size() : 1;
+    nlohmann::json views = nlohmann::json::array();
+    double seconds = 0;
+    uint64_t rays = 0;
+    for (size_t u = 0; u < n_units; ++u) {
+      char stem[96];
+      std::snprintf(stem, sizeof stem, "%s_%04zu", cfg.description.units[u].name.c_str(), i);
+      nlohmann::json stats;
+      views.push_back(ViewJson(RenderView(cfg, scene, static_cast<int>(u), stage.staging(), stem, o.progress, &stats)));
+      seconds += stats["seconds"].get<double>();
+      rays += stats["rays"].get<uint64_t>();
+    }
+    frames.push_back({{"id", i}, {"views", views}, {"world_from_board", PoseToJson(poses[i])},
+                      {"render_seconds", seconds}, {"rays", rays}});
     if (i == 0) boards.push_back(BoardToJson(b));
   }
   m["boards"] = boards;
@@ -217,23 +265,25 @@ void WriteCalibrationDataset(const SceneConfig& base, const DatasetOptions& o, c
 
   // A report page: thumbnails and the per-frame facts.
   results::HtmlPage page("hovs dataset: " + base.name + " (" + o.kind + ")");
-  page.Paragraph(std::to_string(frames.size()) + " frames of unit " + base.description.units[0].name +
-                 ", board poses drawn with seed " + std::to_string(o.seed) + " so that every corner is visible; "
+ page.Paragraph(std::to_string(frames.size()) + " frames (" + o.kind + "), board poses drawn with seed " + std::to_string(o.seed) + " so that every corner is visible; "
                  "render seed " + std::to_string(base.render.seed) + ", " + std::to_string(base.render.samples) +
                  " samples per pixel. Ground truth per frame: truth/*.exr (channels Z, P, N, id, mask, M) and "
                  "truth/*.json (rig, board pose, exact corner pixels).");
   std::vector<std::vector<std::string>> rows;
   for (const auto& fr : frames) {
-    const auto& view = fr["views"][0];
-    const std::string thumb = Thumbnail(stage.staging(), view["image"].get<std::string>(), 320);
-    page.Figure(thumb, "frame " + std::to_string(fr["id"].get<int>()), 320);
-    const auto side = nlohmann::json::parse(ReadFile(stage.staging() / view["ground_truth"]["sidecar"].get<std::string>()));
     char secs[32];
     std::snprintf(secs, sizeof secs, "%.2f", fr["render_seconds"].get<double>());
-    rows.push_back({std::to_string(fr["id"].get<int>()), view["image"].get<std::string>(),
-                    std::to_string(side["boards"][0]["visible_corners"].get<int>()), secs});
+    for (const auto& view : fr["views"]) {
+      const std::string thumb = Thumbnail(stage.staging(), view["image"].get<std::string>(), 320);
+      page.Figure(thumb, "frame " + std::to_string(fr["id"].get<int>()) + ", " + view["unit"].get<std::string>(), 320);
+      const auto side = nlohmann::json::parse(ReadFile(stage.staging() / view["ground_truth"]["sidecar"].get<std::string>()));
+      rows.push_back({std::to_string(fr["id"].get<int>()), view["unit"].get<std::string>(), view["image"].get<std::string>(),
+                      std::to_string(side["boards"][0]["visible_corners"].get<int>()) + " / " +
+                          std::to_string(side["boards"][0]["corners"].size()),
+                      secs});
+    }
   }
-  page.Table({"frame", "image", "visible corners", "render (s)"}, rows);
+  page.Table({"frame", "unit", "image", "visible corners", "render of the frame (s)"}, rows);
   page.Heading("Manifest");
   page.Paragraph("dataset.json lists frames, images, ground truth and the rig; real captures use the same "
                  "manifest without ground truth.");

@@ -19,7 +19,9 @@
 namespace hovs::scenes {
 
 struct DatasetOptions {
-  std::string kind = "mono_calibration";  // mono_calibration | render
+  // mono_calibration: a checkerboard seen whole by unit 0 (the article's 9 images of 7 x 5 corners);
+  // stereo_aruco: a 1.2 m ArUco marker board seen by every unit at once (the article's 12 pairs).
+  std::string kind = "mono_calibration";
   int count = 9;                          // frames
   uint64_t seed = 1;                      // board poses (the render seed comes from the scene's render options)
   BoardSpec board;                        // the calibration board (default: 8 x 6 squares of 30 mm: 7 x 5 corners)
@@ -27,19 +29,24 @@ struct DatasetOptions {
   double min_elevation_deg = -55, max_elevation_deg = -12;
   double max_tilt_deg = 35;                        // board tilt away from facing the viewpoint
   double edge_margin_px = 8;                       // corners at least this far inside the valid annulus
+  double min_visible_fraction = 1.0;               // of the board's corners, in every unit that must see it
   bool progress = false;
   void Check(const std::string& where) const;
+  // Defaults for a kind (board, count, distances, visibility).
+  static DatasetOptions ForKind(const std::string& kind);
 };
 
 // Renders every unit of the scene once: writes out/ (staged) with images/, truth/ and dataset.json.
 void RenderSceneFolder(const SceneConfig& scene, const std::filesystem::path& out, bool progress,
                        const std::map<std::string, std::string>& versions);
 
-// A monocular calibration set: board poses drawn so that every corner is visible in unit 0.
+// A board dataset (mono_calibration or stereo_aruco): board poses drawn so that the board is visible as the
+// kind asks, every unit that must see it rendered per frame, with ground truth.
 void WriteCalibrationDataset(const SceneConfig& base, const DatasetOptions& options, const std::filesystem::path& out,
                              const std::map<std::string, std::string>& versions);
 
-// Board poses for a calibration set (exposed for tests): each keeps every corner visible.
+// Board poses for a dataset (exposed for tests): each keeps at least min_visible_fraction of the corners
+// visible (inside the valid annulus by edge_margin_px) in unit 0 (mono) or in every unit (stereo).
 std::vector<Rigid3d> DrawBoardPoses(const SceneConfig& base, const DatasetOptions& options);
 
 }  // namespace hovs::scenes

@@ -71,6 +71,38 @@ TEST(Dataset, CalibrationSetHasManifestImagesAndGroundTruth) {
   fs::remove_all(out.parent_path());
 }
 
+TEST(Dataset, StereoArucoPairsSeeTheBoardFromBothUnits) {
+  auto cfg = scenes::LoadSceneConfig(std::string(HOVS_SOURCE_DIR) + "/scenes/reference_stereo.yaml");
+  for (auto& u : cfg.description.units) u.rig.camera = PinholeCamera<double>::FromPhysical(0.016, 4 * 4.54e-6, 688, 550);
+  cfg.render.samples = 1;
+  scenes::DatasetOptions o = scenes::DatasetOptions::ForKind("stereo_aruco");
+  o.count = 2;
+  o.edge_margin_px = 2;
+  const fs::path out = test::Scratch("dataset", "stereo");
+  scenes::WriteCalibrationDataset(cfg, o, out, {{"hovs", "test"}});
+  const auto m = nlohmann::json::parse(ReadFile(out / "dataset.json"));
+  EXPECT_EQ(m["kind"], "stereo_aruco");
+  EXPECT_EQ(m["units"].size(), 2u);
+  EXPECT_EQ(m["boards"][0]["type"], "aruco");
+  EXPECT_NEAR(m["boards"][0]["width"].get<double>(), 1.24, 1e-12);
+  ASSERT_EQ(m["frames"].size(), 2u);
+  for (const auto& fr : m["frames"]) {
+    ASSERT_EQ(fr["views"].size(), 2u);
+    EXPECT_EQ(fr["views"][0]["unit"], "left");
+    EXPECT_EQ(fr["views"][1]["unit"], "right");
+    for (const auto& v : fr["views"]) {
+      const auto side = nlohmann::json::parse(ReadFile(out / v["ground_truth"]["sidecar"].get<std::string>()));
+      EXPECT_EQ(side["boards"][0]["corners"].size(), 100u);
+      EXPECT_GE(side["boards"][0]["visible_corners"].get<int>(), 60) << v["image"];
+
+    }
+  }
+  o.kind = "stereo_aruco";
+  auto mono = scenes::LoadSceneConfig(std::string(HOVS_SOURCE_DIR) + "/scenes/reference_calibration.yaml");
+  EXPECT_THROW(scenes::DrawBoardPoses(mono, o), Error) << "a stereo set needs two units";
+  fs::remove_all(out.parent_path());
+}
+
 TEST(RenderCli, RendersAndRejectsBadInput) {
   const fs::path dir = test::Scratch("render-cli", "work");
   fs::create_directories(dir);
