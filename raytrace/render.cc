@@ -62,7 +62,8 @@ class RayMaker {
       HOVS_REQUIRE(cam.unit < static_cast<int>(scene.description().units.size()), "render",
                    "the scene has no unit ", cam.unit);
       unit_ = &scene.description().units[cam.unit];
-      world_from_cam_ = unit_->world_from_mirror * unit_->rig.cam_from_mirror.Inverse();
+      mirror_from_cam_ = unit_->rig.cam_from_mirror.Inverse();
+      world_from_cam_ = unit_->world_from_mirror * mirror_from_cam_;
       viewpoint_ = unit_->world_from_mirror.translation;
       width_ = unit_->rig.camera.width, height_ = unit_->rig.camera.height;
     } else {
@@ -90,12 +91,11 @@ class RayMaker {
       dir_cam = (bearing * (focus_distance_ / bearing.z()) - origin_cam).normalized();
     }
     if (unit_) {
-      const Rigid3d world_from_mirror = unit_->WorldFromMirrorAt(tau);
-      const Rigid3d mirror_from_cam = unit_->rig.cam_from_mirror.Inverse();
-      const Vec3d o = mirror_from_cam * origin_cam, v = mirror_from_cam.Rotate(dir_cam);
+      const Rigid3d world_from_mirror = tau == 0 ? unit_->world_from_mirror : unit_->WorldFromMirrorAt(tau);
+      const Vec3d o = mirror_from_cam_ * origin_cam, v = mirror_from_cam_.Rotate(dir_cam);
       Vec3d M, d;
-      const bool hit = lens_radius_ > 0 ? unit_->rig.ReflectCameraRay(o, v, &M, &d) : unit_->rig.RayFromImg(uv, &M, &d);
-      if (hit) {
+      // The pixel's ray from the camera, reflected by the exact mirror (RayFromImg without a second unprojection).
+      if (unit_->rig.ReflectCameraRay(o, v, &M, &d)) {
         r.valid = r.via_mirror = true;
         r.from_mirror = cam_.unit;
         r.mirror_point = M;
@@ -104,7 +104,7 @@ class RayMaker {
         r.tnear = 1e-5;  // clears the float rounding of the origin on the sheet (the mirror is convex)
         return r;
       }
-      const Rigid3d world_from_cam = world_from_mirror * mirror_from_cam;
+      const Rigid3d world_from_cam = world_from_mirror * mirror_from_cam_;
       r.valid = true;
       r.origin = world_from_cam * origin_cam;
       r.direction = world_from_cam.Rotate(dir_cam);
@@ -121,7 +121,7 @@ class RayMaker {
   const ViewCamera& cam_;
   double lens_radius_ = 0, focus_distance_ = 1;
   const CatadioptricUnit* unit_ = nullptr;
-  Rigid3d world_from_cam_;
+  Rigid3d world_from_cam_, mirror_from_cam_;
   Vec3d viewpoint_ = Vec3d::Zero();
   int width_ = 0, height_ = 0;
 };

@@ -54,11 +54,9 @@ namespace {
 
 uint32_t Hash(int32_t x, int32_t y, uint32_t seed) {
   uint32_t h = seed * 0x9E3779B9u ^ static_cast<uint32_t>(x) * 0x85EBCA6Bu ^ static_cast<uint32_t>(y) * 0xC2B2AE35u;
-  h ^= h >> 16;
-  h *= 0x7FEB352Du;
   h ^= h >> 15;
-  h *= 0x846CA68Bu;
-  h ^= h >> 16;
+  h *= 0x2C1B3C6Du;
+  h ^= h >> 12;
   return h;
 }
 
