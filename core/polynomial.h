@@ -67,8 +67,9 @@ struct PolynomialModel {
     return std::isfinite(ScalarPart((*bearing)(2)));
   }
 
-  // Exact inverse of CamFromImg (Newton on rho from the inverse polynomial's estimate).
-  bool ImgFromCam(const Vec3<T>& X, Vec2<T>* uv) const {
+  // Exact inverse of CamFromImg (Newton on rho from the inverse polynomial's estimate, or from rho_hint when
+  // it is given: e.g. the observed pixel's radius during calibration, when no inverse polynomial exists yet).
+  bool ImgFromCam(const Vec3<T>& X, Vec2<T>* uv, double rho_hint = -1) const {
     using std::sqrt;
     const double xd = ScalarPart(X(0)), yd = ScalarPart(X(1)), zd = ScalarPart(X(2));
     const double nd = std::hypot(xd, yd);
@@ -77,7 +78,7 @@ struct PolynomialModel {
       *uv = ImgFromSensor(Vec2<T>(T(0), T(0)));
       return true;
     }
-    double rho = EstimateRho(std::atan2(zd, nd));
+    double rho = rho_hint >= 0 ? rho_hint : EstimateRho(std::atan2(zd, nd));
     const auto h = [&](const auto& r) { return F(r) * nd - zd * r; };
     NewtonOptions options;
     options.residual_tolerance = 1e-13 * (std::abs(ScalarPart(poly[0])) * nd + 1e-300);

@@ -1,0 +1,355 @@
+#include "calib/polynomial_calibration.h"
+
+#include <ceres/ceres.h>
+#include <ceres/dynamic_autodiff_cost_function.h>
+#include <ceres/rotation.h>
+
+#include <Eigen/Dense>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <fstream>
+#include <map>
+#include <sstream>
+
+#include "core/error.h"
+
+namespace hovs::calib {
+namespace {
+
+// Reprojection residual of one corner through the core's polynomial model. The polynomial is parametrised in
+// normalised radius: f(rho) = sum_k b_k (rho / scale)^k (k = 0, 2..N), so every coefficient has a similar size.
+struct ReprojectionError {
+  ReprojectionError(const Vec3d& board_point, const Vec2d& pixel, int degree, double scale, double rho_hint,
+                    const std::array<double, 3>* fixed_affine)
+      : P(board_point), obs(pixel), N(degree), s(scale), hint(rho_hint), affine(fixed_affine) {}
+
+  template <class T>
+  bool operator()(const T* centre, const T* aff, const T* poly, const T* aa, const T* t, T* residual) const {
+    PolynomialModel<T> m;
+    m.cx = centre[0], m.cy = centre[1];
+    if (affine) {
+      m.c = T((*affine)[0]), m.d = T((*affine)[1]), m.e = T((*affine)[2]);
+    } else {
+      m.c = aff[0], m.d = aff[1], m.e = aff[2];
+    }
+    m.poly.assign(N + 1, T(0));
+    m.poly[0] = poly[0];
+    double sk = s * s;
+    for (int k = 2; k <= N; ++k, sk *= s) m.poly[k] = poly[k - 1] / T(sk);
+    const T Pb[3] = {T(P.x()), T(P.y()), T(P.z())};
+    T X[3];
+    ceres::AngleAxisRotatePoint(aa, Pb, X);
+    Vec2<T> uv;
+    if (!m.ImgFromCam(Vec3<T>(X[0] + t[0], X[1] + t[1], X[2] + t[2]), &uv, hint)) return false;
+    residual[0] = uv(0) - T(obs.x());
+    residual[1] = uv(1) - T(obs.y());
+    return true;
+  }
+
+  // For ceres::DynamicAutoDiffCostFunction: blocks centre, affine, poly (N values), angle-axis, t.
+  template <class T>
+  bool operator()(T const* const* p, T* residual) const {
+    return (*this)(p[0], p[1], p[2], p[3], p[4], residual);
+  }
+
+  Vec3d P;
+  Vec2d obs;
+  int N;
+  double s, hint;
+  const std::array<double, 3>* affine;
+};
+
+// Scaramuzza's linear initialisation for one image with the centre fixed: R (first two columns) and t1, t2
+// from the constraint x (r2 . P + t2) - y (r1 . P + t1) = 0, then the two sign ambiguities resolved by
+// solving the polynomial (degree 2) and t3, keeping the candidate that puts every point in front.
+struct LinearPose {
+  Eigen::Matrix3d R;
+  Vec3d t;
+};
+
+bool LinearExtrinsics(const BoardObservation& o, const Vec2d& centre, double scale, LinearPose* out) {
+  const size_t n = o.pixels.size();
+  Eigen::MatrixXd M(n, 6);
+  for (size_t i = 0; i < n; ++i) {
+    const double x = o.pixels[i].x() - centre.x(), y = o.pixels[i].y() - centre.y();
+    const double X = o.board_points[i].x(), Y = o.board_points[i].y();
+    M.row(i) << -y * X, -y * Y, x * X, x * Y, -y, x;
+  }
+  Eigen::JacobiSVD<Eigen::MatrixXd> svd(M, Eigen::ComputeFullV);
+  const Eigen::VectorXd H = svd.matrixV().col(5);
+  const double r11 = H(0), r12 = H(1), r21 = H(2), r22 = H(3), t1 = H(4), t2 = H(5);
+  const double A = r11 * r11 + r21 * r21, B = r12 * r12 + r22 * r22, C = r11 * r12 + r21 * r22;
+  const double p = 0.5 * ((B - A) + std::sqrt((B - A) * (B - A) + 4 * C * C));
+  double best = HUGE_VAL;
+  bool found = false;
+  for (int hs : {1, -1})
+    for (int rs : {1, -1}) {
+      double r31 = rs * std::sqrt(std::max(p, 0.0));
+      double r32 = std::abs(r31) > 1e-12 ? -C / r31 : rs * std::sqrt(std::max(p + A - B, 0.0));
+      const double lambda = std::sqrt(A + r31 * r31);
+      if (!(lambda > 0)) continue;
+      const double k = hs / lambda;
+      const Vec3d c1(r11 * k, r21 * k, r31 / lambda), c2(r12 * k, r22 * k, r32 / lambda);
+      const double tt1 = t1 * k, tt2 = t2 * k;
+      // Solve [a0, a2, t3] (normalised radius) from the two remaining cross-product rows.
+      Eigen::MatrixXd L(2 * n, 3);
+      Eigen::VectorXd b(2 * n);
+      for (size_t i = 0; i < n; ++i) {
+        const double x = o.pixels[i].x() - centre.x(), y = o.pixels[i].y() - centre.y();
+        const double rho = std::hypot(x, y) / scale;
+        const Vec3d P = o.board_points[i];
+        const double bx = c1.x() * P.x() + c2.x() * P.y() + tt1, by = c1.y() * P.x() + c2.y() * P.y() + tt2;
+        const double cz = c1.z() * P.x() + c2.z() * P.y();
+        L.row(2 * i) << bx, bx * rho * rho, -x;
+        b(2 * i) = x * cz;
+        L.row(2 * i + 1) << -by, -by * rho * rho, y;
+        b(2 * i + 1) = -y * cz;
+      }
+      const Eigen::Vector3d sol = L.colPivHouseholderQr().solve(b);
+      const double err = (L * sol - b).norm();
+      // Every point in front: the model's ray and the point agree in direction.
+      bool front = true;
+      for (size_t i = 0; i < n && front; ++i) {
+        const double x = o.pixels[i].x() - centre.x(), y = o.pixels[i].y() - centre.y();
+        const double rho = std::hypot(x, y) / scale;
+        const Vec3d ray(x, y, sol(0) + sol(1) * rho * rho);
+        const Vec3d P = o.board_points[i];
+        const Vec3d Xc = c1 * P.x() + c2 * P.y() + Vec3d(tt1, tt2, sol(2));
+        front = ray.dot(Xc) > 0;
+      }
+      // hovs' mirror frame has z towards the mirror, so the image centre looks down: a0 < 0. This picks the
+      // proper configuration out of the mirror-image pair that fits equally well.
+      if (!front || !(sol(0) < 0) || !(err < best)) continue;
+      best = err;
+      found = true;
+      out->R.col(0) = c1;
+      out->R.col(1) = c2;
+      out->R.col(2) = c1.cross(c2).normalized();
+      out->t = Vec3d(tt1, tt2, sol(2));
+    }
+  return found;
+}
+
+}  // namespace
+
+void PolynomialCalibrationOptions::Check(const std::string& where) const {
+  HOVS_REQUIRE(degree >= 2 && degree <= 8, where + ".degree", "must be in 2..8 (got ", degree, ")");
+  HOVS_REQUIRE(loss == "none" || loss == "huber" || loss == "cauchy", where + ".loss", "unknown loss '", loss,
+               "' (known: none, huber, cauchy)");
+  HOVS_REQUIRE(loss_scale > 0 && std::isfinite(loss_scale), where + ".loss_scale", "must be positive");
+  HOVS_REQUIRE(max_iterations >= 1, where + ".max_iterations", "must be positive");
+}
+
+PolynomialCalibration CalibratePolynomial(const std::vector<BoardObservation>& obs, int width, int height,
+                                          const PolynomialCalibrationOptions& opt) {
+  opt.Check("calibration");
+  HOVS_REQUIRE(obs.size() >= 3, "calibration", "needs at least three images with corners (got ", obs.size(), ")");
+  HOVS_REQUIRE(width > 0 && height > 0, "calibration", "image size must be positive");
+  for (const auto& o : obs) {
+    HOVS_REQUIRE(o.pixels.size() == o.board_points.size(), o.image, "corner and board point counts differ");
+    HOVS_REQUIRE(o.pixels.size() >= 6, o.image, "needs at least 6 corners (got ", o.pixels.size(), ")");
+  }
+  const Vec2d centre0 = opt.initial_centre.value_or(Vec2d(0.5 * (width - 1), 0.5 * (height - 1)));
+  double scale = 0;
+  for (const auto& o : obs)
+    for (const auto& p : o.pixels) scale = std::max(scale, (p - centre0).norm());
+  HOVS_REQUIRE(scale > 1, "calibration", "the corners are all at the centre");
+
+  // Linear initialisation: poses per image, then the polynomial and every t3 jointly.
+  std::vector<LinearPose> poses(obs.size());
+  for (size_t i = 0; i < obs.size(); ++i)
+    HOVS_REQUIRE(LinearExtrinsics(obs[i], centre0, scale, &poses[i]), obs[i].image,
+                 "degenerate board view: no pose puts every corner in front of the camera");
+  const int N = opt.degree;
+  size_t rows = 0;
+  for (const auto& o : obs) rows += 2 * o.pixels.size();
+  Eigen::MatrixXd L = Eigen::MatrixXd::Zero(rows, N + obs.size());
+  Eigen::VectorXd b(rows);
+  size_t r = 0;
+  for (size_t i = 0; i < obs.size(); ++i) {
+    const auto& R = poses[i].R;
+    const auto& t = poses[i].t;
+    for (size_t j = 0; j < obs[i].pixels.size(); ++j, r += 2) {
+      const double x = obs[i].pixels[j].x() - centre0.x(), y = obs[i].pixels[j].y() - centre0.y();
+      const double rho = std::hypot(x, y) / scale;
+      const Vec3d P = obs[i].board_points[j];
+      const double bx = R(0, 0) * P.x() + R(0, 1) * P.y() + t.x(), by = R(1, 0) * P.x() + R(1, 1) * P.y() + t.y();
+      const double cz = R(2, 0) * P.x() + R(2, 1) * P.y();
+      double pk = 1;
+      for (int k = 0; k <= N; ++k, pk *= rho) {
+        if (k == 1) continue;
+        const int col = k == 0 ? 0 : k - 1;
+        L(r, col) = bx * pk;
+        L(r + 1, col) = -by * pk;
+      }
+      L(r, N + i) = -x;
+      L(r + 1, N + i) = y;
+      b(r) = x * cz;
+      b(r + 1) = -y * cz;
+    }
+  }
+  const Eigen::VectorXd lin = L.colPivHouseholderQr().solve(b);
+  HOVS_REQUIRE(lin.allFinite(), "calibration", "the linear initialisation failed (degenerate board poses?)");
+
+  // Parameter blocks.
+  double centre[2] = {centre0.x(), centre0.y()};
+  double affine[3] = {1, 0, 0};
+  std::vector<double> poly(N);
+  for (int k = 0; k < N; ++k) poly[k] = lin(k);
+  std::vector<std::array<double, 6>> pose_params(obs.size());
+  for (size_t i = 0; i < obs.size(); ++i) {
+    Eigen::Matrix3d R = poses[i].R;
+    // Nearest rotation to the linear estimate.
+    Eigen::JacobiSVD<Eigen::Matrix3d> svd(R, Eigen::ComputeFullU | Eigen::ComputeFullV);
+    R = svd.matrixU() * svd.matrixV().transpose();
+    if (R.determinant() < 0) R.col(2) *= -1;
+    ceres::RotationMatrixToAngleAxis(ceres::ColumnMajorAdapter3x3(static_cast<const double*>(R.data())),
+                                     pose_params[i].data());
+    pose_params[i][3] = poses[i].t.x(), pose_params[i][4] = poses[i].t.y(), pose_params[i][5] = lin(N + i);
+  }
+
+  ceres::Problem problem;
+  static const std::array<double, 3> kIdentityAffine = {1, 0, 0};
+  const auto evaluate = [&](std::vector<double>* per_image_rms, std::vector<double>* per_image_mean, double* rms,
+                            double* mean) {
+    double sum2 = 0, sum = 0;
+    size_t count = 0;
+    for (size_t i = 0; i < obs.size(); ++i) {
+      double s2 = 0, s1 = 0;
+      for (size_t j = 0; j < obs[i].pixels.size(); ++j) {
+        const double hint = (obs[i].pixels[j] - Vec2d(centre[0], centre[1])).norm();
+        ReprojectionError e(obs[i].board_points[j], obs[i].pixels[j], N, scale, hint, nullptr);
+        double res[2] = {1e6, 1e6};
+        e(centre, affine, poly.data(), pose_params[i].data(), pose_params[i].data() + 3, res);
+        const double d2 = res[0] * res[0] + res[1] * res[1];
+        s2 += d2, s1 += std::sqrt(d2);
+      }
+      const size_t n = obs[i].pixels.size();
+      if (per_image_rms) per_image_rms->push_back(std::sqrt(s2 / n));
+      if (per_image_mean) per_image_mean->push_back(s1 / n);
+      sum2 += s2, sum += s1, count += n;
+    }
+    *rms = std::sqrt(sum2 / count);
+    *mean = sum / count;
+  };
+  PolynomialCalibration out;
+  double mean0 = 0;
+  evaluate(nullptr, nullptr, &out.initial_rms, &mean0);
+  if (std::getenv("HOVS_CALIB_DEBUG")) {
+    std::fprintf(stderr, "linear: rms %g, poly", out.initial_rms);
+    for (double v : poly) std::fprintf(stderr, " %g", v);
+    std::fprintf(stderr, "\n");
+    for (size_t i = 0; i < obs.size(); ++i)
+      std::fprintf(stderr, "  pose %zu: aa %g %g %g t %g %g %g\n", i, pose_params[i][0], pose_params[i][1],
+                   pose_params[i][2], pose_params[i][3], pose_params[i][4], pose_params[i][5]);
+  }
+
+  for (size_t i = 0; i < obs.size(); ++i)
+    for (size_t j = 0; j < obs[i].pixels.size(); ++j) {
+      const double hint = (obs[i].pixels[j] - centre0).norm();
+      auto* cost = new ceres::DynamicAutoDiffCostFunction<ReprojectionError, 8>(new ReprojectionError(
+          obs[i].board_points[j], obs[i].pixels[j], N, scale, hint, opt.estimate_affine ? nullptr : &kIdentityAffine));
+      for (int size : {2, 3, N, 3, 3}) cost->AddParameterBlock(size);
+      cost->SetNumResiduals(2);
+      ceres::LossFunction* loss = nullptr;
+      if (opt.loss == "huber") loss = new ceres::HuberLoss(opt.loss_scale);
+      if (opt.loss == "cauchy") loss = new ceres::CauchyLoss(opt.loss_scale);
+      problem.AddResidualBlock(cost, loss, centre, affine, poly.data(), pose_params[i].data(), pose_params[i].data() + 3);
+    }
+  if (!opt.estimate_affine) problem.SetParameterBlockConstant(affine);
+  ceres::Solver::Options so;
+  so.linear_solver_type = ceres::DENSE_SCHUR;
+  so.max_num_iterations = opt.max_iterations;
+  so.function_tolerance = 1e-14;
+  so.parameter_tolerance = 1e-14;
+  so.gradient_tolerance = 1e-14;
+  so.num_threads = 1;
+  ceres::Solver::Summary summary;
+  ceres::Solve(so, &problem, &summary);
+  out.converged = summary.IsSolutionUsable() && summary.termination_type == ceres::CONVERGENCE;
+  out.solver_report = summary.BriefReport();
+
+  // The model.
+  PolynomialModel<double>& m = out.model;
+  m.width = width, m.height = height;
+  m.cx = centre[0], m.cy = centre[1], m.c = affine[0], m.d = affine[1], m.e = affine[2];
+  m.poly.assign(N + 1, 0.0);
+  m.poly[0] = poly[0];
+  for (int k = 2; k <= N; ++k) m.poly[k] = poly[k - 1] / std::pow(scale, k);
+  double rho_min = HUGE_VAL, rho_max = 0;
+  for (const auto& o : obs)
+    for (const auto& p : o.pixels) {
+      const double rho = m.SensorFromImg(p).norm();
+      rho_min = std::min(rho_min, rho), rho_max = std::max(rho_max, rho);
+    }
+  m.rho_min = std::max(0.0, 0.9 * rho_min), m.rho_max = 1.05 * rho_max;
+  m.FitInverse(0.01);
+  for (size_t i = 0; i < obs.size(); ++i) {
+    Eigen::Matrix3d R;
+    ceres::AngleAxisToRotationMatrix(pose_params[i].data(), ceres::ColumnMajorAdapter3x3(R.data()));
+    out.cam_from_board.emplace_back(Eigen::Quaterniond(R), Vec3d(pose_params[i][3], pose_params[i][4], pose_params[i][5]));
+  }
+  evaluate(&out.per_image_rms, &out.per_image_mean, &out.rms, &out.mean);
+
+  // Standard deviations of the intrinsics (when the covariance is computable).
+  // With the affine terms free, a rotation about the optical axis is a gauge freedom (poses turn, d and e
+  // absorb it): the covariance is the pseudo-inverse with that one null direction removed.
+  ceres::Covariance::Options co;
+  co.algorithm_type = ceres::DENSE_SVD;
+  co.null_space_rank = opt.estimate_affine ? 1 : 0;
+  ceres::Covariance cov(co);
+  std::vector<std::pair<const double*, const double*>> blocks = {{centre, centre}, {poly.data(), poly.data()}};
+  if (opt.estimate_affine) blocks.push_back({affine, affine});
+  if (cov.Compute(blocks, &problem)) {
+    double cc[4], pc[64], ac[9];
+    cov.GetCovarianceBlock(centre, centre, cc);
+    cov.GetCovarianceBlock(poly.data(), poly.data(), pc);
+    out.stddev["cx"] = std::sqrt(cc[0]), out.stddev["cy"] = std::sqrt(cc[3]);
+    out.stddev["a0"] = std::sqrt(pc[0]);
+    for (int k = 2; k <= N; ++k) out.stddev["a" + std::to_string(k)] = std::sqrt(pc[(k - 1) * N + (k - 1)]) / std::pow(scale, k);
+    if (opt.estimate_affine) {
+      cov.GetCovarianceBlock(affine, affine, ac);
+      out.stddev["c"] = std::sqrt(ac[0]), out.stddev["d"] = std::sqrt(ac[4]), out.stddev["e"] = std::sqrt(ac[8]);
+    }
+  }
+  return out;
+}
+
+std::vector<BoardObservation> LoadCornerCsv(const std::filesystem::path& path) {
+  std::ifstream in(path);
+  HOVS_REQUIRE(in.good(), path.string(), "cannot open the corner table");
+  std::string line;
+  std::getline(in, line);
+  HOVS_REQUIRE(line.rfind("image,corner,board_x_mm,board_y_mm,u_px,v_px", 0) == 0, path.string() + ":1",
+               "expected the header image,corner,board_x_mm,board_y_mm,u_px,v_px");
+  std::vector<BoardObservation> out;
+  std::map<std::string, size_t> index;
+  int lineno = 1;
+  while (std::getline(in, line)) {
+    ++lineno;
+    if (line.empty()) continue;
+    std::stringstream ss(line);
+    std::string image, field;
+    std::vector<double> v;
+    std::getline(ss, image, ',');
+    while (std::getline(ss, field, ',')) {
+      try {
+        v.push_back(std::stod(field));
+      } catch (const std::exception&) {
+        throw Error(path.string() + ":" + std::to_string(lineno), "not a number: '" + field + "'");
+      }
+    }
+    HOVS_REQUIRE(v.size() == 5, path.string() + ":" + std::to_string(lineno), "expected 6 fields");
+    auto it = index.find(image);
+    if (it == index.end()) {
+      it = index.emplace(image, out.size()).first;
+      out.push_back({image, {}, {}});
+    }
+    out[it->second].board_points.emplace_back(v[1] * 1e-3, v[2] * 1e-3, 0.0);
+    out[it->second].pixels.emplace_back(v[3], v[4]);
+  }
+  return out;
+}
+
+}  // namespace hovs::calib

@@ -1,0 +1,55 @@
+// Monocular calibration of the polynomial (OCamCalib) model from board-corner correspondences:
+// Scaramuzza's linear initialisation (centre fixed, R and t from the cross-product constraint, then the
+// polynomial and t3 by linear least squares), then one joint Ceres problem over the centre, the affine terms
+// c, d, e, the polynomial a0, a2..aN and every board pose, with 2-D reprojection residuals through the core's
+// exact world2cam and an optional robust loss. Standard deviations come from ceres::Covariance.
+#pragma once
+
+#include <filesystem>
+#include <map>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "core/polynomial.h"
+#include "core/rigid.h"
+
+namespace hovs::calib {
+
+// One image's corners: points on the board (board frame, z = 0, metres) and their pixels.
+struct BoardObservation {
+  std::string image;
+  std::vector<Vec3d> board_points;
+  std::vector<Vec2d> pixels;
+};
+
+struct PolynomialCalibrationOptions {
+  int degree = 4;                 // N; a1 = 0
+  std::string loss = "none";      // none | huber | cauchy
+  double loss_scale = 1.0;        // pixels
+  bool estimate_affine = true;    // c, d, e
+  std::optional<Vec2d> initial_centre;  // default: the image centre
+  int max_iterations = 200;
+  void Check(const std::string& where) const;
+};
+
+struct PolynomialCalibration {
+  PolynomialModel<double> model;
+  std::vector<Rigid3d> cam_from_board;    // the board poses, in the model's (mirror) frame
+  std::vector<double> per_image_rms;      // px
+  std::vector<double> per_image_mean;     // px, mean reprojection error (the article's figure)
+  double rms = 0, mean = 0;               // over all corners, px
+  double initial_rms = 0;                 // after the linear initialisation
+  std::map<std::string, double> stddev;   // cx, cy, c, d, e, a0, a2, ... (from the covariance)
+  bool converged = false;
+  std::string solver_report;
+};
+
+// Throws hovs::Error for fewer than three images, images with fewer than 6 corners, degenerate data.
+PolynomialCalibration CalibratePolynomial(const std::vector<BoardObservation>& observations, int width, int height,
+                                          const PolynomialCalibrationOptions& options);
+
+// Reads a corner table: image,corner,board_x_mm,board_y_mm,u_px,v_px (the format of shared/data/vmr).
+std::vector<BoardObservation> LoadCornerCsv(const std::filesystem::path& path);
+
+}  // namespace hovs::calib
