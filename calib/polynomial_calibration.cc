@@ -353,3 +353,130 @@ std::vector<BoardObservation> LoadCornerCsv(const std::filesystem::path& path) {
 }
 
 }  // namespace hovs::calib
+
+namespace hovs::calib {
+namespace {
+
+// Reprojection through the core's unified model. Parameters: [xi, fx, fy, cx, cy], [k1, k2, p1, p2], pose.
+struct UnifiedReprojection {
+  UnifiedReprojection(const Vec3d& P, const Vec2d& obs) : P_(P), obs_(obs) {}
+  template <class T>
+  bool operator()(const T* intr, const T* dist, const T* aa, const T* t, T* residual) const {
+    UnifiedModel<T> m;
+    m.xi = intr[0], m.fx = intr[1], m.fy = intr[2], m.cx = intr[3], m.cy = intr[4];
+    m.distortion = {dist[0], dist[1], dist[2], dist[3]};
+    const T Pb[3] = {T(P_.x()), T(P_.y()), T(P_.z())};
+    T X[3];
+    ceres::AngleAxisRotatePoint(aa, Pb, X);
+    Vec2<T> uv;
+    if (!m.ImgFromCam(Vec3<T>(X[0] + t[0], X[1] + t[1], X[2] + t[2]), &uv)) return false;
+    residual[0] = uv(0) - T(obs_.x());
+    residual[1] = uv(1) - T(obs_.y());
+    return true;
+  }
+  Vec3d P_;
+  Vec2d obs_;
+};
+
+// Fits xi, fx = fy, cx, cy of a distortion-free unified model to the rays of a calibrated polynomial model.
+struct RayFit {
+  RayFit(const Vec3d& bearing, const Vec2d& pixel) : b_(bearing), px_(pixel) {}
+  template <class T>
+  bool operator()(const T* intr, T* residual) const {
+    UnifiedModel<T> m;
+    m.xi = intr[0], m.fx = intr[1], m.fy = intr[1], m.cx = intr[2], m.cy = intr[3];
+    Vec2<T> uv;
+    if (!m.ImgFromCam(Vec3<T>(T(b_.x()), T(b_.y()), T(b_.z())), &uv)) return false;
+    residual[0] = uv(0) - T(px_.x());
+    residual[1] = uv(1) - T(px_.y());
+    return true;
+  }
+  Vec3d b_;
+  Vec2d px_;
+};
+
+}  // namespace
+
+UnifiedCalibration CalibrateUnified(const std::vector<BoardObservation>& obs, int width, int height,
+                                    const PolynomialCalibration& start, const std::string& loss, double loss_scale) {
+  HOVS_REQUIRE(start.cam_from_board.size() == obs.size(), "unified calibration", "the start has a different image count");
+  const PolynomialModel<double>& poly = start.model;
+  // 1. A unified model through the polynomial model's rays over the observed annulus.
+  double intr4[4] = {0.9, 0, poly.cx, poly.cy};
+  {
+    // Focal guess from the ray at the middle of the annulus for xi = 0.9.
+    const double rho = 0.5 * (poly.rho_min + poly.rho_max);
+    Vec3d b;
+    poly.CamFromImg(Vec2d(poly.cx + rho, poly.cy), &b);
+    intr4[1] = rho * (intr4[0] * b.norm() - b.z()) / b.x();
+    ceres::Problem p;
+    for (int k = 0; k <= 40; ++k)
+      for (int a = 0; a < 8; ++a) {
+        const double r = poly.rho_min + (poly.rho_max - poly.rho_min) * k / 40.0, phi = a * M_PI / 4;
+        const Vec2d uv(poly.cx + r * std::cos(phi), poly.cy + r * std::sin(phi));
+        Vec3d bearing;
+        if (!poly.CamFromImg(uv, &bearing)) continue;
+        p.AddResidualBlock(new ceres::AutoDiffCostFunction<RayFit, 2, 4>(new RayFit(bearing, uv)), nullptr, intr4);
+      }
+    ceres::Solver::Options so;
+    so.max_num_iterations = 100;
+    ceres::Solver::Summary s;
+    ceres::Solve(so, &p, &s);
+  }
+  // 2. The joint problem.
+  double intr[5] = {intr4[0], intr4[1], intr4[1], intr4[2], intr4[3]};
+  double dist[4] = {0, 0, 0, 0};
+  std::vector<std::array<double, 6>> poses(obs.size());
+  for (size_t i = 0; i < obs.size(); ++i) {
+    const Eigen::Matrix3d R = start.cam_from_board[i].rotation.toRotationMatrix();
+    ceres::RotationMatrixToAngleAxis(ceres::ColumnMajorAdapter3x3(static_cast<const double*>(R.data())), poses[i].data());
+    for (int k = 0; k < 3; ++k) poses[i][3 + k] = start.cam_from_board[i].translation(k);
+  }
+  ceres::Problem problem;
+  for (size_t i = 0; i < obs.size(); ++i)
+    for (size_t j = 0; j < obs[i].pixels.size(); ++j) {
+      ceres::LossFunction* l = loss == "huber" ? static_cast<ceres::LossFunction*>(new ceres::HuberLoss(loss_scale))
+                               : loss == "cauchy" ? new ceres::CauchyLoss(loss_scale)
+                                                  : nullptr;
+      problem.AddResidualBlock(new ceres::AutoDiffCostFunction<UnifiedReprojection, 2, 5, 4, 3, 3>(
+                                   new UnifiedReprojection(obs[i].board_points[j], obs[i].pixels[j])),
+                               l, intr, dist, poses[i].data(), poses[i].data() + 3);
+    }
+  ceres::Solver::Options so;
+  so.linear_solver_type = ceres::DENSE_SCHUR;
+  so.max_num_iterations = 300;
+  so.function_tolerance = 1e-14;
+  so.parameter_tolerance = 1e-14;
+  so.gradient_tolerance = 1e-14;
+  ceres::Solver::Summary summary;
+  ceres::Solve(so, &problem, &summary);
+  UnifiedCalibration out;
+  out.converged = summary.IsSolutionUsable() && summary.termination_type == ceres::CONVERGENCE;
+  out.solver_report = summary.BriefReport();
+  auto& m = out.model;
+  m.width = width, m.height = height;
+  m.xi = intr[0], m.fx = intr[1], m.fy = intr[2], m.cx = intr[3], m.cy = intr[4];
+  m.distortion = {dist[0], dist[1], dist[2], dist[3]};
+  double sum2 = 0, sum = 0;
+  size_t count = 0;
+  for (size_t i = 0; i < obs.size(); ++i) {
+    Eigen::Matrix3d R;
+    ceres::AngleAxisToRotationMatrix(poses[i].data(), ceres::ColumnMajorAdapter3x3(R.data()));
+    out.cam_from_board.emplace_back(Eigen::Quaterniond(R), Vec3d(poses[i][3], poses[i][4], poses[i][5]));
+    double s2 = 0;
+    for (size_t j = 0; j < obs[i].pixels.size(); ++j) {
+      Vec2d uv;
+      const double d2 = m.ImgFromCam(out.cam_from_board[i] * obs[i].board_points[j], &uv)
+                            ? (uv - obs[i].pixels[j]).squaredNorm()
+                            : 1e12;
+      s2 += d2, sum += std::sqrt(d2);
+    }
+    out.per_image_rms.push_back(std::sqrt(s2 / obs[i].pixels.size()));
+    sum2 += s2, count += obs[i].pixels.size();
+  }
+  out.rms = std::sqrt(sum2 / count);
+  out.mean = sum / count;
+  return out;
+}
+
+}  // namespace hovs::calib

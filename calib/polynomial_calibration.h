@@ -53,3 +53,25 @@ PolynomialCalibration CalibratePolynomial(const std::vector<BoardObservation>& o
 std::vector<BoardObservation> LoadCornerCsv(const std::filesystem::path& path);
 
 }  // namespace hovs::calib
+
+#include "core/unified.h"
+
+namespace hovs::calib {
+
+struct UnifiedCalibration {
+  UnifiedModel<double> model;
+  std::vector<Rigid3d> cam_from_board;
+  std::vector<double> per_image_rms;
+  double rms = 0, mean = 0;
+  bool converged = false;
+  std::string solver_report;
+};
+
+// The unified (Mei) model with radial-tangential distortion through the same machinery: started from a
+// polynomial calibration (its poses, and a unified model fitted to its rays), then one joint Ceres problem over
+// xi, fx, fy, cx, cy, k1, k2, p1, p2 and every pose.
+UnifiedCalibration CalibrateUnified(const std::vector<BoardObservation>& observations, int width, int height,
+                                    const PolynomialCalibration& start, const std::string& loss = "none",
+                                    double loss_scale = 1.0);
+
+}  // namespace hovs::calib
