@@ -7,6 +7,7 @@ const std::vector<Command>& Commands() {
       {"design", "Mirror design study: sweep (a, b[, d]), constrained optima, report with figures", SetupDesign},
       {"render", "Render a scene through its catadioptric units, with ground truth (EXR + JSON)", SetupRender},
       {"dataset", "Render a dataset (a monocular calibration set) with ground truth and a manifest", SetupDataset},
+      {"calibrate", "Monocular calibration (polynomial and unified models) from a corner table or a dataset", SetupCalibrate},
       {"version", "Print the versions of hovs and its libraries", SetupVersion},
   };
   return table;

@@ -29,5 +29,6 @@ Runner SetupDesign(CLI::App* sub, const GlobalOptions* global);
 Runner SetupVersion(CLI::App* sub, const GlobalOptions* global);
 Runner SetupRender(CLI::App* sub, const GlobalOptions* global);
 Runner SetupDataset(CLI::App* sub, const GlobalOptions* global);
+Runner SetupCalibrate(CLI::App* sub, const GlobalOptions* global);
 
 }  // namespace hovs::apps

@@ -1,4 +1,6 @@
 // hovs: one command, subcommands from the table in commands.cc.
+#include <glog/logging.h>
+
 #include <iostream>
 
 #include "apps/commands.h"
@@ -6,6 +8,9 @@
 #include "core/version.h"
 
 int main(int argc, char** argv) {
+  // Ceres logs through glog; hovs reports what matters itself.
+  FLAGS_minloglevel = 3;
+  google::InitGoogleLogging(argv[0]);
   CLI::App app{"hovs: design, render, calibrate, unwrap and measure hyperboloid catadioptric vision systems"};
   app.set_version_flag("--version", hovs::HovsVersion());
   hovs::apps::GlobalOptions global;

@@ -103,6 +103,37 @@ TEST(Dataset, StereoArucoPairsSeeTheBoardFromBothUnits) {
   fs::remove_all(out.parent_path());
 }
 
+TEST(CalibrateCli, CalibratesASyntheticSetAgainstGroundTruthAndRejectsBadInput) {
+  const auto cfg = SmallCalibrationScene();
+  scenes::DatasetOptions o;
+  o.count = 9;
+  const fs::path dir = test::Scratch("calibrate-cli", "work");
+  scenes::WriteCalibrationDataset(cfg, o, dir / "set", {{"hovs", "test"}});
+  const auto ok = test::Hovs("-q calibrate --dataset " + (dir / "set" / "dataset.json").string() + " --out " +
+                             (dir / "cal").string());
+  ASSERT_EQ(ok.exit_code, 0) << ok.output;
+  const auto j = nlohmann::json::parse(ReadFile(dir / "cal" / "calibration.json"));
+  EXPECT_LT(j["polynomial"]["rms_px"].get<double>(), 0.01);
+  EXPECT_LT(j["ground_truth"]["mean_ray_angle_deg"].get<double>(), 0.01);
+  EXPECT_EQ(j["order_selection"].size(), 5u);
+  // Bad input: one clear error, exit 2, no report.
+  const auto rejected = [&](const std::string& args, const std::string& needle) {
+    const auto r = test::Hovs("calibrate " + args + " --out " + (dir / "bad").string());
+    EXPECT_EQ(r.exit_code, 2) << args << "\n" << r.output;
+    EXPECT_NE(r.output.find(needle), std::string::npos) << r.output;
+    EXPECT_FALSE(fs::exists(dir / "bad"));
+  };
+  const std::string vmr = std::string(HOVS_SOURCE_DIR) + "/../shared/data/vmr/reference_corners.csv";
+  rejected("--corners " + vmr + " --size 1024by768", "expected WxH");
+  rejected("--corners " + vmr + " --size 640x480", "lies outside the 640x480 image");
+  rejected("--corners " + vmr + " --size 1024x768 --dataset x.json", "either --corners or --dataset");
+  rejected("--corners /nonexistent.csv --size 1024x768", "cannot open the corner table");
+  std::ofstream(dir / "two.csv") << "image,corner,board_x_mm,board_y_mm,u_px,v_px\n"
+                                 << "a.png,0,0,0,100,100\na.png,1,30,0,110,100\nb.png,0,0,0,200,200\n";
+  rejected("--corners " + (dir / "two.csv").string() + " --size 1024x768", "needs at least three images");
+  fs::remove_all(dir.parent_path());
+}
+
 TEST(RenderCli, RendersAndRejectsBadInput) {
   const fs::path dir = test::Scratch("render-cli", "work");
   fs::create_directories(dir);
