@@ -67,6 +67,15 @@ Vec2<S> ReflectionResidual(const HyperboloidMirror<P>& mirror_p, const Vec3<P>& 
   return Vec2<S>(h(0) + h(2) * slope(0), h(1) + h(2) * slope(1));
 }
 
+// The camera placement of a misaligned rig: the pinhole at F2 + offset (mirror frame), the camera turned by
+// `tilt` (axis-angle, radians) about its own centre, starting from the ideal orientation (optical axis along
+// +z). Returns cam_from_mirror. (The article's R_eps, t_eps, seen from the camera.)
+template <class T>
+Rigid3<T> CamFromMirrorMisaligned(const HyperboloidMirror<T>& mirror, const Vec3<T>& tilt, const Vec3<T>& offset) {
+  const Rigid3<T> mirror_from_cam(QuaternionFromAngleAxis<T>(tilt), Vec3<T>(mirror.SecondFocus() + offset));
+  return mirror_from_cam.Inverse();
+}
+
 template <class T>
 struct CatadioptricCamera {
   HyperboloidMirror<T> mirror;

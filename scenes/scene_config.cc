@@ -132,9 +132,7 @@ Rigid3d LookAt(const Vec3d& position, const Vec3d& target, double roll) {
 
 Rigid3d MisalignedCamFromMirror(const HyperboloidMirror<double>& mirror, const Vec3d& tilt, const Vec3d& offset,
                                 double height_error) {
-  const Vec3d centre = mirror.SecondFocus() + offset + Vec3d(0, 0, -height_error);
-  const Rigid3d mirror_from_cam(QuaternionFromAngleAxis<double>(tilt), centre);
-  return mirror_from_cam.Inverse();
+  return CamFromMirrorMisaligned<double>(mirror, tilt, Vec3d(offset + Vec3d(0, 0, -height_error)));
 }
 
 namespace {
