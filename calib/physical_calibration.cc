@@ -3,6 +3,7 @@
 #include <ceres/ceres.h>
 #include <ceres/rotation.h>
 
+#include "calib/pose_params.h"
 #include "core/error.h"
 
 #include <cstdio>
@@ -57,11 +58,7 @@ PhysicalCalibration CalibratePhysical(const std::vector<BoardObservation>& obs, 
                     nominal.camera.distortion.p2};
   double mis[6] = {0, 0, 0, 0, 0, 0};
   std::vector<std::array<double, 6>> poses(obs.size());
-  for (size_t i = 0; i < obs.size(); ++i) {
-    const Eigen::Matrix3d R = start.cam_from_board[i].rotation.toRotationMatrix();
-    ceres::RotationMatrixToAngleAxis(ceres::ColumnMajorAdapter3x3(static_cast<const double*>(R.data())), poses[i].data());
-    for (int k = 0; k < 3; ++k) poses[i][3 + k] = start.cam_from_board[i].translation(k);
-  }
+  for (size_t i = 0; i < obs.size(); ++i) poses[i] = PoseToParams(start.cam_from_board[i]);
   ceres::Problem problem;
   for (size_t i = 0; i < obs.size(); ++i)
     for (size_t j = 0; j < obs[i].pixels.size(); ++j)
@@ -101,9 +98,7 @@ PhysicalCalibration CalibratePhysical(const std::vector<BoardObservation>& obs, 
   double sum2 = 0;
   size_t n = 0;
   for (size_t i = 0; i < obs.size(); ++i) {
-    Eigen::Matrix3d R;
-    ceres::AngleAxisToRotationMatrix(poses[i].data(), ceres::ColumnMajorAdapter3x3(R.data()));
-    out.mirror_from_board.emplace_back(Eigen::Quaterniond(R), Vec3d(poses[i][3], poses[i][4], poses[i][5]));
+    out.mirror_from_board.push_back(ParamsToPose(poses[i].data()));
     for (size_t j = 0; j < obs[i].pixels.size(); ++j, ++n) {
       Vec2d uv;
       sum2 += unlimited.ImgFromMirrorGeneral(out.mirror_from_board[i] * obs[i].board_points[j], &uv) == ProjectionStatus::kOk

@@ -12,6 +12,7 @@
 #include <map>
 #include <sstream>
 
+#include "calib/pose_params.h"
 #include "core/error.h"
 
 namespace hovs::calib {
@@ -204,9 +205,7 @@ PolynomialCalibration CalibratePolynomial(const std::vector<BoardObservation>& o
     Eigen::JacobiSVD<Eigen::Matrix3d> svd(R, Eigen::ComputeFullU | Eigen::ComputeFullV);
     R = svd.matrixU() * svd.matrixV().transpose();
     if (R.determinant() < 0) R.col(2) *= -1;
-    ceres::RotationMatrixToAngleAxis(ceres::ColumnMajorAdapter3x3(static_cast<const double*>(R.data())),
-                                     pose_params[i].data());
-    pose_params[i][3] = poses[i].t.x(), pose_params[i][4] = poses[i].t.y(), pose_params[i][5] = lin(N + i);
+    pose_params[i] = PoseToParams(Rigid3d(Eigen::Quaterniond(R), Vec3d(poses[i].t.x(), poses[i].t.y(), lin(N + i))));
   }
 
   ceres::Problem problem;
@@ -285,11 +284,7 @@ PolynomialCalibration CalibratePolynomial(const std::vector<BoardObservation>& o
     }
   m.rho_min = std::max(0.0, 0.9 * rho_min), m.rho_max = 1.05 * rho_max;
   m.FitInverse(0.01);
-  for (size_t i = 0; i < obs.size(); ++i) {
-    Eigen::Matrix3d R;
-    ceres::AngleAxisToRotationMatrix(pose_params[i].data(), ceres::ColumnMajorAdapter3x3(R.data()));
-    out.cam_from_board.emplace_back(Eigen::Quaterniond(R), Vec3d(pose_params[i][3], pose_params[i][4], pose_params[i][5]));
-  }
+  for (size_t i = 0; i < obs.size(); ++i) out.cam_from_board.push_back(ParamsToPose(pose_params[i].data()));
   evaluate(&out.per_image_rms, &out.per_image_mean, &out.rms, &out.mean);
 
   // Standard deviations of the intrinsics (when the covariance is computable).
@@ -427,11 +422,7 @@ UnifiedCalibration CalibrateUnified(const std::vector<BoardObservation>& obs, in
   double intr[5] = {intr4[0], intr4[1], intr4[1], intr4[2], intr4[3]};
   double dist[4] = {0, 0, 0, 0};
   std::vector<std::array<double, 6>> poses(obs.size());
-  for (size_t i = 0; i < obs.size(); ++i) {
-    const Eigen::Matrix3d R = start.cam_from_board[i].rotation.toRotationMatrix();
-    ceres::RotationMatrixToAngleAxis(ceres::ColumnMajorAdapter3x3(static_cast<const double*>(R.data())), poses[i].data());
-    for (int k = 0; k < 3; ++k) poses[i][3 + k] = start.cam_from_board[i].translation(k);
-  }
+  for (size_t i = 0; i < obs.size(); ++i) poses[i] = PoseToParams(start.cam_from_board[i]);
   ceres::Problem problem;
   for (size_t i = 0; i < obs.size(); ++i)
     for (size_t j = 0; j < obs[i].pixels.size(); ++j) {
@@ -460,9 +451,7 @@ UnifiedCalibration CalibrateUnified(const std::vector<BoardObservation>& obs, in
   double sum2 = 0, sum = 0;
   size_t count = 0;
   for (size_t i = 0; i < obs.size(); ++i) {
-    Eigen::Matrix3d R;
-    ceres::AngleAxisToRotationMatrix(poses[i].data(), ceres::ColumnMajorAdapter3x3(R.data()));
-    out.cam_from_board.emplace_back(Eigen::Quaterniond(R), Vec3d(poses[i][3], poses[i][4], poses[i][5]));
+    out.cam_from_board.push_back(ParamsToPose(poses[i].data()));
     double s2 = 0;
     for (size_t j = 0; j < obs[i].pixels.size(); ++j) {
       Vec2d uv;

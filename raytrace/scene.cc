@@ -134,39 +134,49 @@ double DefaultMountRadius(const CatadioptricUnit& u) {
 
 }  // namespace
 
+std::vector<Rect> MakeBox(const Rigid3d& world_from_base, const Vec3d& s, const Texture& texture, int object_id,
+                          bool double_sided) {
+  const double pi = M_PI;
+  struct Face {
+    Vec3d centre, axis_angle;
+    double w, h;
+  };
+  const Face faces[] = {{Vec3d(0, 0, s.z()), Vec3d(0, 0, 0), s.x(), s.y()},
+                        {Vec3d(0, 0, 0), Vec3d(pi, 0, 0), s.x(), s.y()},
+                        {Vec3d(s.x() / 2, 0, s.z() / 2), Vec3d(0, pi / 2, 0), s.z(), s.y()},
+                        {Vec3d(-s.x() / 2, 0, s.z() / 2), Vec3d(0, -pi / 2, 0), s.z(), s.y()},
+                        {Vec3d(0, s.y() / 2, s.z() / 2), Vec3d(-pi / 2, 0, 0), s.x(), s.z()},
+                        {Vec3d(0, -s.y() / 2, s.z() / 2), Vec3d(pi / 2, 0, 0), s.x(), s.z()}};
+  std::vector<Rect> out;
+  for (const Face& f : faces) {
+    Rect r;
+    r.object_id = object_id;
+    r.world_from_rect = world_from_base * Rigid3d(QuaternionFromAngleAxis<double>(f.axis_angle), f.centre);
+    r.width = f.w, r.height = f.h;
+    r.front = texture;
+    r.double_sided = double_sided;
+    out.push_back(r);
+  }
+  return out;
+}
+
 RayScene::RayScene(SceneDescription description) : desc_(std::move(description)) {
   device_ = rtcNewDevice(nullptr);
   HOVS_REQUIRE(device_ != nullptr, "embree", "cannot create a device (error ", static_cast<int>(rtcGetDeviceError(nullptr)), ")");
   scene_ = rtcNewScene(device_);
   rtcSetSceneBuildQuality(scene_, RTC_BUILD_QUALITY_HIGH);
 
-  // Camera bodies of the units become rectangles (a box behind the lens face).
+  // Camera bodies of the units become rectangles (a box behind the lens face, along the optical axis).
   for (size_t ui = 0; ui < desc_.units.size(); ++ui) {
     const CatadioptricUnit& u = desc_.units[ui];
     u.rig.Check("unit " + u.name);
     const Rigid3d world_from_cam = u.world_from_mirror * u.rig.cam_from_mirror.Inverse();
-    const double half = 0.7 * u.rig.occluder_radius, len = u.body_length;
+    const double half = 0.7 * u.rig.occluder_radius;
     Texture body;
     body.colour_a = u.body_colour;
-    // Faces of the box: centres and orientations in the camera frame (z forward; the box spans z in [-len, 0]).
-    struct Face {
-      Vec3d centre, axis_angle;
-      double w, h;
-    };
-    const double pi = M_PI;
-    const Face faces[] = {{Vec3d(half, 0, -len / 2), Vec3d(0, pi / 2, 0), len, 2 * half},
-                          {Vec3d(-half, 0, -len / 2), Vec3d(0, -pi / 2, 0), len, 2 * half},
-                          {Vec3d(0, half, -len / 2), Vec3d(-pi / 2, 0, 0), 2 * half, len},
-                          {Vec3d(0, -half, -len / 2), Vec3d(pi / 2, 0, 0), 2 * half, len},
-                          {Vec3d(0, 0, -len), Vec3d(pi, 0, 0), 2 * half, 2 * half}};
-    for (const Face& f : faces) {
-      Rect r;
-      r.object_id = kCameraBodyId;
-      r.world_from_rect = world_from_cam * Rigid3d(QuaternionFromAngleAxis<double>(f.axis_angle), f.centre);
-      r.width = f.w, r.height = f.h;
-      r.front = body;
+    for (Rect r : MakeBox(world_from_cam * Rigid3d::Translation(Vec3d(0, 0, -u.body_length)),
+                          Vec3d(2 * half, 2 * half, u.body_length), body, kCameraBodyId, true)) {
       r.back = u.body_colour;
-      r.double_sided = true;
       desc_.rects.push_back(r);
     }
   }
@@ -288,32 +298,37 @@ void RayScene::Shade(const Vec3d& o, const Vec3d& d, unsigned geom_id, unsigned 
   (void)prim_id;
 }
 
-void RayScene::Trace16(int count, const Vec3d* o, const Vec3d* d, const double* tnear, Hit* hits,
-                       const int* from_mirror) const {
-  alignas(64) RTCRayHit16 rh;
+namespace {
+// Fills a 16-wide packet (lanes past count are masked off) and intersects it with the scene.
+void IntersectPacket(RTCScene scene, int count, const Vec3d* o, const Vec3d* d, const double* tnear,
+                     const int* from_mirror, RTCRayHit16* rh) {
   alignas(64) int valid[16];
   for (int i = 0; i < 16; ++i) {
     valid[i] = i < count ? -1 : 0;
     const int k = i < count ? i : 0;
-    rh.ray.org_x[i] = static_cast<float>(o[k].x());
-    rh.ray.org_y[i] = static_cast<float>(o[k].y());
-    rh.ray.org_z[i] = static_cast<float>(o[k].z());
-    rh.ray.dir_x[i] = static_cast<float>(d[k].x());
-    rh.ray.dir_y[i] = static_cast<float>(d[k].y());
-    rh.ray.dir_z[i] = static_cast<float>(d[k].z());
-    rh.ray.tnear[i] = static_cast<float>(tnear ? tnear[k] : 0.0);
-    rh.ray.tfar[i] = std::numeric_limits<float>::infinity();
-    rh.ray.mask[i] = 0xFFFFFFFFu;
-    rh.ray.flags[i] = 0;
-    rh.ray.time[i] = 0;
-    rh.ray.id[i] = from_mirror ? static_cast<unsigned>(from_mirror[k] + 1) : 0u;
-    rh.hit.geomID[i] = RTC_INVALID_GEOMETRY_ID;
-    rh.hit.instID[0][i] = RTC_INVALID_GEOMETRY_ID;
+    rh->ray.org_x[i] = static_cast<float>(o[k].x()), rh->ray.org_y[i] = static_cast<float>(o[k].y());
+    rh->ray.org_z[i] = static_cast<float>(o[k].z());
+    rh->ray.dir_x[i] = static_cast<float>(d[k].x()), rh->ray.dir_y[i] = static_cast<float>(d[k].y());
+    rh->ray.dir_z[i] = static_cast<float>(d[k].z());
+    rh->ray.tnear[i] = static_cast<float>(tnear ? tnear[k] : 0.0);
+    rh->ray.tfar[i] = std::numeric_limits<float>::infinity();
+    rh->ray.mask[i] = 0xFFFFFFFFu, rh->ray.flags[i] = 0, rh->ray.time[i] = 0;
+    // The id carries the unit whose (convex) mirror the ray leaves, which the mirror callback then skips.
+    rh->ray.id[i] = from_mirror ? static_cast<unsigned>(from_mirror[k] + 1) : 0u;
+    rh->hit.geomID[i] = RTC_INVALID_GEOMETRY_ID;
+    rh->hit.instID[0][i] = RTC_INVALID_GEOMETRY_ID;
   }
   RTCIntersectContext ctx;
   rtcInitIntersectContext(&ctx);
   ctx.flags = RTC_INTERSECT_CONTEXT_FLAG_COHERENT;
-  rtcIntersect16(valid, scene_, &ctx, &rh);
+  rtcIntersect16(valid, scene, &ctx, rh);
+}
+}  // namespace
+
+void RayScene::Trace16(int count, const Vec3d* o, const Vec3d* d, const double* tnear, Hit* hits,
+                       const int* from_mirror) const {
+  alignas(64) RTCRayHit16 rh;
+  IntersectPacket(scene_, count, o, d, tnear, from_mirror, &rh);
   for (int i = 0; i < count; ++i) {
     Hit& h = hits[i];
     h = Hit();
@@ -354,24 +369,7 @@ bool RayScene::Occluded(const Vec3d& a, const Vec3d& b, double eps) const {
 void RayScene::IntersectOnly16(int count, const Vec3d* o, const Vec3d* d, unsigned* geom_ids,
                                const int* from_mirror) const {
   alignas(64) RTCRayHit16 rh;
-  alignas(64) int valid[16];
-  for (int i = 0; i < 16; ++i) {
-    valid[i] = i < count ? -1 : 0;
-    const int k = i < count ? i : 0;
-    rh.ray.org_x[i] = static_cast<float>(o[k].x()), rh.ray.org_y[i] = static_cast<float>(o[k].y());
-    rh.ray.org_z[i] = static_cast<float>(o[k].z());
-    rh.ray.dir_x[i] = static_cast<float>(d[k].x()), rh.ray.dir_y[i] = static_cast<float>(d[k].y());
-    rh.ray.dir_z[i] = static_cast<float>(d[k].z());
-    rh.ray.tnear[i] = 0, rh.ray.tfar[i] = std::numeric_limits<float>::infinity();
-    rh.ray.mask[i] = 0xFFFFFFFFu, rh.ray.flags[i] = 0, rh.ray.time[i] = 0;
-    rh.ray.id[i] = from_mirror ? static_cast<unsigned>(from_mirror[k] + 1) : 0u;
-    rh.hit.geomID[i] = RTC_INVALID_GEOMETRY_ID;
-    rh.hit.instID[0][i] = RTC_INVALID_GEOMETRY_ID;
-  }
-  RTCIntersectContext ctx;
-  rtcInitIntersectContext(&ctx);
-  ctx.flags = RTC_INTERSECT_CONTEXT_FLAG_COHERENT;
-  rtcIntersect16(valid, scene_, &ctx, &rh);
+  IntersectPacket(scene_, count, o, d, nullptr, from_mirror, &rh);
   for (int i = 0; i < count; ++i) geom_ids[i] = rh.hit.geomID[i];
 }
 

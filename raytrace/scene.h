@@ -56,6 +56,11 @@ struct Sky {
   Rgb Eval(const Vec3d& direction_world) const;
 };
 
+// The six outward-facing rectangles of a box of `size` (x, y, z) whose bottom face is centred at
+// world_from_base's origin.
+std::vector<Rect> MakeBox(const Rigid3d& world_from_base, const Vec3d& size, const Texture& texture, int object_id,
+                          bool double_sided = false);
+
 struct SceneObjectInfo {
   int id;
   std::string name, type;

@@ -345,26 +345,8 @@ SceneConfig ParseSceneConfig(const std::string& text, const std::string& source,
         const Vec3d s = r.Vector3(r.Require(o, k, "size", &sz), k + ".size");
         HOVS_REQUIRE(s.minCoeff() > 0, r.Where(sz, k + ".size"), "box sides must be positive");
         const Texture tex = ReadTexture(r, r.Require(o, k, "texture", &t), k + ".texture", base);
-        const double pi = M_PI;
-        struct Face {
-          Vec3d centre, aa;
-          double w, h;
-        };
-        // Six faces, each looking outwards; the box's pose is at the centre of its bottom face.
-        const Face faces[] = {{Vec3d(0, 0, s.z()), Vec3d(0, 0, 0), s.x(), s.y()},
-                              {Vec3d(0, 0, 0), Vec3d(pi, 0, 0), s.x(), s.y()},
-                              {Vec3d(s.x() / 2, 0, s.z() / 2), Vec3d(0, pi / 2, 0), s.z(), s.y()},
-                              {Vec3d(-s.x() / 2, 0, s.z() / 2), Vec3d(0, -pi / 2, 0), s.z(), s.y()},
-                              {Vec3d(0, s.y() / 2, s.z() / 2), Vec3d(-pi / 2, 0, 0), s.x(), s.z()},
-                              {Vec3d(0, -s.y() / 2, s.z() / 2), Vec3d(pi / 2, 0, 0), s.x(), s.z()}};
-        for (const Face& fc : faces) {
-          Rect p;
-          p.object_id = id;
-          p.world_from_rect = world_from_box * Rigid3d(QuaternionFromAngleAxis<double>(fc.aa), fc.centre);
-          p.width = fc.w, p.height = fc.h;
-          p.front = tex;
-          desc.rects.push_back(p);
-        }
+        // The box's pose is at the centre of its bottom face.
+        for (const Rect& face : raytrace::MakeBox(world_from_box, s, tex, id)) desc.rects.push_back(face);
       } else {
         throw Error(r.Where(type_node, k + ".type"), "unknown object type '" + type + "' (known: board, box, ground, plane)");
       }
