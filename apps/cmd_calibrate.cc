@@ -7,6 +7,7 @@
 #include <random>
 
 #include "apps/commands.h"
+#include "calib/ocam_io.h"
 #include "calib/omnidir_reference.h"
 #include "calib/polynomial_calibration.h"
 #include "core/error.h"
@@ -182,6 +183,7 @@ Runner SetupCalibrate(CLI::App* sub, const GlobalOptions* global) {
     }
     StagedDirectory stage(o->out);
     WriteFileAtomic(stage.staging() / "calibration.json", j.dump(2) + "\n");
+    WriteFileAtomic(stage.staging() / "calib_results.txt", calib::FormatOcamCalibResults(chosen->model));
     std::string summary = "hovs calibrate: " + std::to_string(in.obs.size()) + " images\n";
     summary += "  polynomial (degree " + std::to_string(chosen->model.Degree()) + "): RMS " + F("%.4f", chosen->rms) +
                " px, mean " + F("%.4f", chosen->mean) + " px (linear start " + F("%.3f", chosen->initial_rms) + " px)\n";

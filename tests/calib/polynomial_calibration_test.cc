@@ -4,6 +4,7 @@
 
 #include <random>
 
+#include "calib/ocam_io.h"
 #include "calib/omnidir_reference.h"
 #include "calib/physical_calibration.h"
 #include "calib/polynomial_calibration.h"
@@ -157,6 +158,36 @@ TEST(PhysicalCalibration, RecoversTheTiltOfAMisalignedRig) {
   std::printf("[ figure ] misaligned rig, 0.3 px noise: physical RMS %.4f px, tilt error %.4f deg, offset error %.3f mm\n",
               pn.rms, (pn.tilt - tilt).norm() / kDeg, (pn.offset - offset).norm() * 1e3);
   EXPECT_LT((pn.tilt - tilt).norm() / kDeg, 0.05);
+}
+
+TEST(OcamIo, CalibResultsRoundTripInOCamCalibsLayout) {
+  const auto obs = LoadCornerCsv(std::string(HOVS_SHARED_DIR) + "/data/vmr/reference_corners.csv");
+  const PolynomialModel<double> m = CalibratePolynomial(obs, 1024, 768, {}).model;
+  const std::string text = FormatOcamCalibResults(m);
+  // OCamCalib's layout: comment, blank, data, blank, ...; centre as row then column; size as height then width.
+  EXPECT_EQ(text.rfind("#polynomial coefficients for the DIRECT mapping function (ocam_model.ss in MATLAB). "
+                       "These are used by cam2world\n\n5 ", 0), 0u);
+  EXPECT_NE(text.find("#center: \"row\" and \"column\", starting from 0 (C convention)\n\n"), std::string::npos);
+  EXPECT_NE(text.find("\n\n#image size: \"height\" and \"width\"\n\n768 1024\n"), std::string::npos);
+  char centre[64];
+  std::snprintf(centre, sizeof centre, "\n%f %f\n", m.cy, m.cx);
+  EXPECT_NE(text.find(centre), std::string::npos) << "row first";
+  const PolynomialModel<double> back = ParseOcamCalibResults(text, "calib_results.txt");
+  EXPECT_EQ(FormatOcamCalibResults(back), text) << "byte-for-byte";
+  double worst = 0;
+  for (const auto& o : obs)
+    for (const auto& px : o.pixels) {
+      Vec3d a, b;
+      ASSERT_TRUE(m.CamFromImg(px, &a));
+      ASSERT_TRUE(back.CamFromImg(px, &b));
+      Vec2d ua, ub;
+      ASSERT_TRUE(m.ImgFromCamFast(a, &ua));
+      ASSERT_TRUE(back.ImgFromCamFast(b, &ub));
+      worst = std::max(worst, (ua - ub).norm());
+    }
+  EXPECT_LT(worst, 1e-3) << "px, after printing with OCamCalib's precision";
+  EXPECT_THROW(ParseOcamCalibResults("#x\n\n3 -100 0\n", "bad.txt"), Error);
+  EXPECT_THROW(ParseOcamCalibResults(text.substr(0, text.find("#image size")), "cut.txt"), Error);
 }
 
 TEST(PolynomialCalibration, RejectsTooFewImages) {

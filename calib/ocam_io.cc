@@ -1,0 +1,83 @@
+#include "calib/ocam_io.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <sstream>
+#include <vector>
+
+#include "core/error.h"
+#include "core/io.h"
+
+namespace hovs::calib {
+
+std::string FormatOcamCalibResults(const PolynomialModel<double>& m) {
+  m.Check("OCamCalib export");
+  HOVS_REQUIRE(!m.inv_poly.empty(), "OCamCalib export", "the model has no inverse polynomial");
+  std::string out;
+  char buf[64];
+  out += "#polynomial coefficients for the DIRECT mapping function (ocam_model.ss in MATLAB). These are used by cam2world\n\n";
+  out += std::to_string(m.poly.size()) + " ";
+  for (double a : m.poly) std::snprintf(buf, sizeof buf, "%e ", a), out += buf;
+  out += "\n\n#polynomial coefficients for the inverse mapping function (ocam_model.invpol in MATLAB). These are used by world2cam\n\n";
+  out += std::to_string(m.inv_poly.size()) + " ";
+  for (double a : m.inv_poly) std::snprintf(buf, sizeof buf, "%f ", a), out += buf;
+  out += "\n\n#center: \"row\" and \"column\", starting from 0 (C convention)\n\n";
+  std::snprintf(buf, sizeof buf, "%f %f", m.cy, m.cx);
+  out += buf;
+  out += "\n\n#affine parameters \"c\", \"d\", \"e\"\n\n";
+  std::snprintf(buf, sizeof buf, "%f %f %f", m.c, m.d, m.e);
+  out += buf;
+  out += "\n\n#image size: \"height\" and \"width\"\n\n";
+  out += std::to_string(m.height) + " " + std::to_string(m.width) + "\n";
+  return out;
+}
+
+PolynomialModel<double> ParseOcamCalibResults(const std::string& text, const std::string& source) {
+  std::istringstream in(text);
+  std::string line;
+  int lineno = 0;
+  // The next data line (skipping comments and blank lines), as numbers.
+  const auto data = [&](const char* what) {
+    while (std::getline(in, line)) {
+      ++lineno;
+      if (line.empty() || line[0] == '#') continue;
+      std::istringstream ls(line);
+      std::vector<double> v;
+      double x;
+      while (ls >> x) v.push_back(x);
+      HOVS_REQUIRE(ls.eof() && !v.empty() && std::all_of(v.begin(), v.end(), [](double y) { return std::isfinite(y); }),
+                   source + ":" + std::to_string(lineno), "expected numbers for ", what);
+      return v;
+    }
+    throw Error(source, std::string("missing ") + what);
+  };
+  PolynomialModel<double> m;
+  auto ss = data("the direct polynomial");
+  HOVS_REQUIRE(ss.size() >= 3 && ss[0] == static_cast<int>(ss.size()) - 1, source + ":" + std::to_string(lineno),
+               "the direct polynomial's length does not match its coefficients");
+  m.poly.assign(ss.begin() + 1, ss.end());
+  auto inv = data("the inverse polynomial");
+  HOVS_REQUIRE(inv.size() >= 2 && inv[0] == static_cast<int>(inv.size()) - 1, source + ":" + std::to_string(lineno),
+               "the inverse polynomial's length does not match its coefficients");
+  m.inv_poly.assign(inv.begin() + 1, inv.end());
+  const auto centre = data("the centre");
+  HOVS_REQUIRE(centre.size() == 2, source + ":" + std::to_string(lineno), "the centre needs row and column");
+  m.cy = centre[0], m.cx = centre[1];
+  const auto aff = data("the affine parameters");
+  HOVS_REQUIRE(aff.size() == 3, source + ":" + std::to_string(lineno), "the affine parameters need c, d, e");
+  m.c = aff[0], m.d = aff[1], m.e = aff[2];
+  const auto size = data("the image size");
+  HOVS_REQUIRE(size.size() == 2 && size[0] > 0 && size[1] > 0, source + ":" + std::to_string(lineno),
+               "the image size needs height and width");
+  m.height = static_cast<int>(size[0]), m.width = static_cast<int>(size[1]);
+  m.rho_min = 0, m.rho_max = 0.5 * std::hypot(m.width, m.height);
+  m.Check(source);
+  return m;
+}
+
+PolynomialModel<double> LoadOcamCalibResults(const std::filesystem::path& path) {
+  return ParseOcamCalibResults(ReadFile(path), path.string());
+}
+
+}  // namespace hovs::calib
