@@ -3,7 +3,7 @@
 #include <ceres/ceres.h>
 #include <ceres/rotation.h>
 
-#include "calib/pose_params.h"
+#include "calib/solver_util.h"
 #include "core/error.h"
 
 #include <cstdio>
@@ -72,12 +72,7 @@ PhysicalCalibration CalibratePhysical(const std::vector<BoardObservation>& obs, 
   problem.SetManifold(mis, new ceres::SubsetManifold(6, {2}));
   if (!opt.estimate_mirror) problem.SetParameterBlockConstant(mirror);
   for (int k = 0; k < 2; ++k) problem.SetParameterLowerBound(mirror, k, 1e-4);
-  ceres::Solver::Options so;
-  so.linear_solver_type = ceres::DENSE_SCHUR;
-  so.max_num_iterations = opt.max_iterations;
-  so.function_tolerance = 1e-15;
-  so.parameter_tolerance = 1e-15;
-  so.gradient_tolerance = 1e-15;
+  const ceres::Solver::Options so = CalibrationSolverOptions(opt.max_iterations, 1e-15);
   ceres::Solver::Summary summary;
   ceres::Solve(so, &problem, &summary);
   PhysicalCalibration out;

@@ -12,7 +12,7 @@
 #include <map>
 #include <sstream>
 
-#include "calib/pose_params.h"
+#include "calib/solver_util.h"
 #include "core/error.h"
 
 namespace hovs::calib {
@@ -251,18 +251,10 @@ PolynomialCalibration CalibratePolynomial(const std::vector<BoardObservation>& o
           obs[i].board_points[j], obs[i].pixels[j], N, scale, hint, opt.estimate_affine ? nullptr : &kIdentityAffine));
       for (int size : {2, 3, N, 3, 3}) cost->AddParameterBlock(size);
       cost->SetNumResiduals(2);
-      ceres::LossFunction* loss = nullptr;
-      if (opt.loss == "huber") loss = new ceres::HuberLoss(opt.loss_scale);
-      if (opt.loss == "cauchy") loss = new ceres::CauchyLoss(opt.loss_scale);
-      problem.AddResidualBlock(cost, loss, centre, affine, poly.data(), pose_params[i].data(), pose_params[i].data() + 3);
+      problem.AddResidualBlock(cost, MakeLoss(opt.loss, opt.loss_scale), centre, affine, poly.data(), pose_params[i].data(), pose_params[i].data() + 3);
     }
   if (!opt.estimate_affine) problem.SetParameterBlockConstant(affine);
-  ceres::Solver::Options so;
-  so.linear_solver_type = ceres::DENSE_SCHUR;
-  so.max_num_iterations = opt.max_iterations;
-  so.function_tolerance = 1e-14;
-  so.parameter_tolerance = 1e-14;
-  so.gradient_tolerance = 1e-14;
+  ceres::Solver::Options so = CalibrationSolverOptions(opt.max_iterations, 1e-14);
   so.num_threads = 1;
   ceres::Solver::Summary summary;
   ceres::Solve(so, &problem, &summary);
@@ -426,19 +418,11 @@ UnifiedCalibration CalibrateUnified(const std::vector<BoardObservation>& obs, in
   ceres::Problem problem;
   for (size_t i = 0; i < obs.size(); ++i)
     for (size_t j = 0; j < obs[i].pixels.size(); ++j) {
-      ceres::LossFunction* l = loss == "huber" ? static_cast<ceres::LossFunction*>(new ceres::HuberLoss(loss_scale))
-                               : loss == "cauchy" ? new ceres::CauchyLoss(loss_scale)
-                                                  : nullptr;
       problem.AddResidualBlock(new ceres::AutoDiffCostFunction<UnifiedReprojection, 2, 5, 4, 3, 3>(
                                    new UnifiedReprojection(obs[i].board_points[j], obs[i].pixels[j])),
-                               l, intr, dist, poses[i].data(), poses[i].data() + 3);
+                               MakeLoss(loss, loss_scale), intr, dist, poses[i].data(), poses[i].data() + 3);
     }
-  ceres::Solver::Options so;
-  so.linear_solver_type = ceres::DENSE_SCHUR;
-  so.max_num_iterations = 300;
-  so.function_tolerance = 1e-14;
-  so.parameter_tolerance = 1e-14;
-  so.gradient_tolerance = 1e-14;
+  const ceres::Solver::Options so = CalibrationSolverOptions(300, 1e-14);
   ceres::Solver::Summary summary;
   ceres::Solve(so, &problem, &summary);
   UnifiedCalibration out;
