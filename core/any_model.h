@@ -1,0 +1,177 @@
+// One handle on any catadioptric model of the core: the exact rig (hyperboloid + pinhole + pose), the
+// polynomial (OCam) model or the unified (Mei) model. Unwrapping and depth take this handle, so they run the
+// same way on the design, on a calibration and on a real camera's model.
+//
+// Bearings are unit vectors in the mirror frame (conventions.h), seen from the viewpoint F1.
+// Validity of a pixel (each model's own domain, plus the image):
+//   exact       the pixel's ray meets the mirror inside the rim and does not see the camera (SeesMirror);
+//               a bearing projects when the law of reflection has a solution inside the rim, not occluded by
+//               the camera (ProjectionStatus::kOk). For a rig that is not single-viewpoint the projection
+//               depends on depth: bearings are projected as points at `scene_distance` metres from F1.
+//   polynomial  rho_min <= rho <= rho_max (the calibrated annulus) and inside the image.
+//   unified     inside the annulus (centre cx, cy; radii annulus_min, annulus_max in pixels) when annulus_max
+//               is set, and inside the image.
+#pragma once
+
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "core/catadioptric.h"
+#include "core/error.h"
+#include "core/polynomial.h"
+#include "core/unified.h"
+
+namespace hovs {
+
+class AnyModel {
+ public:
+  enum class Kind { kExact, kPolynomial, kUnified };
+
+  static AnyModel Exact(const CatadioptricCamera<double>& rig, double scene_distance = 10.0) {
+    rig.Check("exact model");
+    HOVS_REQUIRE(rig.camera.width > 0 && rig.camera.height > 0, "exact model", "the camera needs an image size");
+    HOVS_REQUIRE(scene_distance > 0 && std::isfinite(scene_distance), "exact model",
+                 "scene distance must be positive");
+    AnyModel m;
+    m.kind_ = Kind::kExact;
+    m.exact_ = rig;
+    m.scene_distance_ = scene_distance;
+    m.svp_ = rig.IsSingleViewpoint();
+    m.width_ = rig.camera.width, m.height_ = rig.camera.height;
+    return m;
+  }
+  static AnyModel Polynomial(const PolynomialModel<double>& model) {
+    model.Check("polynomial model");
+    HOVS_REQUIRE(model.width > 0 && model.height > 0, "polynomial model", "needs the image size");
+    HOVS_REQUIRE(model.rho_max > model.rho_min, "polynomial model", "needs a valid annulus (rho_min < rho_max)");
+    AnyModel m;
+    m.kind_ = Kind::kPolynomial;
+    m.poly_ = model;
+    m.width_ = model.width, m.height_ = model.height;
+    return m;
+  }
+  // annulus_max <= 0: no annulus (the whole image is valid where the model is).
+  static AnyModel Unified(const UnifiedModel<double>& model, double annulus_min = 0, double annulus_max = 0) {
+    model.Check("unified model");
+    HOVS_REQUIRE(model.width > 0 && model.height > 0, "unified model", "needs the image size");
+    AnyModel m;
+    m.kind_ = Kind::kUnified;
+    m.unified_ = model;
+    m.annulus_ = {annulus_min, annulus_max};
+    m.width_ = model.width, m.height_ = model.height;
+    return m;
+  }
+
+  Kind kind() const { return kind_; }
+  const char* KindName() const {
+    return kind_ == Kind::kExact ? "exact" : kind_ == Kind::kPolynomial ? "polynomial" : "unified";
+  }
+  int width() const { return width_; }
+  int height() const { return height_; }
+  const CatadioptricCamera<double>& exact() const { return exact_; }
+  const PolynomialModel<double>& polynomial() const { return poly_; }
+  const UnifiedModel<double>& unified() const { return unified_; }
+  double scene_distance() const { return scene_distance_; }
+  std::pair<double, double> annulus() const { return annulus_; }
+
+  bool InImage(const Vec2d& uv) const {
+    return uv(0) >= -0.5 && uv(1) >= -0.5 && uv(0) <= width_ - 0.5 && uv(1) <= height_ - 0.5;
+  }
+
+  // Pixel of a bearing (mirror frame, any length); false outside the model's valid domain.
+  bool ImgFromMirror(const Vec3d& bearing, Vec2d* uv) const {
+    switch (kind_) {
+      case Kind::kExact: {
+        const Vec3d X = bearing.normalized() * scene_distance_;
+        const ProjectionStatus s = svp_ ? exact_.ImgFromMirrorSvp(X, uv) : exact_.ImgFromMirrorGeneral(X, uv);
+        return s == ProjectionStatus::kOk;
+      }
+      case Kind::kPolynomial: {
+        if (!poly_.ImgFromCam(bearing, uv)) return false;
+        const double rho = poly_.SensorFromImg(*uv).norm();
+        return rho >= poly_.rho_min && rho <= poly_.rho_max && InImage(*uv);
+      }
+      case Kind::kUnified:
+        if (!unified_.ImgFromCam(bearing, uv)) return false;
+        return InAnnulus(*uv) && InImage(*uv);
+    }
+    return false;
+  }
+
+  // Unit bearing (mirror frame) of a pixel; false outside the valid domain.
+  bool MirrorFromImg(const Vec2d& uv, Vec3d* bearing) const {
+    if (!InImage(uv)) return false;
+    switch (kind_) {
+      case Kind::kExact: {
+        Vec3d M, d;
+        if (!exact_.RayFromImg(uv, &M, &d) || exact_.RayHitsCamera(M, d)) return false;
+        *bearing = d;
+        return true;
+      }
+      case Kind::kPolynomial: {
+        const double rho = poly_.SensorFromImg(uv).norm();
+        if (rho < poly_.rho_min || rho > poly_.rho_max) return false;
+        return poly_.CamFromImg(uv, bearing);
+      }
+      case Kind::kUnified:
+        return InAnnulus(uv) && unified_.CamFromImg(uv, bearing);
+    }
+    return false;
+  }
+
+  // Named parameters (for headers of mapping files and reports).
+  std::vector<std::pair<std::string, double>> Parameters() const {
+    std::vector<std::pair<std::string, double>> p;
+    switch (kind_) {
+      case Kind::kExact: {
+        const auto& r = exact_;
+        const Vec3d C = r.CameraCentre();
+        const auto& q = r.cam_from_mirror.rotation;
+        p = {{"a", r.mirror.a}, {"b", r.mirror.b}, {"rim_diameter", r.mirror.rim_diameter},
+             {"fx", r.camera.fx}, {"fy", r.camera.fy}, {"cx", r.camera.cx}, {"cy", r.camera.cy},
+             {"k1", r.camera.distortion.k1}, {"k2", r.camera.distortion.k2}, {"p1", r.camera.distortion.p1},
+             {"p2", r.camera.distortion.p2}, {"qw", q.w()}, {"qx", q.x()}, {"qy", q.y()}, {"qz", q.z()},
+             {"camera_x", C(0)}, {"camera_y", C(1)}, {"camera_z", C(2)},
+             {"occluder_radius", r.occluder_radius}, {"scene_distance", scene_distance_}};
+        break;
+      }
+      case Kind::kPolynomial: {
+        p = {{"cx", poly_.cx}, {"cy", poly_.cy}, {"c", poly_.c}, {"d", poly_.d}, {"e", poly_.e},
+             {"rho_min", poly_.rho_min}, {"rho_max", poly_.rho_max}};
+        for (size_t i = 0; i < poly_.poly.size(); ++i) p.emplace_back("a" + std::to_string(i), poly_.poly[i]);
+        for (size_t i = 0; i < poly_.inv_poly.size(); ++i)
+          p.emplace_back("inv" + std::to_string(i), poly_.inv_poly[i]);
+        break;
+      }
+      case Kind::kUnified: {
+        const auto& u = unified_;
+        p = {{"xi", u.xi}, {"fx", u.fx}, {"fy", u.fy}, {"cx", u.cx}, {"cy", u.cy}, {"skew", u.skew},
+             {"k1", u.distortion.k1}, {"k2", u.distortion.k2}, {"p1", u.distortion.p1}, {"p2", u.distortion.p2},
+             {"annulus_min", annulus_.first}, {"annulus_max", annulus_.second}};
+        break;
+      }
+    }
+    p.emplace_back("width", width_);
+    p.emplace_back("height", height_);
+    return p;
+  }
+
+ private:
+  bool InAnnulus(const Vec2d& uv) const {
+    if (annulus_.second <= 0) return true;
+    const double r = std::hypot(uv(0) - unified_.cx, uv(1) - unified_.cy);
+    return r >= annulus_.first && r <= annulus_.second;
+  }
+
+  Kind kind_ = Kind::kExact;
+  CatadioptricCamera<double> exact_;
+  PolynomialModel<double> poly_;
+  UnifiedModel<double> unified_;
+  std::pair<double, double> annulus_{0, 0};
+  double scene_distance_ = 10.0;
+  bool svp_ = true;
+  int width_ = 0, height_ = 0;
+};
+
+}  // namespace hovs

@@ -1,0 +1,143 @@
+#include "unwrap/layout.h"
+
+#include <set>
+
+#include "core/error.h"
+#include "core/io.h"
+#include "core/yaml_reader.h"
+
+namespace hovs::unwrap {
+namespace {
+constexpr double kDeg = M_PI / 180.0;
+}
+
+void ViewSpec::Check(const std::string& where) const {
+  HOVS_REQUIRE(!name.empty(), where, "a view needs a name");
+  HOVS_REQUIRE(name.find_first_of("/\\ ") == std::string::npos, where, "view name '", name,
+               "' must not contain spaces or slashes (it names output files)");
+  HOVS_REQUIRE(width > 0 && height > 0 && width <= 32768 && height <= 32768, where + " (" + name + ")",
+               "size must be 1..32768 pixels (got ", width, " x ", height, ")");
+  if (type == ViewProjection::kPerspective) {
+    HOVS_REQUIRE(hfov_deg > 0 && hfov_deg < 180, where + " (" + name + ")",
+                 "a perspective view needs 0 < hfov < 180 degrees (got ", hfov_deg, ")");
+    const double vfov = 2 * std::atan(std::tan(0.5 * hfov_deg * kDeg) * height / width) / kDeg;
+    HOVS_REQUIRE(vfov < 180, where + " (" + name + ")", "vertical field of view must be below 180 degrees");
+  }
+  View().Check(where + " (" + name + ")");
+}
+
+VirtualView<double> ViewSpec::View() const {
+  if (type == ViewProjection::kPerspective)
+    return VirtualView<double>::Perspective(width, height, hfov_deg * kDeg, yaw_deg * kDeg, pitch_deg * kDeg,
+                                            roll_deg * kDeg);
+  return VirtualView<double>::Panorama(type, width, height, elevation_min_deg * kDeg, elevation_max_deg * kDeg,
+                                       azimuth_centre_deg * kDeg, azimuth_span_deg * kDeg);
+}
+
+void Layout::Check(const std::string& where) const {
+  HOVS_REQUIRE(!views.empty(), where, "the layout has no views");
+  std::set<std::string> names;
+  for (const auto& v : views) {
+    v.Check(where);
+    HOVS_REQUIRE(names.insert(v.name).second, where, "two views are named '", v.name, "'");
+  }
+}
+
+std::vector<std::string> PresetNames() { return {"article", "panorama", "longlat"}; }
+
+Layout PresetLayout(const std::string& name) {
+  Layout l;
+  l.name = name;
+  if (name == "article") {
+    const char* names[] = {"view0", "view60", "view120", "view180", "view240", "view300"};
+    for (int i = 0; i < 6; ++i) {
+      ViewSpec v;
+      v.name = names[i];
+      v.yaw_deg = 60.0 * i;
+      l.views.push_back(v);
+    }
+  } else if (name == "panorama") {
+    ViewSpec v;
+    v.name = "panorama";
+    v.type = ViewProjection::kCylindrical;
+    v.width = 3600, v.height = 900;
+    l.views.push_back(v);
+  } else if (name == "longlat") {
+    ViewSpec v;
+    v.name = "longlat";
+    v.type = ViewProjection::kLongLat;
+    v.width = 3600, v.height = 1800;
+    v.elevation_min_deg = -90, v.elevation_max_deg = 90;
+    l.views.push_back(v);
+  } else {
+    std::string known;
+    for (const auto& n : PresetNames()) known += (known.empty() ? "" : ", ") + n;
+    throw Error("layout '" + name + "'", "unknown preset (known: " + known + "; or give a YAML file)");
+  }
+  l.Check("layout " + name);
+  return l;
+}
+
+Layout LoadLayout(const std::filesystem::path& path) {
+  const YamlReader r(path.string());
+  const YAML::Node root = r.Load(ReadFile(path));
+  HOVS_REQUIRE(root.IsMap(), path.string(), "expected a YAML mapping with 'views'");
+  r.OnlyKeys(root, "", {"name", "views"});
+  Layout l;
+  l.name = root["name"] ? r.String(root["name"], "name") : path.stem().string();
+  YAML::Node views;
+  r.Require(root, "", "views", &views);
+  HOVS_REQUIRE(views.IsSequence() && views.size() > 0, r.Where(views, "views"), "expected a list of views");
+  for (size_t i = 0; i < views.size(); ++i) {
+    const YAML::Node& n = views[i];
+    const std::string key = "views[" + std::to_string(i) + "]";
+    r.OnlyKeys(n, key, {"name", "type", "width", "height", "yaw", "pitch", "roll", "hfov", "elevation_min",
+                        "elevation_max", "azimuth_centre", "azimuth_span"});
+    ViewSpec v;
+    YAML::Node t;
+    v.name = r.String(r.Require(n, key, "name", &t), key + ".name");
+    const std::string type = n["type"] ? r.String(n["type"], key + ".type") : "perspective";
+    if (type == "perspective") v.type = ViewProjection::kPerspective;
+    else if (type == "cylindrical") v.type = ViewProjection::kCylindrical;
+    else if (type == "longlat") v.type = ViewProjection::kLongLat;
+    else throw Error(r.Where(n["type"], key + ".type"), "unknown view type '" + type +
+                                                            "' (known: perspective, cylindrical, longlat)");
+    if (v.type == ViewProjection::kLongLat) v.elevation_min_deg = -90, v.elevation_max_deg = 90;
+    if (v.type != ViewProjection::kPerspective) v.width = 3600, v.height = 900;
+    const auto num = [&](const char* k, double* out) {
+      if (n[k]) *out = r.Number(n[k], key + "." + k);
+    };
+    const auto integer = [&](const char* k, int* out) {
+      if (n[k]) *out = r.Integer(n[k], key + "." + k);
+    };
+    integer("width", &v.width);
+    integer("height", &v.height);
+    const bool perspective = v.type == ViewProjection::kPerspective;
+    for (const char* k : {"yaw", "pitch", "roll", "hfov"})
+      HOVS_REQUIRE(perspective || !n[k], r.Where(n[k], key + "." + k), "'", k, "' applies to perspective views only");
+    for (const char* k : {"elevation_min", "elevation_max", "azimuth_centre", "azimuth_span"})
+      HOVS_REQUIRE(!perspective || !n[k], r.Where(n[k], key + "." + k), "'", k, "' applies to panoramas only");
+    num("yaw", &v.yaw_deg);
+    num("pitch", &v.pitch_deg);
+    num("roll", &v.roll_deg);
+    num("hfov", &v.hfov_deg);
+    num("elevation_min", &v.elevation_min_deg);
+    num("elevation_max", &v.elevation_max_deg);
+    num("azimuth_centre", &v.azimuth_centre_deg);
+    num("azimuth_span", &v.azimuth_span_deg);
+    v.Check(r.Where(n, key));
+    l.views.push_back(v);
+  }
+  l.Check(path.string());
+  return l;
+}
+
+Layout ResolveLayout(const std::string& name_or_path) {
+  for (const auto& n : PresetNames())
+    if (n == name_or_path) return PresetLayout(n);
+  HOVS_REQUIRE(std::filesystem::exists(name_or_path), "layout '" + name_or_path + "'",
+               "neither a preset nor an existing YAML file");
+  return LoadLayout(name_or_path);
+}
+
+}  // namespace hovs::unwrap

@@ -1,0 +1,47 @@
+// View layouts: the virtual cameras and panoramas one unwrap produces, by name or from a YAML file.
+//
+// YAML (angles in degrees, sizes in pixels):
+//   views:
+//     - {name: front, type: perspective, width: 1200, height: 700, yaw: 0, pitch: -30, roll: 0, hfov: 65}
+//     - {name: pano, type: cylindrical, width: 4096, height: 768, elevation_min: -70, elevation_max: -2,
+//        azimuth_centre: 0, azimuth_span: 360}
+//     - {name: sphere, type: longlat, width: 2048, height: 1024, elevation_min: -90, elevation_max: 90}
+// Presets:
+//   article     the article's six 1200 x 700 perspective views, yaw 0, 60, ..., 300 degrees, pitch -30, hfov 65
+//               (neighbours overlap by 5 degrees), the layout of its Figs 30-31
+//   panorama    one cylindrical panorama, 3600 x 900, elevation -75 .. -2 degrees, azimuth centred on +x
+//   longlat     one longitude-latitude panorama, 3600 x 1800, the whole sphere
+#pragma once
+
+#include <filesystem>
+#include <string>
+#include <vector>
+
+#include "core/virtual_view.h"
+
+namespace hovs::unwrap {
+
+struct ViewSpec {
+  std::string name;
+  ViewProjection type = ViewProjection::kPerspective;
+  int width = 1200, height = 700;
+  double yaw_deg = 0, pitch_deg = -30, roll_deg = 0, hfov_deg = 65;                  // perspective
+  double elevation_min_deg = -75, elevation_max_deg = -2;                             // panoramas
+  double azimuth_centre_deg = 0, azimuth_span_deg = 360;
+  VirtualView<double> View() const;   // throws hovs::Error naming the view when the spec is invalid
+  void Check(const std::string& where) const;
+};
+
+struct Layout {
+  std::string name;
+  std::vector<ViewSpec> views;
+  void Check(const std::string& where) const;  // at least one view, unique names, every view valid
+};
+
+Layout PresetLayout(const std::string& name);                 // throws listing the known presets
+Layout LoadLayout(const std::filesystem::path& path);         // YAML, validated (file:line)
+// A preset name or a YAML file.
+Layout ResolveLayout(const std::string& name_or_path);
+std::vector<std::string> PresetNames();
+
+}  // namespace hovs::unwrap

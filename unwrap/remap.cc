@@ -1,0 +1,328 @@
+#include "unwrap/remap.h"
+
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstring>
+
+#include "core/error.h"
+#include "unwrap/remap_kernels.h"
+
+namespace hovs::unwrap {
+namespace {
+
+// ---------------------------------------------------------------------------------------------------------
+// Source planes. A plane is one channel sampled on a regular grid inside an interleaved or mosaic buffer:
+// element (i, j) is at data + j * ystep + i * xstep.
+struct Plane {
+  const uint8_t* data;
+  int w, h;
+  ptrdiff_t xstep, ystep;
+  int at(int i, int j) const {
+    i = std::clamp(i, 0, w - 1);
+    j = std::clamp(j, 0, h - 1);
+    return data[j * ystep + i * xstep];
+  }
+};
+
+inline float Cubic(float t, float* w) {
+  // Keys (a = -0.5) weights for taps at -1, 0, 1, 2 from the sample at fractional position t in [0, 1).
+  const float a = -0.5f;
+  const float t2 = t * t, t3 = t2 * t;
+  w[0] = a * (t3 - 2 * t2 + t);
+  w[1] = (a + 2) * t3 - (a + 3) * t2 + 1;
+  w[2] = -(a + 2) * t3 + (2 * a + 3) * t2 - a * t;
+  w[3] = a * (-t3 + t2);
+  return 0;
+}
+
+// Clamped sample of a plane at (x, y) in plane coordinates.
+float SamplePlane(const Plane& p, float x, float y, Interpolation m) {
+  if (m == Interpolation::kNearest) return float(p.at(int(std::lround(x)), int(std::lround(y))));
+  const float fx0 = std::floor(x), fy0 = std::floor(y);
+  const int ix = int(fx0), iy = int(fy0);
+  const float tx = x - fx0, ty = y - fy0;
+  if (m == Interpolation::kBilinear) {
+    const float top = p.at(ix, iy) * (1 - tx) + p.at(ix + 1, iy) * tx;
+    const float bot = p.at(ix, iy + 1) * (1 - tx) + p.at(ix + 1, iy + 1) * tx;
+    return top * (1 - ty) + bot * ty;
+  }
+  float wx[4], wy[4];
+  Cubic(tx, wx);
+  Cubic(ty, wy);
+  float acc = 0;
+  for (int j = 0; j < 4; ++j) {
+    float row = 0;
+    for (int i = 0; i < 4; ++i) row += wx[i] * p.at(ix - 1 + i, iy - 1 + j);
+    acc += wy[j] * row;
+  }
+  return acc;
+}
+
+inline uint8_t Saturate(float v) { return static_cast<uint8_t>(std::clamp(std::lround(v), 0l, 255l)); }
+
+// ---------------------------------------------------------------------------------------------------------
+// Samplers: called with 16.16 coordinates at the tile's level, write one output pixel.
+
+// Generic: any format and interpolation, clamped at the borders.
+struct GenericSampler {
+  Plane planes[4];
+  int num_planes = 1;    // 1 grey, 3 RGB, 4 Bayer (R, G1, G2, B)
+  bool bayer = false;
+  Interpolation m;
+  void operator()(int32_t xf, int32_t yf, uint8_t* o) const {
+    const float x = xf * (1.f / 65536), y = yf * (1.f / 65536);
+    if (!bayer) {
+      for (int c = 0; c < num_planes; ++c) o[c] = Saturate(SamplePlane(planes[c], x, y, m));
+      return;
+    }
+    // Mosaic positions of the colour grids: R (2i, 2j), G1 (2i + 1, 2j), G2 (2i, 2j + 1), B (2i + 1, 2j + 1).
+    const float hx = 0.5f * x, hy = 0.5f * y, hx1 = 0.5f * (x - 1), hy1 = 0.5f * (y - 1);
+    o[0] = Saturate(SamplePlane(planes[0], hx, hy, m));
+    o[1] = Saturate(0.5f * (SamplePlane(planes[1], hx1, hy, m) + SamplePlane(planes[2], hx, hy1, m)));
+    o[2] = Saturate(SamplePlane(planes[3], hx1, hy1, m));
+  }
+};
+
+template <int C>
+struct NearestSampler {
+  const uint8_t* data;
+  ptrdiff_t stride;
+  void operator()(int32_t xf, int32_t yf, uint8_t* o) const {
+    const uint8_t* p = data + ((yf + 0x8000) >> 16) * stride + ((xf + 0x8000) >> 16) * C;
+    for (int c = 0; c < C; ++c) o[c] = p[c];
+  }
+};
+
+// Row functors: f(xs, ys, n, out) samples n pixels of one output row.
+template <class PixelSampler, int OC>
+struct PerPixel {
+  PixelSampler s;
+  void operator()(const kernels::RowCoords& c, int i0, int n, uint8_t* o) const {
+    for (int i = 0; i < n; ++i) s(c.X(i0 + i), c.Y(i0 + i), o + i * OC);
+  }
+};
+using RowKernel = void (*)(const uint8_t*, ptrdiff_t, const kernels::RowCoords&, int, int, uint8_t*);
+struct FastRow {
+  RowKernel kernel;
+  const uint8_t* data;
+  ptrdiff_t stride;
+  void operator()(const kernels::RowCoords& c, int i0, int n, uint8_t* o) const { kernel(data, stride, c, i0, n, o); }
+};
+
+// Walks one tile's rows: interp tiles evaluate their coordinates per row, dense tiles read them; runs of valid
+// pixels go to the row functor, invalid pixels are written as 0.
+template <int OC, class Row>
+void WalkTile(const ViewTable& vt, const Tile& t, int T, int u0, int v0, int nu, int nv, Image8* out, const Row& f) {
+  const size_t ostride = size_t(out->width) * OC;
+  uint8_t* base = out->data.data() + size_t(v0) * ostride + size_t(u0) * OC;
+  int32_t xs[64], ys[64];
+  if (t.kind == TileKind::kInterp) {
+    kernels::RowCoords c;
+    for (int j = 0; j < nv; ++j) {
+      c.poly = InterpRowPoly(t, T, j);
+      f(c, 0, nu, base + j * ostride);
+    }
+    return;
+  }
+  kernels::RowCoords c;
+  c.xs = xs, c.ys = ys;
+  const int32_t* d = vt.dense.data() + size_t(t.dense_index) * 2;
+  for (int j = 0; j < nv; ++j) {
+    uint8_t* o = base + j * ostride;
+    const int32_t* dj = d + 2 * j * T;
+    int i = 0;
+    while (i < nu) {
+      if (dj[2 * i] == kInvalidCoordinate) {
+        std::memset(o + i * OC, 0, OC);
+        ++i;
+        continue;
+      }
+      int n = 0;
+      while (i + n < nu && dj[2 * (i + n)] != kInvalidCoordinate) {
+        xs[n] = dj[2 * (i + n)];
+        ys[n] = dj[2 * (i + n) + 1];
+        ++n;
+      }
+      f(c, 0, n, o + i * OC);
+      i += n;
+    }
+  }
+}
+
+void BuildLevel(const Image8& in, PixelFormat in_format, Image8* out) {
+  const int W = (in.width + 1) / 2, H = (in.height + 1) / 2;
+  const bool bayer = in_format == PixelFormat::kBayerRggb8;
+  const int C = bayer ? 3 : in.channels;
+  out->width = W, out->height = H, out->channels = C;
+  out->data.resize(size_t(W) * H * C);
+  const size_t is = size_t(in.width) * in.channels;
+  tbb::parallel_for(tbb::blocked_range<int>(0, H, 32), [&](const tbb::blocked_range<int>& rows) {
+    for (int j = rows.begin(); j < rows.end(); ++j) {
+      const int j0 = 2 * j, j1 = std::min(2 * j + 1, in.height - 1);
+      uint8_t* o = out->data.data() + size_t(j) * W * C;
+      const uint8_t* r0 = in.data.data() + j0 * is;
+      const uint8_t* r1 = in.data.data() + j1 * is;
+      for (int i = 0; i < W; ++i) {
+        const int i0 = 2 * i, i1 = std::min(2 * i + 1, in.width - 1);
+        if (bayer) {
+          // The 2 x 2 RGGB cell becomes one RGB pixel at its centre.
+          o[3 * i] = r0[i0];
+          o[3 * i + 1] = static_cast<uint8_t>((r0[i1] + r1[i0] + 1) >> 1);
+          o[3 * i + 2] = r1[i1];
+        } else {
+          for (int c = 0; c < C; ++c)
+            o[C * i + c] = static_cast<uint8_t>((r0[C * i0 + c] + r0[C * i1 + c] + r1[C * i0 + c] + r1[C * i1 + c] + 2) >> 2);
+        }
+      }
+    }
+  });
+}
+
+}  // namespace
+
+const char* ToString(PixelFormat f) {
+  return f == PixelFormat::kGray8 ? "gray" : f == PixelFormat::kRgb8 ? "rgb" : "bayer_rggb";
+}
+const char* ToString(Interpolation i) {
+  return i == Interpolation::kNearest ? "nearest" : i == Interpolation::kBilinear ? "bilinear" : "bicubic";
+}
+PixelFormat ParsePixelFormat(const std::string& s) {
+  if (s == "gray" || s == "grey" || s == "mono8") return PixelFormat::kGray8;
+  if (s == "rgb") return PixelFormat::kRgb8;
+  if (s == "bayer_rggb" || s == "bayerrg8" || s == "bayer") return PixelFormat::kBayerRggb8;
+  throw Error("pixel format '" + s + "'", "unknown (known: gray, rgb, bayer_rggb)");
+}
+Interpolation ParseInterpolation(const std::string& s) {
+  if (s == "nearest") return Interpolation::kNearest;
+  if (s == "bilinear") return Interpolation::kBilinear;
+  if (s == "bicubic") return Interpolation::kBicubic;
+  throw Error("interpolation '" + s + "'", "unknown (known: nearest, bilinear, bicubic)");
+}
+
+Remapper::Remapper(const RemapTable& table) : table_(table) {}
+
+void Remapper::Prepare(const ImageView& src) {
+  HOVS_REQUIRE(src.data != nullptr, "remap input", "no image data");
+  HOVS_REQUIRE(src.width == table_.source_width && src.height == table_.source_height, "remap input",
+               "the image is ", src.width, " x ", src.height, " but the mapping was built for ", table_.source_width,
+               " x ", table_.source_height, " (a different camera or model)");
+  const int C = src.format == PixelFormat::kRgb8 ? 3 : 1;
+  HOVS_REQUIRE(src.stride >= size_t(src.width) * C, "remap input", "row stride ", src.stride,
+               " is smaller than a row of ", src.width * C, " bytes");
+  HOVS_REQUIRE(src.format != PixelFormat::kBayerRggb8 || (src.width % 2 == 0 && src.height % 2 == 0), "remap input",
+               "a Bayer mosaic needs an even width and height");
+  const auto start = std::chrono::steady_clock::now();
+  pyramid_.resize(std::max(0, table_.levels - 1));
+  if (!pyramid_.empty()) {
+    // Level 0 as a packed Image8 (one copy only if the stride is padded).
+    Image8 level0;
+    level0.width = src.width, level0.height = src.height, level0.channels = C;
+    level0.data.resize(size_t(src.width) * src.height * C);
+    for (int j = 0; j < src.height; ++j)
+      std::memcpy(level0.data.data() + size_t(j) * src.width * C, src.data + j * src.stride, size_t(src.width) * C);
+    BuildLevel(level0, src.format, &pyramid_[0]);
+    for (size_t l = 1; l < pyramid_.size(); ++l) BuildLevel(pyramid_[l - 1], PixelFormat::kRgb8, &pyramid_[l]);
+  }
+  pyramid_ms_ = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+}
+
+void Remapper::RemapRows(const ImageView& src, Interpolation interp, int view, int tile_row, Image8* out) const {
+  const ViewTable& vt = table_.views[view];
+  const int T = table_.tile;
+  const int v0 = tile_row * T, nv = std::min(T, vt.view.height - v0);
+  const int OC = out->channels;
+  for (int tx = 0; tx < vt.tiles_x; ++tx) {
+    const Tile& t = vt.tiles[tile_row * vt.tiles_x + tx];
+    const int u0 = tx * T, nu = std::min(T, vt.view.width - u0);
+    if (t.kind == TileKind::kEmpty) {
+      for (int j = 0; j < nv; ++j)
+        std::memset(out->data.data() + (size_t(v0 + j) * out->width + u0) * OC, 0, size_t(nu) * OC);
+      continue;
+    }
+    // The image this tile samples.
+    const uint8_t* data = src.data;
+    int w = src.width, h = src.height;
+    ptrdiff_t stride = static_cast<ptrdiff_t>(src.stride);
+    PixelFormat fmt = src.format;
+    if (t.level > 0) {
+      const Image8& lv = pyramid_[t.level - 1];
+      data = lv.data.data(), w = lv.width, h = lv.height, stride = ptrdiff_t(lv.width) * lv.channels;
+      fmt = lv.channels == 1 ? PixelFormat::kGray8 : PixelFormat::kRgb8;
+    }
+    const bool fast = t.inside && interp != Interpolation::kBicubic;
+    if (fast && interp == Interpolation::kBilinear) {
+      if (fmt == PixelFormat::kGray8) {
+        WalkTile<1>(vt, t, T, u0, v0, nu, nv, out, FastRow{kernels::BilinearGrayRow, data, stride});
+      } else if (fmt == PixelFormat::kRgb8) {
+        WalkTile<3>(vt, t, T, u0, v0, nu, nv, out, FastRow{kernels::BilinearRgbRow, data, stride});
+      } else {
+        WalkTile<3>(vt, t, T, u0, v0, nu, nv, out, FastRow{kernels::BayerRgbRow, data, stride});
+      }
+      continue;
+    }
+    if (fast && fmt == PixelFormat::kGray8) {
+      WalkTile<1>(vt, t, T, u0, v0, nu, nv, out, PerPixel<NearestSampler<1>, 1>{{data, stride}});
+      continue;
+    }
+    if (fast && fmt == PixelFormat::kRgb8) {
+      WalkTile<3>(vt, t, T, u0, v0, nu, nv, out, PerPixel<NearestSampler<3>, 3>{{data, stride}});
+      continue;
+    }
+    GenericSampler g;
+    g.m = interp;
+    if (fmt == PixelFormat::kBayerRggb8) {
+      g.bayer = true;
+      g.num_planes = 4;
+      const int hw = w / 2, hh = h / 2;
+      g.planes[0] = {data, hw, hh, 2, 2 * stride};
+      g.planes[1] = {data + 1, hw, hh, 2, 2 * stride};
+      g.planes[2] = {data + stride, hw, hh, 2, 2 * stride};
+      g.planes[3] = {data + stride + 1, hw, hh, 2, 2 * stride};
+    } else {
+      const int C = fmt == PixelFormat::kRgb8 ? 3 : 1;
+      g.num_planes = C;
+      for (int c = 0; c < C; ++c) g.planes[c] = {data + c, w, h, C, stride};
+    }
+    if (OC == 1) {
+      WalkTile<1>(vt, t, T, u0, v0, nu, nv, out, PerPixel<GenericSampler, 1>{g});
+    } else {
+      WalkTile<3>(vt, t, T, u0, v0, nu, nv, out, PerPixel<GenericSampler, 3>{g});
+    }
+  }
+}
+
+void Remapper::Run(const ImageView& src, Interpolation interp, std::vector<Image8>* outputs) {
+  Prepare(src);
+  const int n = static_cast<int>(table_.views.size());
+  outputs->resize(n);
+  const int OC = src.format == PixelFormat::kGray8 ? 1 : 3;
+  std::vector<std::pair<int, int>> rows;   // (view, tile row)
+  for (int v = 0; v < n; ++v) {
+    Image8& o = (*outputs)[v];
+    const auto& vw = table_.views[v].view;
+    if (o.width != vw.width || o.height != vw.height || o.channels != OC) {
+      o.width = vw.width, o.height = vw.height, o.channels = OC;
+      o.data.resize(size_t(o.width) * o.height * OC);
+    }
+    for (int r = 0; r < table_.views[v].tiles_y; ++r) rows.emplace_back(v, r);
+  }
+  tbb::parallel_for(tbb::blocked_range<size_t>(0, rows.size(), 1), [&](const tbb::blocked_range<size_t>& range) {
+    for (size_t k = range.begin(); k < range.end(); ++k)
+      RemapRows(src, interp, rows[k].first, rows[k].second, &(*outputs)[rows[k].first]);
+  });
+}
+
+void Remapper::RunView(const ImageView& src, Interpolation interp, int view, Image8* out) {
+  HOVS_REQUIRE(view >= 0 && view < int(table_.views.size()), "remap", "no view ", view);
+  Prepare(src);
+  const auto& vw = table_.views[view].view;
+  out->width = vw.width, out->height = vw.height, out->channels = src.format == PixelFormat::kGray8 ? 1 : 3;
+  out->data.resize(size_t(out->width) * out->height * out->channels);
+  tbb::parallel_for(0, table_.views[view].tiles_y, [&](int r) { RemapRows(src, interp, view, r, out); });
+}
+
+}  // namespace hovs::unwrap
