@@ -20,8 +20,6 @@ void ViewSpec::Check(const std::string& where) const {
   if (type == ViewProjection::kPerspective) {
     HOVS_REQUIRE(hfov_deg > 0 && hfov_deg < 180, where + " (" + name + ")",
                  "a perspective view needs 0 < hfov < 180 degrees (got ", hfov_deg, ")");
-    const double vfov = 2 * std::atan(std::tan(0.5 * hfov_deg * kDeg) * height / width) / kDeg;
-    HOVS_REQUIRE(vfov < 180, where + " (" + name + ")", "vertical field of view must be below 180 degrees");
   }
   View().Check(where + " (" + name + ")");
 }

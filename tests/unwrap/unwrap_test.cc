@@ -1,0 +1,375 @@
+// Unwrap without rendering: view geometry round trips, tables against the exact model, mapping files (round
+// trip, corruption, version), kernels (AVX2 = scalar, ramps reproduced, Bayer = RGB on grey-world content),
+// bad input.
+#include <gtest/gtest.h>
+
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <random>
+
+#include "core/error.h"
+#include "core/model_fit.h"
+#include "unwrap/remap.h"
+#include "unwrap/remap_kernels.h"
+
+namespace hovs::unwrap {
+namespace {
+
+constexpr double kDeg = M_PI / 180;
+
+CatadioptricCamera<double> Rig() {
+  return CatadioptricCamera<double>::Aligned({0.048, 0.044, 0.080},
+                                             PinholeCamera<double>::FromPhysical(0.016, 4.54e-6, 2750, 2200), 0.010);
+}
+
+std::filesystem::path TempDir() {
+  const auto d = std::filesystem::temp_directory_path() /
+                 ("hovs_unwrap_test_" + std::to_string(::testing::UnitTest::GetInstance()->random_seed()) + "_" +
+                  ::testing::UnitTest::GetInstance()->current_test_info()->name());
+  std::filesystem::create_directories(d);
+  return d;
+}
+
+TEST(VirtualView, PerspectiveAndPanoramaRoundTrip) {
+  std::mt19937 rng(3);
+  std::uniform_real_distribution<double> U(0, 1);
+  const std::vector<VirtualView<double>> views = {
+      VirtualView<double>::Perspective(1200, 700, 65 * kDeg, 40 * kDeg, -30 * kDeg, 5 * kDeg),
+      VirtualView<double>::Panorama(ViewProjection::kCylindrical, 3600, 900, -75 * kDeg, -2 * kDeg),
+      VirtualView<double>::Panorama(ViewProjection::kLongLat, 2000, 1000, -90 * kDeg, 90 * kDeg, 30 * kDeg)};
+  for (const auto& v : views) {
+    double worst = 0;
+    for (int k = 0; k < 2000; ++k) {
+      const Vec2d uv(-0.49 + U(rng) * (v.width - 0.02), -0.49 + U(rng) * (v.height - 0.02));
+      Vec3d b;
+      ASSERT_TRUE(v.MirrorFromImg(uv, &b));
+      EXPECT_NEAR(b.norm(), 1.0, 1e-12);
+      Vec2d back;
+      ASSERT_TRUE(v.ImgFromMirror(b * 3.7, &back));
+      worst = std::max(worst, (back - uv).norm());
+    }
+    EXPECT_LT(worst, 1e-8) << ToString(v.projection);
+  }
+}
+
+TEST(VirtualView, PerspectiveLooksWhereYawAndPitchSayAndIsUpright) {
+  const auto v = VirtualView<double>::Perspective(1201, 701, 60 * kDeg, 60 * kDeg, -30 * kDeg, 0);
+  Vec3d b;
+  ASSERT_TRUE(v.MirrorFromImg(Vec2d(600, 350), &b));   // the principal point
+  EXPECT_NEAR(std::atan2(b.y(), b.x()), 60 * kDeg, 1e-12);
+  EXPECT_NEAR(std::asin(b.z()), -30 * kDeg, 1e-12);
+  Vec3d up, right;
+  ASSERT_TRUE(v.MirrorFromImg(Vec2d(600, 0), &up));
+  ASSERT_TRUE(v.MirrorFromImg(Vec2d(1200, 350), &right));
+  EXPECT_GT(up.z(), b.z());   // image rows go down in the world
+  // Right of the image is clockwise seen from above (azimuth decreases), as for a person looking out.
+  EXPECT_LT(std::atan2(right.y(), right.x()), 60 * kDeg);
+}
+
+TEST(VirtualView, PanoramaWrapsWithoutASeam) {
+  const auto v = VirtualView<double>::Panorama(ViewProjection::kCylindrical, 3600, 900, -75 * kDeg, -2 * kDeg);
+  // Column spacing is uniform across the wrap: the last column and the first are one column apart.
+  Vec3d a, b;
+  ASSERT_TRUE(v.MirrorFromImg(Vec2d(3599, 450), &a));
+  ASSERT_TRUE(v.MirrorFromImg(Vec2d(0, 450), &b));
+  Vec3d c, d;
+  ASSERT_TRUE(v.MirrorFromImg(Vec2d(1000, 450), &c));
+  ASSERT_TRUE(v.MirrorFromImg(Vec2d(1001, 450), &d));
+  EXPECT_NEAR(std::acos(a.dot(b)), std::acos(c.dot(d)), 1e-9);
+  Vec2d uv;
+  ASSERT_TRUE(v.ImgFromMirror(b, &uv));
+  EXPECT_NEAR(uv.x(), 0, 1e-9);
+}
+
+TEST(RemapTable, DecodedCoordinatesMatchTheExactModel) {
+  const AnyModel exact = AnyModel::Exact(Rig());
+  const AnyModel poly = AnyModel::Polynomial(PolynomialFromCatadioptric(Rig(), 5));
+  Layout layout = PresetLayout("article");
+  layout.views.resize(2);
+  ViewSpec pano;
+  pano.name = "pano", pano.type = ViewProjection::kCylindrical, pano.width = 1800, pano.height = 400;
+  layout.views.push_back(pano);
+  for (const AnyModel* m : {&exact, &poly}) {
+    const RemapTable t = BuildRemapTable(*m, layout, {});
+    ASSERT_EQ(t.views.size(), 3u);
+    for (size_t v = 0; v < t.views.size(); ++v) {
+      std::vector<float> ex, ey, dx, dy;
+      ExactMaps(*m, t.views[v].view, &ex, &ey);
+      t.DecodeView(static_cast<int>(v), &dx, &dy);
+      double worst = 0;
+      int64_t valid = 0, mismatch = 0;
+      for (size_t k = 0; k < ex.size(); ++k) {
+        if ((ex[k] < 0) != (dx[k] < 0)) ++mismatch;
+        if (ex[k] < 0 || dx[k] < 0) continue;
+        ++valid;
+        worst = std::max(worst, std::hypot(double(ex[k]) - dx[k], double(ey[k]) - dy[k]));
+      }
+      EXPECT_EQ(mismatch, 0) << m->KindName() << " view " << v;
+      EXPECT_GT(valid, int64_t(ex.size()) / 2);
+      // 1/64 px interpolation tolerance plus float storage of 2750-pixel coordinates.
+      EXPECT_LT(worst, 1.0 / 64 + 1e-3) << m->KindName() << " view " << v;
+    }
+  }
+}
+
+TEST(RemapTable, PanoramaHasInvalidPixelsWhereTheMirrorIsNotSeen) {
+  Layout layout;
+  layout.name = "wide";
+  ViewSpec pano;
+  pano.name = "pano", pano.type = ViewProjection::kLongLat, pano.width = 720, pano.height = 400;
+  pano.elevation_min_deg = -89, pano.elevation_max_deg = 20;   // beyond both ends of the mirror's field
+  layout.views.push_back(pano);
+  const RemapTable t = BuildRemapTable(AnyModel::Exact(Rig()), layout, {});
+  std::vector<float> x, y;
+  t.DecodeView(0, &x, &y);
+  EXPECT_LT(x[0], 0) << "top row (20 deg up) is above the mirror's field";
+  EXPECT_LT(x[x.size() - 1], 0) << "bottom row (-89 deg) sees the camera";
+  EXPECT_GE(x[200 * 720], 0) << "a middle row sees the mirror";
+  EXPECT_GT(t.views[0].dense_tiles, 0);
+  EXPECT_GT(t.views[0].empty_tiles, 0) << "the rows above the mirror's field";
+}
+
+TEST(RemapTable, MinifyingTilesSampleThePyramid) {
+  Layout layout;
+  layout.name = "small";
+  ViewSpec pano;
+  pano.name = "small", pano.type = ViewProjection::kCylindrical, pano.width = 360, pano.height = 120;
+  layout.views.push_back(pano);
+  const RemapTable t = BuildRemapTable(AnyModel::Exact(Rig()), layout, {});
+  EXPECT_GE(t.views[0].max_level, 1);   // 1 degree per column: several source pixels at the rim
+  EXPECT_EQ(t.levels, t.views[0].max_level + 1);
+  RemapOptions no_aa;
+  no_aa.antialias = false;
+  EXPECT_EQ(BuildRemapTable(AnyModel::Exact(Rig()), layout, no_aa).levels, 1);
+}
+
+TEST(MappingFile, RoundTripAndDetectsCorruptionAndVersion) {
+  Layout layout = PresetLayout("article");
+  layout.views.resize(2);
+  const RemapTable t = BuildRemapTable(AnyModel::Exact(Rig()), layout, {}, R"({"hovs": "test"})");
+  const auto dir = TempDir();
+  const auto path = dir / "article.hmap";
+  SaveRemapTable(path, t);
+  const RemapTable back = LoadRemapTable(path);
+  ASSERT_EQ(back.views.size(), 2u);
+  EXPECT_EQ(back.header, t.header);
+  for (int v = 0; v < 2; ++v) {
+    std::vector<float> a, b, c, d;
+    t.DecodeView(v, &a, &b);
+    back.DecodeView(v, &c, &d);
+    EXPECT_EQ(a, c);
+    EXPECT_EQ(b, d);
+  }
+  EXPECT_NE(MappingFileHeader(path).find("\"exact\""), std::string::npos);
+
+  std::string bytes;
+  {
+    std::ifstream in(path, std::ios::binary);
+    bytes.assign(std::istreambuf_iterator<char>(in), {});
+  }
+  const auto write = [&](const std::string& name, const std::string& content) {
+    std::ofstream out(dir / name, std::ios::binary);
+    out.write(content.data(), static_cast<std::streamsize>(content.size()));
+    return dir / name;
+  };
+  const auto expect_error = [&](const std::filesystem::path& p, const std::string& what) {
+    try {
+      LoadRemapTable(p);
+      ADD_FAILURE() << "no error for " << p;
+    } catch (const Error& e) {
+      EXPECT_NE(std::string(e.what()).find(what), std::string::npos) << e.what();
+      EXPECT_NE(std::string(e.what()).find(p.filename().string()), std::string::npos) << e.what();
+    }
+  };
+  std::string flipped = bytes;
+  flipped[bytes.size() / 2] ^= 0x10;
+  expect_error(write("flipped.hmap", flipped), "checksum");
+  expect_error(write("truncated.hmap", bytes.substr(0, bytes.size() - 100)), "checksum");
+  std::string version = bytes;
+  version[8] = 99;
+  expect_error(write("version.hmap", version), "version");
+  expect_error(write("garbage.hmap", "hello world, not a mapping file"), "not a hovs mapping file");
+  std::filesystem::remove_all(dir);
+}
+
+// Random interior coordinates of a row, in 16.16.
+kernels::RowCoords RandomRow(std::mt19937* rng, int n, int w, int h, std::vector<int32_t>* xs, std::vector<int32_t>* ys) {
+  std::uniform_real_distribution<double> X(3, w - 5), Y(3, h - 5);
+  xs->resize(n), ys->resize(n);
+  for (int i = 0; i < n; ++i) (*xs)[i] = int32_t(X(*rng) * 65536), (*ys)[i] = int32_t(Y(*rng) * 65536);
+  kernels::RowCoords c;
+  c.xs = xs->data(), c.ys = ys->data();
+  return c;
+}
+
+TEST(Kernels, VectorAndScalarAgreeBitForBit) {
+  if (!kernels::HaveAvx2()) GTEST_SKIP() << "this CPU has no AVX2: only the scalar kernels run here";
+  std::mt19937 rng(11);
+  const int w = 300, h = 200;
+  std::vector<uint8_t> rgb(w * h * 3), grey(w * h);
+  for (auto& v : rgb) v = uint8_t(rng());
+  for (auto& v : grey) v = uint8_t(rng());
+  for (int trial = 0; trial < 20; ++trial) {
+    std::vector<int32_t> xs, ys;
+    const int n = 37 + trial;
+    kernels::RowCoords c = RandomRow(&rng, n, w, h, &xs, &ys);
+    if (trial % 2) {   // the polynomial form of interp tiles
+      c.xs = c.ys = nullptr;
+      c.poly = {float((20 + trial) * 65536), 0.9f * 65536, 0.01f * 65536, float((30 + trial) * 65536), 0.3f * 65536,
+                -0.002f * 65536};
+    }
+    std::vector<uint8_t> a(3 * n), b(3 * n);
+    kernels::BilinearRgbRow(rgb.data(), 3 * w, c, 0, n, a.data());
+    kernels::BilinearRgbRowScalar(rgb.data(), 3 * w, c, 0, n, b.data());
+    EXPECT_EQ(a, b) << "rgb trial " << trial;
+    kernels::BayerRgbRow(grey.data(), w, c, 0, n, a.data());
+    kernels::BayerRgbRowScalar(grey.data(), w, c, 0, n, b.data());
+    EXPECT_EQ(a, b) << "bayer trial " << trial;
+    std::vector<uint8_t> g1(n), g2(n);
+    kernels::BilinearGrayRow(grey.data(), w, c, 0, n, g1.data());
+    kernels::BilinearGrayRowScalar(grey.data(), w, c, 0, n, g2.data());
+    EXPECT_EQ(g1, g2) << "grey trial " << trial;
+  }
+}
+
+TEST(Kernels, BilinearReproducesALinearRamp) {
+  // value = 0.25 x + 0.3 y + 5 per channel (with an offset per channel): bilinear is exact on a plane, so the
+  // output equals the plane at the sampled position within rounding (1/64 px positions, integer output).
+  const int w = 400, h = 300;
+  std::vector<uint8_t> rgb(w * h * 3);
+  for (int y = 0; y < h; ++y)
+    for (int x = 0; x < w; ++x)
+      for (int c = 0; c < 3; ++c) rgb[3 * (y * w + x) + c] = uint8_t(std::lround(0.25 * x + 0.3 * y + 5 + 5 * c));
+  std::mt19937 rng(5);
+  std::vector<int32_t> xs, ys;
+  const kernels::RowCoords c = RandomRow(&rng, 500, w, h, &xs, &ys);
+  std::vector<uint8_t> out(3 * 500);
+  kernels::BilinearRgbRow(rgb.data(), 3 * w, c, 0, 500, out.data());
+  for (int i = 0; i < 500; ++i)
+    for (int ch = 0; ch < 3; ++ch) {
+      const double expect = 0.25 * xs[i] / 65536.0 + 0.3 * ys[i] / 65536.0 + 5 + 5 * ch;
+      EXPECT_NEAR(out[3 * i + ch], expect, 1.0) << i;
+    }
+}
+
+TEST(Remap, BayerInputGivesTheRgbResultOnSmoothContent) {
+  // A smooth colour image and its RGGB mosaic: the demosaicing remap is close to the RGB remap.
+  const auto rig = Rig();
+  Layout layout = PresetLayout("article");
+  layout.views.resize(1);
+  const RemapTable t = BuildRemapTable(AnyModel::Exact(rig), layout, {});
+  const int W = 2750, H = 2200;
+  std::vector<uint8_t> rgb(size_t(W) * H * 3), mosaic(size_t(W) * H);
+  for (int y = 0; y < H; ++y)
+    for (int x = 0; x < W; ++x) {
+      const double r = 128 + 100 * std::sin(x * 0.01), g = 128 + 100 * std::cos(y * 0.012),
+                   b = 128 + 80 * std::sin((x + y) * 0.008);
+      uint8_t* p = &rgb[3 * (size_t(y) * W + x)];
+      p[0] = uint8_t(std::lround(r)), p[1] = uint8_t(std::lround(g)), p[2] = uint8_t(std::lround(b));
+      mosaic[size_t(y) * W + x] = p[(y % 2) + (x % 2)];   // RGGB: (0,0) R, (1,0)/(0,1) G, (1,1) B
+    }
+  Remapper remapper(t);
+  std::vector<Image8> a, b;
+  remapper.Run({rgb.data(), W, H, size_t(W) * 3, PixelFormat::kRgb8}, Interpolation::kBilinear, &a);
+  remapper.Run({mosaic.data(), W, H, size_t(W), PixelFormat::kBayerRggb8}, Interpolation::kBilinear, &b);
+  ASSERT_EQ(a[0].data.size(), b[0].data.size());
+  double sum = 0;
+  int worst = 0;
+  for (size_t k = 0; k < a[0].data.size(); ++k) {
+    const int d = std::abs(int(a[0].data[k]) - int(b[0].data[k]));
+    sum += d;
+    worst = std::max(worst, d);
+  }
+  EXPECT_LT(sum / a[0].data.size(), 1.0);
+  EXPECT_LE(worst, 4);
+}
+
+TEST(Remap, InterpolationsAgreeOnSmoothContentAndNearestIsExactOnIntegers) {
+  const auto rig = Rig();
+  Layout layout;
+  layout.name = "one";
+  ViewSpec v;
+  v.name = "v", v.width = 200, v.height = 150, v.hfov_deg = 20;
+  layout.views.push_back(v);
+  const RemapTable t = BuildRemapTable(AnyModel::Exact(rig), layout, {});
+  const int W = 2750, H = 2200;
+  std::vector<uint8_t> grey(size_t(W) * H);
+  for (int y = 0; y < H; ++y)
+    for (int x = 0; x < W; ++x) grey[size_t(y) * W + x] = uint8_t(128 + 100 * std::sin(x * 0.02) * std::cos(y * 0.015));
+  Remapper r(t);
+  const ImageView src{grey.data(), W, H, size_t(W), PixelFormat::kGray8};
+  std::vector<Image8> bl, bc, nn;
+  r.Run(src, Interpolation::kBilinear, &bl);
+  r.Run(src, Interpolation::kBicubic, &bc);
+  r.Run(src, Interpolation::kNearest, &nn);
+  ASSERT_EQ(bl[0].channels, 1);
+  std::vector<float> mx, my;
+  t.DecodeView(0, &mx, &my);
+  int worst_bc = 0;
+  for (size_t k = 0; k < bl[0].data.size(); ++k) {
+    worst_bc = std::max(worst_bc, std::abs(int(bl[0].data[k]) - int(bc[0].data[k])));
+    const int ix = int(std::lround(mx[k])), iy = int(std::lround(my[k]));
+    EXPECT_EQ(nn[0].data[k], grey[size_t(iy) * W + ix]) << k;
+    if (::testing::Test::HasFailure()) break;
+  }
+  EXPECT_LE(worst_bc, 3);
+}
+
+TEST(Remap, RejectsBadInput) {
+  Layout layout = PresetLayout("article");
+  layout.views.resize(1);
+  const RemapTable t = BuildRemapTable(AnyModel::Exact(Rig()), layout, {});
+  Remapper r(t);
+  std::vector<uint8_t> img(100 * 100 * 3);
+  std::vector<Image8> out;
+  try {
+    r.Run({img.data(), 100, 100, 300, PixelFormat::kRgb8}, Interpolation::kBilinear, &out);
+    ADD_FAILURE() << "no error";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("2750 x 2200"), std::string::npos) << e.what();
+  }
+  ViewSpec wide;
+  wide.name = "wide", wide.hfov_deg = 180;
+  EXPECT_THROW(wide.Check("test"), Error);
+  wide.hfov_deg = 120, wide.width = 0;
+  EXPECT_THROW(wide.Check("test"), Error);
+  EXPECT_THROW(PresetLayout("nonsense"), Error);
+  Layout dup = PresetLayout("article");
+  dup.views[1].name = dup.views[0].name;
+  EXPECT_THROW(dup.Check("test"), Error);
+  RemapOptions o;
+  o.tile = 12;
+  EXPECT_THROW(o.Check("test"), Error);
+}
+
+TEST(Layout, YamlFileIsValidated) {
+  const auto dir = TempDir();
+  const auto write = [&](const std::string& name, const std::string& text) {
+    std::ofstream(dir / name) << text;
+    return dir / name;
+  };
+  const Layout l = LoadLayout(write("ok.yaml", "views:\n  - {name: a, yaw: 10, pitch: -20, hfov: 50, width: 64, height: 48}\n"
+                                               "  - {name: p, type: cylindrical, width: 720, height: 100}\n"));
+  ASSERT_EQ(l.views.size(), 2u);
+  EXPECT_DOUBLE_EQ(l.views[0].yaw_deg, 10);
+  EXPECT_EQ(l.views[1].type, ViewProjection::kCylindrical);
+  const auto expect_error = [&](const std::string& text, const std::string& what) {
+    try {
+      LoadLayout(write("bad.yaml", text));
+      ADD_FAILURE() << "no error for " << text;
+    } catch (const Error& e) {
+      EXPECT_NE(std::string(e.what()).find(what), std::string::npos) << e.what();
+      EXPECT_NE(std::string(e.what()).find("bad.yaml"), std::string::npos) << e.what();
+    }
+  };
+  expect_error("views:\n  - {name: a, hfov: 190}\n", "hfov");
+  expect_error("views:\n  - {name: a, yaw: 10, colour: red}\n", "unknown key");
+  expect_error("views:\n  - {name: a, type: fisheye}\n", "unknown view type");
+  expect_error("views:\n  - {name: a, type: cylindrical, yaw: 3}\n", "perspective views only");
+  expect_error("views: []\n", "list of views");
+  std::filesystem::remove_all(dir);
+}
+
+}  // namespace
+}  // namespace hovs::unwrap
