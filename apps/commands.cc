@@ -8,6 +8,7 @@ const std::vector<Command>& Commands() {
       {"render", "Render a scene through its catadioptric units, with ground truth (EXR + JSON)", SetupRender},
       {"dataset", "Render a dataset (a monocular calibration set) with ground truth and a manifest", SetupDataset},
       {"calibrate", "Monocular calibration (polynomial and unified models) from a corner table or a dataset", SetupCalibrate},
+      {"unwrap", "Virtual perspective views and panoramas from catadioptric images (any model), mapping files", SetupUnwrap},
       {"version", "Print the versions of hovs and its libraries", SetupVersion},
   };
   return table;

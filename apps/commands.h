@@ -30,5 +30,6 @@ Runner SetupVersion(CLI::App* sub, const GlobalOptions* global);
 Runner SetupRender(CLI::App* sub, const GlobalOptions* global);
 Runner SetupDataset(CLI::App* sub, const GlobalOptions* global);
 Runner SetupCalibrate(CLI::App* sub, const GlobalOptions* global);
+Runner SetupUnwrap(CLI::App* sub, const GlobalOptions* global);
 
 }  // namespace hovs::apps

@@ -9,4 +9,12 @@ xvfb-run -a build/apps/hovs design --config design/reference.yaml --out results/
 # A small monocular calibration set of the reference unit, rendered with exact ground truth.
 build/apps/hovs dataset --scene scenes/reference_calibration.yaml --count 9 --seed 1 --samples 4 \
   --out results/calibration-set
-echo "demo: reports in results/design-reference/index.html and results/calibration-set/index.html"
+# Panoramic expansion of a street scene: the article's six views and a cylindrical panorama of the left unit,
+# each perspective view compared with a pinhole render of the same view at the unit's viewpoint (PSNR).
+build/apps/hovs render --scene scenes/street.yaml --samples 4 --out results/street
+build/apps/hovs unwrap --model scenes/street.yaml --unit left --layout article --input results/street/dataset.json \
+  --save-map results/street/article.hmap --truth-scene scenes/street.yaml --out results/street-views
+build/apps/hovs unwrap --model scenes/street.yaml --unit left --layout panorama --input results/street/dataset.json \
+  --out results/street-panorama
+echo "demo: reports in results/design-reference/index.html and results/calibration-set/index.html;"
+echo "      street views in results/street-views/ (views.json: K, poses, PSNR against truth renders), panorama in results/street-panorama/"

@@ -1,0 +1,300 @@
+// hovs unwrap: virtual perspective views and panoramas from catadioptric images, through any model.
+//
+//   hovs unwrap --model scenes/street.yaml --unit left --layout article --input frame.png -o out
+//   hovs unwrap --model calib/calib_results.txt --layout panorama --input images/ -o out --save-map pano.hmap
+//   hovs unwrap --map pano.hmap --input dataset.json -o out
+// Models: a scene YAML or a dataset manifest (the exact rig of a unit), OCamCalib's calib_results.txt or hovs'
+// calibration.json (polynomial). Inputs: an image, a folder of images, or a dataset manifest (every view of the
+// unit). Output folder (replaced atomically): <frame>/<view>.png per input frame, views.json (each view's K and
+// pose, the mapping header, timings).
+#include <algorithm>
+#include <cmath>
+#include <optional>
+#include <chrono>
+#include <cstdio>
+#include <iostream>
+#include <nlohmann/json.hpp>
+
+#include "apps/commands.h"
+#include "calib/ocam_io.h"
+#include "core/error.h"
+#include "core/io.h"
+#include "design/study.h"
+#include "raytrace/render.h"
+#include "scenes/ground_truth.h"
+#include "scenes/scene_config.h"
+#include "unwrap/remap.h"
+
+namespace hovs::apps {
+namespace {
+namespace fs = std::filesystem;
+
+bool EndsWith(const std::string& s, const std::string& e) {
+  return s.size() >= e.size() && s.compare(s.size() - e.size(), e.size(), e) == 0;
+}
+
+PolynomialModel<double> PolynomialFromCalibrationJson(const fs::path& path) {
+  const auto j = nlohmann::json::parse(ReadFile(path), nullptr, false);
+  HOVS_REQUIRE(!j.is_discarded() && j.contains("polynomial"), path.string(),
+               "not a hovs calibration.json (no 'polynomial' model)");
+  const auto& p = j["polynomial"];
+  try {
+    PolynomialModel<double> m;
+    m.width = p.at("width"), m.height = p.at("height");
+    m.cx = p.at("cx"), m.cy = p.at("cy"), m.c = p.at("c"), m.d = p.at("d"), m.e = p.at("e");
+    m.poly = p.at("poly").get<std::vector<double>>();
+    m.inv_poly = p.at("inv_poly").get<std::vector<double>>();
+    m.rho_min = p.at("rho_range")[0], m.rho_max = p.at("rho_range")[1];
+    m.Check(path.string());
+    return m;
+  } catch (const nlohmann::json::exception& e) {
+    throw Error(path.string(), std::string("polynomial model is incomplete: ") + e.what());
+  }
+}
+
+// The model named on the command line; `unit` selects a unit of a scene or manifest.
+AnyModel LoadModel(const std::string& spec, const std::string& unit, double scene_distance) {
+  const fs::path path(spec);
+  HOVS_REQUIRE(fs::exists(path), "--model " + spec, "file not found");
+  const auto pick = [&](size_t n, const auto& name_of) {
+    if (unit.empty()) return size_t(0);
+    for (size_t i = 0; i < n; ++i)
+      if (name_of(i) == unit) return i;
+    throw Error("--unit " + unit, "no such unit in " + spec);
+  };
+  if (EndsWith(spec, ".yaml") || EndsWith(spec, ".yml")) {
+    const auto cfg = scenes::LoadSceneConfig(path);
+    const auto& units = cfg.description.units;
+    const size_t i = pick(units.size(), [&](size_t k) { return units[k].name; });
+    return AnyModel::Exact(units[i].rig, scene_distance);
+  }
+  if (EndsWith(spec, ".txt")) return AnyModel::Polynomial(calib::LoadOcamCalibResults(path));
+  const auto j = nlohmann::json::parse(ReadFile(path), nullptr, false);
+  HOVS_REQUIRE(!j.is_discarded(), path.string(), "not JSON, YAML or calib_results.txt");
+  if (j.value("format", "") == "hovs-dataset") {
+    const auto& units = j.at("units");
+    const size_t i = pick(units.size(), [&](size_t k) { return units[k]["name"].get<std::string>(); });
+    return AnyModel::Exact(scenes::UnitFromJson(units[i], spec + " (units)").rig, scene_distance);
+  }
+  return AnyModel::Polynomial(PolynomialFromCalibrationJson(path));
+}
+
+struct Frame {
+  std::string name;
+  fs::path image;
+};
+
+std::vector<Frame> ListInputs(const std::string& input, const std::string& unit) {
+  const fs::path p(input);
+  HOVS_REQUIRE(fs::exists(p), "--input " + input, "not found");
+  std::vector<Frame> frames;
+  if (fs::is_directory(p)) {
+    for (const auto& e : fs::directory_iterator(p)) {
+      std::string ext = e.path().extension().string();
+      std::transform(ext.begin(), ext.end(), ext.begin(), ::tolower);
+      if (ext == ".png" || ext == ".jpg" || ext == ".jpeg" || ext == ".tif" || ext == ".tiff" || ext == ".bmp")
+        frames.push_back({e.path().stem().string(), e.path()});
+    }
+    std::sort(frames.begin(), frames.end(), [](const Frame& a, const Frame& b) { return a.name < b.name; });
+    HOVS_REQUIRE(!frames.empty(), "--input " + input, "the folder holds no images (png, jpg, tif, bmp)");
+    return frames;
+  }
+  if (EndsWith(input, ".json")) {
+    const auto m = nlohmann::json::parse(ReadFile(p), nullptr, false);
+    HOVS_REQUIRE(!m.is_discarded() && m.value("format", "") == "hovs-dataset", input, "not a hovs dataset manifest");
+    const std::string want = unit.empty() ? m.at("units")[0]["name"].get<std::string>() : unit;
+    for (const auto& fr : m.at("frames"))
+      for (const auto& v : fr.at("views"))
+        if (v.at("unit") == want)
+          frames.push_back({"frame" + std::to_string(fr.at("id").get<int>()), p.parent_path() / v.at("image").get<std::string>()});
+    HOVS_REQUIRE(!frames.empty(), input, "no frame of unit '", want, "'");
+    return frames;
+  }
+  return {{p.stem().string(), p}};
+}
+
+nlohmann::json ViewJson(const unwrap::ViewTable& vt) {
+  const auto& v = vt.view;
+  const auto& q = v.mirror_from_view;
+  nlohmann::json j = {{"name", vt.spec.name}, {"type", ToString(v.projection)}, {"width", v.width},
+                      {"height", v.height},
+                      {"mirror_from_view", {{"qw", q.w()}, {"qx", q.x()}, {"qy", q.y()}, {"qz", q.z()}}},
+                      {"valid_pixels", vt.valid_pixels}, {"tiles", {{"interp", vt.interp_tiles}, {"dense", vt.dense_tiles},
+                                                                    {"empty", vt.empty_tiles}}},
+                      {"max_interp_error_px", vt.max_interp_error}, {"max_pyramid_level", vt.max_level}};
+  if (v.projection == ViewProjection::kPerspective) {
+    j["K"] = {{v.camera.fx, 0.0, v.camera.cx}, {0.0, v.camera.fy, v.camera.cy}, {0.0, 0.0, 1.0}};
+    j["yaw_deg"] = vt.spec.yaw_deg, j["pitch_deg"] = vt.spec.pitch_deg, j["roll_deg"] = vt.spec.roll_deg;
+    j["hfov_deg"] = vt.spec.hfov_deg;
+  } else {
+    j["elevation_deg"] = {vt.spec.elevation_min_deg, vt.spec.elevation_max_deg};
+    j["azimuth_centre_deg"] = vt.spec.azimuth_centre_deg, j["azimuth_span_deg"] = vt.spec.azimuth_span_deg;
+  }
+  return j;
+}
+
+}  // namespace
+
+Runner SetupUnwrap(CLI::App* sub, const GlobalOptions* global) {
+  struct Options {
+    std::string model, unit, layout = "article", input, out = "results/unwrap", map, save_map;
+    std::string interp = "bilinear", format = "auto";
+    double scene_distance = 10.0;
+    int tile = 32;
+    std::string truth_scene;
+    int truth_samples = 4;
+  };
+  auto o = std::make_shared<Options>();
+  sub->add_option("--model", o->model, "scene YAML or dataset.json (exact rig), calib_results.txt or calibration.json");
+  sub->add_option("--unit", o->unit, "unit name in a scene or manifest (default: the first)");
+  sub->add_option("--layout", o->layout, "article | panorama | longlat | a layout YAML")->capture_default_str();
+  sub->add_option("--map", o->map, "load a mapping file instead of building from --model");
+  sub->add_option("--save-map", o->save_map, "save the mapping file built from --model");
+  sub->add_option("-i,--input", o->input, "an image, a folder of images or a dataset manifest");
+  sub->add_option("-o,--out", o->out, "output folder (replaced atomically)")->capture_default_str();
+  sub->add_option("--interp", o->interp, "bilinear | bicubic | nearest")->capture_default_str();
+  sub->add_option("--format", o->format, "auto | rgb | gray | bayer_rggb (input pixel format)")->capture_default_str();
+  sub->add_option("--scene-distance", o->scene_distance, "m; depth at which a non-single-viewpoint rig is unwrapped")
+      ->capture_default_str();
+  sub->add_option("--tile", o->tile, "tile size of the mapping (8, 16, 32, 64)")->capture_default_str();
+  sub->add_option("--truth-scene", o->truth_scene,
+                  "scene YAML the input was rendered from: render each perspective view with a pinhole camera at the "
+                  "unit's viewpoint and report PSNR against it");
+  sub->add_option("--truth-samples", o->truth_samples, "samples per pixel of the truth renders")->capture_default_str();
+  return [o, global]() {
+    HOVS_REQUIRE(o->model.empty() != o->map.empty(), "hovs unwrap", "give either --model or --map");
+    HOVS_REQUIRE(!o->input.empty() || !o->save_map.empty(), "hovs unwrap", "give --input (and/or --save-map)");
+    const unwrap::Interpolation interp = unwrap::ParseInterpolation(o->interp);
+    const auto t0 = std::chrono::steady_clock::now();
+    unwrap::RemapTable table;
+    std::string source;
+    if (!o->map.empty()) {
+      table = unwrap::LoadRemapTable(o->map);
+      source = "loaded " + o->map;
+    } else {
+      const AnyModel model = LoadModel(o->model, o->unit, o->scene_distance);
+      unwrap::RemapOptions ro;
+      ro.tile = o->tile;
+      const nlohmann::json versions = design::DesignVersions();
+      table = unwrap::BuildRemapTable(model, unwrap::ResolveLayout(o->layout), ro, versions.dump());
+      source = std::string("built from the ") + model.KindName() + " model in " + o->model;
+      if (!o->save_map.empty()) unwrap::SaveRemapTable(o->save_map, table);
+    }
+    const double table_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+    if (!global->quiet) std::printf("hovs unwrap: %zu views, mapping %s in %.0f ms\n", table.views.size(), source.c_str(), table_ms);
+    if (o->input.empty()) return 0;
+
+    const auto frames = ListInputs(o->input, o->unit);
+    // Ground-truth views: pinhole renders of the scene (without the units' hardware) at the unit's viewpoint.
+    std::vector<std::optional<std::vector<uint8_t>>> truth(table.views.size());
+    if (!o->truth_scene.empty()) {
+      const auto cfg = scenes::LoadSceneConfig(o->truth_scene);
+      const auto& units = cfg.description.units;
+      size_t ui = 0;
+      if (!o->unit.empty()) {
+        ui = units.size();
+        for (size_t k = 0; k < units.size(); ++k)
+          if (units[k].name == o->unit) ui = k;
+        HOVS_REQUIRE(ui < units.size(), "--unit " + o->unit, "no such unit in ", o->truth_scene);
+      }
+      raytrace::SceneDescription bare = cfg.description;
+      bare.units.clear();
+      const raytrace::RayScene scene(bare);
+      raytrace::RenderOptions ro = cfg.render;
+      ro.samples = o->truth_samples;
+      ro.ground_truth = false;
+      ro.Check("--truth-samples");
+      for (size_t v = 0; v < table.views.size(); ++v) {
+        const auto& view = table.views[v].view;
+        if (view.projection != ViewProjection::kPerspective) continue;
+        const Rigid3d world_from_view = units[ui].world_from_mirror * Rigid3d(view.mirror_from_view, Vec3d::Zero());
+        const auto fr = raytrace::Render(scene, raytrace::ViewCamera::Pinhole(view.camera, world_from_view), ro);
+        std::vector<uint8_t> bytes(fr.rgb.size());
+        for (size_t k = 0; k < bytes.size(); ++k) bytes[k] = uint8_t(std::lround(std::clamp(fr.rgb[k], 0.f, 1.f) * 255));
+        truth[v] = std::move(bytes);
+      }
+    }
+    StagedDirectory staged(o->out);
+    unwrap::Remapper remapper(table);
+    nlohmann::json frames_json = nlohmann::json::array();
+    nlohmann::json truth_json = nlohmann::json::object();
+    std::vector<double> remap_ms;
+    for (size_t f = 0; f < frames.size(); ++f) {
+      int w = 0, h = 0, c = 0;
+      const std::vector<float> px = raytrace::ReadImage(frames[f].image, &w, &h, &c);
+      unwrap::PixelFormat fmt;
+      if (o->format == "auto") {
+        HOVS_REQUIRE(c == 1 || c == 3 || c == 4, frames[f].image.string(), "unsupported channel count ", c);
+        fmt = c == 1 ? unwrap::PixelFormat::kGray8 : unwrap::PixelFormat::kRgb8;
+      } else {
+        fmt = unwrap::ParsePixelFormat(o->format);
+        HOVS_REQUIRE((fmt == unwrap::PixelFormat::kRgb8) == (c >= 3), frames[f].image.string(), "has ", c,
+                     " channels, which is not ", o->format);
+      }
+      HOVS_REQUIRE(w == table.source_width && h == table.source_height, frames[f].image.string(), "the image is ", w,
+                   " x ", h, " but the model is for ", table.source_width, " x ", table.source_height);
+      const int oc = fmt == unwrap::PixelFormat::kRgb8 ? 3 : 1;
+      std::vector<uint8_t> bytes(size_t(w) * h * oc);
+      for (size_t k = 0; k < size_t(w) * h; ++k)
+        for (int ch = 0; ch < oc; ++ch)
+          bytes[k * oc + ch] = uint8_t(std::lround(std::clamp(px[k * c + ch], 0.f, 1.f) * 255));
+      std::vector<unwrap::Image8> views;
+      const auto a = std::chrono::steady_clock::now();
+      remapper.Run({bytes.data(), w, h, size_t(w) * oc, fmt}, interp, &views);
+      remap_ms.push_back(std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - a).count());
+      nlohmann::json outs = nlohmann::json::object();
+      for (size_t v = 0; v < views.size(); ++v) {
+        const std::string rel = frames[f].name + "/" + table.views[v].spec.name + ".png";
+        std::vector<float> fl(views[v].data.size());
+        for (size_t k = 0; k < fl.size(); ++k) fl[k] = views[v].data[k] / 255.f;
+        raytrace::WriteImage(staged.staging() / rel, views[v].width, views[v].height, views[v].channels, fl, 8);
+        outs[table.views[v].spec.name] = rel;
+        if (truth[v] && views[v].channels == 3) {
+          // PSNR over the view's valid pixels (those the mapping fills).
+          std::vector<float> mx, my;
+          table.DecodeView(static_cast<int>(v), &mx, &my);
+          double se = 0;
+          int64_t n = 0;
+          for (size_t k = 0; k < mx.size(); ++k) {
+            if (mx[k] < 0) continue;
+            for (int ch = 0; ch < 3; ++ch) se += std::pow(double(views[v].data[3 * k + ch]) - (*truth[v])[3 * k + ch], 2);
+            n += 3;
+          }
+          const double psnr = n ? 10 * std::log10(255.0 * 255.0 * n / std::max(se, 1e-9)) : 0.0;
+          const std::string trel = frames[f].name + "/" + table.views[v].spec.name + "_truth.png";
+          for (size_t k = 0; k < fl.size(); ++k) fl[k] = (*truth[v])[k] / 255.f;
+          raytrace::WriteImage(staged.staging() / trel, views[v].width, views[v].height, 3, fl, 8);
+          truth_json[frames[f].name][table.views[v].spec.name] = {{"psnr_db", psnr}, {"truth", trel},
+                                                                  {"valid_fraction", double(n / 3) / mx.size()}};
+          if (!global->quiet)
+            std::fprintf(stderr, "\r  %s %s: PSNR %.2f dB against the pinhole truth render\n", frames[f].name.c_str(),
+                         table.views[v].spec.name.c_str(), psnr);
+        }
+      }
+      frames_json.push_back({{"frame", frames[f].name}, {"input", frames[f].image.string()}, {"views", outs},
+                             {"remap_ms", remap_ms.back()}, {"pixel_format", unwrap::ToString(fmt)}});
+      if (!global->quiet) std::fprintf(stderr, "\r  frame %zu / %zu", f + 1, frames.size());
+    }
+    if (!global->quiet) std::fprintf(stderr, "\n");
+    nlohmann::json views = nlohmann::json::array();
+    for (const auto& vt : table.views) views.push_back(ViewJson(vt));
+    std::vector<double> sorted = remap_ms;
+    std::sort(sorted.begin(), sorted.end());
+    nlohmann::json j = {{"tool", "hovs unwrap"}, {"versions", design::DesignVersions()},
+                              {"mapping", nlohmann::json::parse(table.header)}, {"mapping_source", source},
+                              {"interpolation", o->interp}, {"views", views}, {"frames", frames_json},
+                              {"timing", {{"mapping_ms", table_ms}, {"median_remap_ms", sorted[sorted.size() / 2]},
+                                          {"note", "remap of all views of one frame, this machine, threads: TBB default"}}}};
+    if (!truth_json.empty()) {
+      j["truth"] = {{"scene", o->truth_scene}, {"samples", o->truth_samples}, {"per_frame", truth_json}};
+    }
+    WriteFileAtomic(staged.staging() / "views.json", j.dump(1));
+    staged.Commit();
+    if (!global->quiet)
+      std::printf("hovs unwrap: %zu frames x %zu views -> %s (median remap %.2f ms per frame)\n", frames.size(),
+                  table.views.size(), o->out.c_str(), sorted[sorted.size() / 2]);
+    return 0;
+  };
+}
+
+}  // namespace hovs::apps
