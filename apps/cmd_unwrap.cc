@@ -16,6 +16,7 @@
 #include <nlohmann/json.hpp>
 
 #include "apps/commands.h"
+#include "apps/unwrap_viewer.h"
 #include "calib/ocam_io.h"
 #include "core/error.h"
 #include "core/io.h"
@@ -143,6 +144,8 @@ Runner SetupUnwrap(CLI::App* sub, const GlobalOptions* global) {
     int tile = 32;
     std::string truth_scene;
     int truth_samples = 4;
+    bool interactive = false;
+    std::string layout_out = "layout.yaml";
   };
   auto o = std::make_shared<Options>();
   sub->add_option("--model", o->model, "scene YAML or dataset.json (exact rig), calib_results.txt or calibration.json");
@@ -161,8 +164,28 @@ Runner SetupUnwrap(CLI::App* sub, const GlobalOptions* global) {
                   "scene YAML the input was rendered from: render each perspective view with a pinhole camera at the "
                   "unit's viewpoint and report PSNR against it");
   sub->add_option("--truth-samples", o->truth_samples, "samples per pixel of the truth renders")->capture_default_str();
+  sub->add_flag("--interactive", o->interactive,
+                "control panel: adjust each view live on the first input frame (needs a display; s saves the layout)");
+  sub->add_option("--layout-out", o->layout_out, "where --interactive saves the adjusted layout")->capture_default_str();
   return [o, global]() {
     HOVS_REQUIRE(o->model.empty() != o->map.empty(), "hovs unwrap", "give either --model or --map");
+    if (o->interactive) {
+      HOVS_REQUIRE(!o->model.empty() && !o->input.empty(), "hovs unwrap --interactive",
+                   "needs --model (views are rebuilt as you move them) and --input");
+      const AnyModel model = LoadModel(o->model, o->unit, o->scene_distance);
+      const auto frame = ListInputs(o->input, o->unit).front();
+      int w = 0, h = 0, c = 0;
+      const std::vector<float> px = raytrace::ReadImage(frame.image, &w, &h, &c);
+      HOVS_REQUIRE(c == 1 || c >= 3, frame.image.string(), "unsupported channel count ", c);
+      const int oc = c == 1 ? 1 : 3;
+      std::vector<uint8_t> bytes(size_t(w) * h * oc);
+      for (size_t k = 0; k < size_t(w) * h; ++k)
+        for (int ch = 0; ch < oc; ++ch) bytes[k * oc + ch] = uint8_t(std::lround(std::clamp(px[k * c + ch], 0.f, 1.f) * 255));
+      RunUnwrapViewer(model, unwrap::ResolveLayout(o->layout),
+                      {bytes.data(), w, h, size_t(w) * oc, oc == 1 ? unwrap::PixelFormat::kGray8 : unwrap::PixelFormat::kRgb8},
+                      o->layout_out);
+      return 0;
+    }
     HOVS_REQUIRE(!o->input.empty() || !o->save_map.empty(), "hovs unwrap", "give --input (and/or --save-map)");
     const unwrap::Interpolation interp = unwrap::ParseInterpolation(o->interp);
     const auto t0 = std::chrono::steady_clock::now();
