@@ -21,6 +21,15 @@
 //     (a cylinder around the pole: vertical lines stay vertical and are not stretched).
 //   Row v, longlat: elevation = e_max - (v + 0.5) / H * (e_max - e_min).
 //
+// Epipolar (stereo rectification; the pole is the baseline, the view frame's +x axis):
+//   column u: theta, the angle between the ray and the pole, theta = t_max - (u + 0.5) / W * (t_max - t_min)
+//             (stored in azimuth_centre +- azimuth_span / 2: t_min = centre - span / 2, t_max = centre + span / 2);
+//   row v:    phi, the angle of the ray's plane around the pole, phi = p_max - (v + 0.5) / H * (p_max - p_min)
+//             (stored in elevation_min / elevation_max);
+//   bearing (view frame) = (cos theta, sin theta cos phi, sin theta sin phi).
+//   Every plane containing the pole is one row: for two units whose views share the pole (the baseline) and
+//   the orientation, epipolar curves are rows, and a point's two columns give its two angles to the baseline.
+//
 // Valid domains: perspective bearings with positive z in the view frame; cylindrical elevations strictly
 // inside (-90, 90) degrees; longlat elevations in [-90, 90]. Every function returns false outside.
 #pragma once
@@ -34,13 +43,14 @@
 
 namespace hovs {
 
-enum class ViewProjection { kPerspective, kCylindrical, kLongLat };
+enum class ViewProjection { kPerspective, kCylindrical, kLongLat, kEpipolar };
 
 inline const char* ToString(ViewProjection p) {
   switch (p) {
     case ViewProjection::kPerspective: return "perspective";
     case ViewProjection::kCylindrical: return "cylindrical";
     case ViewProjection::kLongLat: return "longlat";
+    case ViewProjection::kEpipolar: return "epipolar";
   }
   return "?";
 }
@@ -101,6 +111,10 @@ struct VirtualView {
     Vec3<T> b;
     if (projection == ViewProjection::kPerspective) {
       if (!camera.CamFromImg(uv, &b)) return false;
+    } else if (projection == ViewProjection::kEpipolar) {
+      const T theta = azimuth_centre + azimuth_span * (T(0.5) - (uv(0) + T(0.5)) / T(width));
+      const T phi = elevation_max - (uv(1) + T(0.5)) / T(height) * (elevation_max - elevation_min);
+      b = Vec3<T>(cos(theta), sin(theta) * cos(phi), sin(theta) * sin(phi));
     } else {
       const T az = azimuth_centre + azimuth_span * (T(0.5) - (uv(0) + T(0.5)) / T(width));
       const T s = (uv(1) + T(0.5)) / T(height);
@@ -124,6 +138,13 @@ struct VirtualView {
     using std::tan;
     const Vec3<T> b = mirror_from_view.conjugate() * X;
     if (projection == ViewProjection::kPerspective) return camera.ImgFromCam(b, uv);
+    if (projection == ViewProjection::kEpipolar) {
+      const T theta = atan2(sqrt(b(1) * b(1) + b(2) * b(2)), b(0));
+      const T phi = atan2(b(2), b(1));
+      *uv = Vec2<T>((T(0.5) - (theta - azimuth_centre) / azimuth_span) * T(width) - T(0.5),
+                    (elevation_max - phi) / (elevation_max - elevation_min) * T(height) - T(0.5));
+      return true;
+    }
     const T rxy = sqrt(b(0) * b(0) + b(1) * b(1));
     const T el = atan2(b(2), rxy);
     T az = atan2(b(1), b(0)) - azimuth_centre;
@@ -150,6 +171,13 @@ struct VirtualView {
       camera.Check(where);
       const double hfov = 2 * std::atan(0.5 * width / ScalarPart(camera.fx));
       HOVS_REQUIRE(hfov < M_PI, where, "a perspective view needs a field of view below 180 degrees");
+    } else if (projection == ViewProjection::kEpipolar) {
+      const double t0 = ScalarPart(azimuth_centre - azimuth_span * T(0.5));
+      const double t1 = ScalarPart(azimuth_centre + azimuth_span * T(0.5));
+      HOVS_REQUIRE(t0 >= 0 && t1 <= M_PI + 1e-12 && t0 < t1, where,
+                   "epipolar view: angles from the baseline must lie in [0, 180] degrees");
+      HOVS_REQUIRE(ScalarPart(elevation_min) < ScalarPart(elevation_max), where,
+                   "epipolar view: phi_min must be below phi_max");
     } else {
       const double lo = ScalarPart(elevation_min), hi = ScalarPart(elevation_max);
       const double limit = projection == ViewProjection::kCylindrical ? M_PI / 2 - 1e-6 : M_PI / 2 + 1e-12;

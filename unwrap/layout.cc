@@ -28,8 +28,11 @@ VirtualView<double> ViewSpec::View() const {
   if (type == ViewProjection::kPerspective)
     return VirtualView<double>::Perspective(width, height, hfov_deg * kDeg, yaw_deg * kDeg, pitch_deg * kDeg,
                                             roll_deg * kDeg);
-  return VirtualView<double>::Panorama(type, width, height, elevation_min_deg * kDeg, elevation_max_deg * kDeg,
-                                       azimuth_centre_deg * kDeg, azimuth_span_deg * kDeg);
+  VirtualView<double> v = VirtualView<double>::Panorama(type, width, height, elevation_min_deg * kDeg,
+                                                        elevation_max_deg * kDeg, azimuth_centre_deg * kDeg,
+                                                        azimuth_span_deg * kDeg);
+  v.mirror_from_view = pole.normalized();
+  return v;
 }
 
 void Layout::Check(const std::string& where) const {

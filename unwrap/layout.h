@@ -28,6 +28,10 @@ struct ViewSpec {
   double yaw_deg = 0, pitch_deg = -30, roll_deg = 0, hfov_deg = 65;                  // perspective
   double elevation_min_deg = -75, elevation_max_deg = -2;                             // panoramas
   double azimuth_centre_deg = 0, azimuth_span_deg = 360;
+  // Panoramas and epipolar views: mirror_from_view (identity: the pole is the mirror axis). Epipolar views
+  // (stereo rectification, built by depth/) use azimuth_centre/span for the angle from the baseline and
+  // elevation_min/max for the angle around it (virtual_view.h).
+  Eigen::Quaterniond pole = Eigen::Quaterniond::Identity();
   VirtualView<double> View() const;   // throws hovs::Error naming the view when the spec is invalid
   void Check(const std::string& where) const;
 };

@@ -64,6 +64,7 @@ nlohmann::json SpecJson(const ViewSpec& v) {
   } else {
     j["elevation_min_deg"] = v.elevation_min_deg, j["elevation_max_deg"] = v.elevation_max_deg;
     j["azimuth_centre_deg"] = v.azimuth_centre_deg, j["azimuth_span_deg"] = v.azimuth_span_deg;
+    j["pole"] = {v.pole.w(), v.pole.x(), v.pole.y(), v.pole.z()};
   }
   return j;
 }
@@ -72,8 +73,9 @@ ViewSpec SpecFromJson(const nlohmann::json& j) {
   ViewSpec v;
   v.name = j.at("name");
   const std::string t = j.at("type");
-  v.type = t == "perspective" ? ViewProjection::kPerspective
+  v.type = t == "perspective"   ? ViewProjection::kPerspective
            : t == "cylindrical" ? ViewProjection::kCylindrical
+           : t == "epipolar"    ? ViewProjection::kEpipolar
                                 : ViewProjection::kLongLat;
   v.width = j.at("width"), v.height = j.at("height");
   if (v.type == ViewProjection::kPerspective) {
@@ -82,6 +84,7 @@ ViewSpec SpecFromJson(const nlohmann::json& j) {
   } else {
     v.elevation_min_deg = j.at("elevation_min_deg"), v.elevation_max_deg = j.at("elevation_max_deg");
     v.azimuth_centre_deg = j.at("azimuth_centre_deg"), v.azimuth_span_deg = j.at("azimuth_span_deg");
+    if (j.contains("pole")) v.pole = Eigen::Quaterniond(j["pole"][0], j["pole"][1], j["pole"][2], j["pole"][3]);
   }
   return v;
 }
