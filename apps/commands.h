@@ -31,5 +31,6 @@ Runner SetupRender(CLI::App* sub, const GlobalOptions* global);
 Runner SetupDataset(CLI::App* sub, const GlobalOptions* global);
 Runner SetupCalibrate(CLI::App* sub, const GlobalOptions* global);
 Runner SetupUnwrap(CLI::App* sub, const GlobalOptions* global);
+Runner SetupDepth(CLI::App* sub, const GlobalOptions* global);
 
 }  // namespace hovs::apps

@@ -168,9 +168,16 @@ DenseDepth ComputeDenseDepth(const Rectification& r, const unwrap::Image8& left_
   const int bs = o.block_size;
   auto sgbm = cv::StereoSGBM::create(0, o.num_disparities, bs, 8 * bs * bs, 32 * bs * bs, 1, 31, 10, 100, 2,
                                      cv::StereoSGBM::MODE_SGBM_3WAY);
-  cv::Mat disp16;
+  // SGBM gives no disparity to the first num_disparities columns (their match would lie left of the image).
+  // Pad both images on the left (replicated border) and crop the result: near theta_max the true disparity is
+  // small, so real matches stay inside the real image.
+  cv::Mat pl, pr, disp_padded;
+  const int pad = o.num_disparities;
+  cv::copyMakeBorder(gl, pl, 0, 0, pad, 0, cv::BORDER_REPLICATE);
+  cv::copyMakeBorder(gr, pr, 0, 0, pad, 0, cv::BORDER_REPLICATE);
   const auto m0 = std::chrono::steady_clock::now();
-  sgbm->compute(gl, gr, disp16);
+  sgbm->compute(pl, pr, disp_padded);
+  const cv::Mat disp16 = disp_padded.colRange(pad, pad + W);
   DenseDepth d;
   d.match_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - m0).count();
   d.width = W, d.height = H;

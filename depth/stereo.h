@@ -74,7 +74,7 @@ Rectification Rectify(const StereoRig& rig, const RectifyOptions& options);
 
 // ---- dense ------------------------------------------------------------------------------------------------
 struct DenseOptions {
-  int num_disparities = 192;          // columns; multiple of 16
+  int num_disparities = 320;          // columns, multiple of 16 (at 0.088 deg per column: ranges down to 1.3 m)
   int block_size = 5;                 // odd
   double sigma_disparity_px = 0.5;    // matching noise assumed for sigma
   double min_theta_deg = 12;          // mask rays closer than this to the baseline direction

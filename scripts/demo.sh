@@ -16,5 +16,8 @@ build/apps/hovs unwrap --model scenes/street.yaml --unit left --layout article -
   --save-map results/street/article.hmap --truth-scene scenes/street.yaml --out results/street-views
 build/apps/hovs unwrap --model scenes/street.yaml --unit left --layout panorama --input results/street/dataset.json \
   --out results/street-panorama
+# Dense binocular depth of the same street frame (both units), against the renderer's range channel.
+build/apps/hovs depth --dataset results/street/dataset.json --out results/street-depth
 echo "demo: reports in results/design-reference/index.html and results/calibration-set/index.html;"
-echo "      street views in results/street-views/ (views.json: K, poses, PSNR against truth renders), panorama in results/street-panorama/"
+echo "      street views in results/street-views/ (views.json: K, poses, PSNR against truth renders), panorama in results/street-panorama/,"
+echo "      depth in results/street-depth/ (depth.json: error per distance band; range.exr; points.ply / points.vtp)"

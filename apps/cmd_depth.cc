@@ -1,0 +1,239 @@
+// hovs depth: dense and sparse binocular depth from a two-unit dataset manifest (synthetic or real).
+//
+//   hovs depth --dataset results/street/dataset.json --out results/street-depth
+// Models: the manifest's units (the exact rigs of a synthetic set), or --left-model / --right-model
+// (calib_results.txt or calibration.json) with the relative pose of the units from the manifest. Output folder
+// (replaced atomically): rectified_left.png, rectified_right.png, disparity.png, range.exr (Z, Z.sigma),
+// points.ply, points.vtp, depth.json (config, timings, and with ground truth the error table per distance band).
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <iostream>
+#include <nlohmann/json.hpp>
+
+#include "apps/commands.h"
+#include "calib/ocam_io.h"
+#include "core/error.h"
+#include "core/io.h"
+#include "depth/stereo.h"
+#include "design/study.h"
+#include "raytrace/render.h"
+#include "scenes/ground_truth.h"
+
+namespace hovs::apps {
+namespace {
+namespace fs = std::filesystem;
+
+struct View {
+  std::string unit;
+  fs::path image, exr;
+};
+
+unwrap::Image8 Load8(const fs::path& path, int* w, int* h) {
+  int c = 0;
+  const std::vector<float> px = raytrace::ReadImage(path, w, h, &c);
+  HOVS_REQUIRE(c == 1 || c >= 3, path.string(), "unsupported channel count ", c);
+  unwrap::Image8 im;
+  im.width = *w, im.height = *h, im.channels = c == 1 ? 1 : 3;
+  im.data.resize(size_t(*w) * *h * im.channels);
+  for (size_t k = 0; k < size_t(*w) * *h; ++k)
+    for (int ch = 0; ch < im.channels; ++ch)
+      im.data[k * im.channels + ch] = uint8_t(std::lround(std::clamp(px[k * c + ch], 0.f, 1.f) * 255));
+  return im;
+}
+
+AnyModel ModelFile(const std::string& path) {
+  if (path.size() > 4 && path.substr(path.size() - 4) == ".txt") return AnyModel::Polynomial(calib::LoadOcamCalibResults(path));
+  const auto j = nlohmann::json::parse(ReadFile(path), nullptr, false);
+  HOVS_REQUIRE(!j.is_discarded() && j.contains("polynomial"), path, "not calib_results.txt or a hovs calibration.json");
+  const auto& p = j["polynomial"];
+  PolynomialModel<double> m;
+  try {
+    m.width = p.at("width"), m.height = p.at("height");
+    m.cx = p.at("cx"), m.cy = p.at("cy"), m.c = p.at("c"), m.d = p.at("d"), m.e = p.at("e");
+    m.poly = p.at("poly").get<std::vector<double>>();
+    m.inv_poly = p.at("inv_poly").get<std::vector<double>>();
+    m.rho_min = p.at("rho_range")[0], m.rho_max = p.at("rho_range")[1];
+  } catch (const nlohmann::json::exception& e) {
+    throw Error(path, std::string("incomplete polynomial model: ") + e.what());
+  }
+  return AnyModel::Polynomial(m);
+}
+
+}  // namespace
+
+Runner SetupDepth(CLI::App* sub, const GlobalOptions* global) {
+  struct Options {
+    std::string dataset, out = "results/depth", left, right, left_model, right_model;
+    int frame = 0, width = 2048, height = 512, disparities = 320, block = 5, max_points = 200000;
+    double sigma_px = 0.5, max_rel_sigma = 0.05;
+  };
+  auto o = std::make_shared<Options>();
+  sub->add_option("--dataset", o->dataset, "dataset manifest with two units (dataset.json)")->required();
+  sub->add_option("--left", o->left, "left unit name (default: the first)");
+  sub->add_option("--right", o->right, "right unit name (default: the second)");
+  sub->add_option("--left-model", o->left_model, "calibrated model of the left unit (calib_results.txt or calibration.json)");
+  sub->add_option("--right-model", o->right_model, "calibrated model of the right unit");
+  sub->add_option("--frame", o->frame, "frame index in the manifest")->capture_default_str();
+  sub->add_option("--width", o->width, "rectified width (angle from the baseline)")->capture_default_str();
+  sub->add_option("--height", o->height, "rectified height (angle around the baseline)")->capture_default_str();
+  sub->add_option("--num-disparities", o->disparities, "SGBM disparity range, multiple of 16")->capture_default_str();
+  sub->add_option("--block-size", o->block, "SGBM block size (odd)")->capture_default_str();
+  sub->add_option("--sigma-disparity", o->sigma_px, "matching noise for sigma, px")->capture_default_str();
+  sub->add_option("--max-relative-sigma", o->max_rel_sigma, "mask where sigma / range exceeds this")->capture_default_str();
+  sub->add_option("--max-points", o->max_points, "points written to PLY / VTP (evenly subsampled)")->capture_default_str();
+  sub->add_option("-o,--out", o->out, "output folder (replaced atomically)")->capture_default_str();
+  return [o, global]() {
+    const fs::path manifest(o->dataset);
+    const auto m = nlohmann::json::parse(ReadFile(manifest), nullptr, false);
+    HOVS_REQUIRE(!m.is_discarded() && m.value("format", "") == "hovs-dataset", o->dataset, "not a hovs dataset manifest");
+    const auto& units = m.at("units");
+    HOVS_REQUIRE(units.size() >= 2, o->dataset, "depth needs two units; the manifest has ", units.size());
+    const auto find = [&](const std::string& name, size_t fallback) {
+      if (name.empty()) return fallback;
+      for (size_t i = 0; i < units.size(); ++i)
+        if (units[i].at("name") == name) return i;
+      throw Error(o->dataset, "no unit named '" + name + "'");
+    };
+    const size_t il = find(o->left, 0), ir = find(o->right, 1);
+    HOVS_REQUIRE(il != ir, "--left/--right", "the two units must differ");
+    const auto ul = scenes::UnitFromJson(units[il], o->dataset + " (units)");
+    const auto ur = scenes::UnitFromJson(units[ir], o->dataset + " (units)");
+    const auto& frames = m.at("frames");
+    HOVS_REQUIRE(o->frame >= 0 && o->frame < int(frames.size()), "--frame", "the manifest has ", frames.size(), " frames");
+    View vl, vr;
+    for (const auto& v : frames[o->frame].at("views")) {
+      View* t = v.at("unit") == ul.name ? &vl : v.at("unit") == ur.name ? &vr : nullptr;
+      if (!t) continue;
+      t->unit = v.at("unit");
+      t->image = manifest.parent_path() / v.at("image").get<std::string>();
+      if (v.contains("ground_truth")) t->exr = manifest.parent_path() / v["ground_truth"].at("exr").get<std::string>();
+    }
+    HOVS_REQUIRE(!vl.unit.empty() && !vr.unit.empty(), o->dataset, "frame ", o->frame, " lacks a view of both units");
+
+    depth::StereoRig rig{o->left_model.empty() ? AnyModel::Exact(ul.rig) : ModelFile(o->left_model),
+                         o->right_model.empty() ? AnyModel::Exact(ur.rig) : ModelFile(o->right_model),
+                         ur.world_from_mirror.Inverse() * ul.world_from_mirror};
+    int wl = 0, hl = 0, wr = 0, hr = 0;
+    const unwrap::Image8 il8 = Load8(vl.image, &wl, &hl), ir8 = Load8(vr.image, &wr, &hr);
+    HOVS_REQUIRE(wl == wr && hl == hr, o->dataset, "the two images differ in size (", wl, " x ", hl, " and ", wr, " x ", hr, ")");
+    HOVS_REQUIRE(wl == rig.left.width() && hl == rig.left.height() && wr == rig.right.width() && hr == rig.right.height(),
+                 vl.image.string(), "the images are ", wl, " x ", hl, " but the models are for ", rig.left.width(), " x ",
+                 rig.left.height());
+    HOVS_REQUIRE(il8.channels == ir8.channels, o->dataset, "the two images differ in channels");
+
+    depth::RectifyOptions ro;
+    ro.width = o->width, ro.height = o->height;
+    const auto t0 = std::chrono::steady_clock::now();
+    const depth::Rectification rect = depth::Rectify(rig, ro);
+    const double rectify_build_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+    const auto fmt = il8.channels == 3 ? unwrap::PixelFormat::kRgb8 : unwrap::PixelFormat::kGray8;
+    unwrap::Remapper ml(rect.left), mr(rect.right);
+    std::vector<unwrap::Image8> left, right;
+    const auto t1 = std::chrono::steady_clock::now();
+    ml.Run(il8.View(fmt), unwrap::Interpolation::kBilinear, &left);
+    mr.Run(ir8.View(fmt), unwrap::Interpolation::kBilinear, &right);
+    const double rectify_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t1).count();
+    depth::DenseOptions dop;
+    dop.num_disparities = o->disparities, dop.block_size = o->block;
+    dop.sigma_disparity_px = o->sigma_px, dop.max_relative_sigma = o->max_rel_sigma;
+    const depth::DenseDepth d = depth::ComputeDenseDepth(rect, left[0], right[0], dop);
+
+    StagedDirectory staged(o->out);
+    const auto write8 = [&](const std::string& name, const unwrap::Image8& im) {
+      std::vector<float> f(im.data.size());
+      for (size_t k = 0; k < f.size(); ++k) f[k] = im.data[k] / 255.f;
+      raytrace::WriteImage(staged.staging() / name, im.width, im.height, im.channels, f, 8);
+    };
+    write8("rectified_left.png", left[0]);
+    write8("rectified_right.png", right[0]);
+    {
+      std::vector<float> f(d.disparity.size());
+      for (size_t k = 0; k < f.size(); ++k) f[k] = d.disparity[k] > 0 ? float(d.disparity[k] / dop.num_disparities) : 0.f;
+      raytrace::WriteImage(staged.staging() / "disparity.png", d.width, d.height, 1, f, 16);
+    }
+    const nlohmann::json versions = design::DesignVersions();
+    depth::WriteRangeExr(staged.staging() / "range.exr", d,
+                         {{"hovs:what", "range from the left viewpoint (Z) and its sigma (Z.sigma), m, rectified grid"},
+                          {"hovs:dataset", o->dataset}, {"hovs:versions", versions.dump()}});
+    // Point cloud (left mirror frame), evenly subsampled.
+    std::vector<depth::ColouredPoint> pts;
+    std::vector<float> sig;
+    const size_t nvalid = std::count(d.valid.begin(), d.valid.end(), 1);
+    const size_t step = std::max<size_t>(1, nvalid / std::max(1, o->max_points));
+    size_t seen = 0;
+    for (int v = 0; v < d.height; ++v)
+      for (int u = 0; u < d.width; ++u) {
+        const size_t k = size_t(v) * d.width + u;
+        if (!d.valid[k] || (seen++ % step)) continue;
+        depth::ColouredPoint p;
+        p.p = rect.LeftBearing(u, v) * d.range[k];
+        for (int c = 0; c < 3; ++c) p.rgb[c] = left[0].data[k * left[0].channels + (left[0].channels == 3 ? c : 0)];
+        pts.push_back(p);
+        sig.push_back(d.sigma[k]);
+      }
+    depth::WritePly(staged.staging() / "points.ply", pts);
+    depth::WriteVtp(staged.staging() / "points.vtp", pts, sig);
+
+    nlohmann::json j = {{"tool", "hovs depth"}, {"versions", versions}, {"dataset", o->dataset}, {"frame", o->frame},
+                        {"units", {ul.name, ur.name}}, {"models", {rig.left.KindName(), rig.right.KindName()}},
+                        {"baseline_m", rect.baseline},
+                        {"rectification", {{"width", ro.width}, {"height", ro.height},
+                                           {"theta_deg", {ro.theta_min_deg, ro.theta_max_deg}},
+                                           {"phi_deg", {ro.phi_min_deg, ro.phi_max_deg}}, {"dtheta_deg", rect.dtheta * 180 / M_PI}}},
+                        {"sgbm", {{"mode", "3way"}, {"num_disparities", dop.num_disparities}, {"block_size", dop.block_size}}},
+                        {"mask", {{"min_theta_deg", dop.min_theta_deg}, {"max_relative_sigma", dop.max_relative_sigma},
+                                  {"sigma_disparity_px", dop.sigma_disparity_px}}},
+                        {"valid_pixels", nvalid}, {"points_written", pts.size()},
+                        {"timing_ms", {{"rectification_tables", rectify_build_ms}, {"rectify", rectify_ms},
+                                       {"matching", d.match_ms}, {"dense_total", d.total_ms}}}};
+    std::string table;
+    if (!vl.exr.empty()) {
+      // Ground truth: the left unit's range channel at each rectified pixel's source pixel.
+      const auto exr = raytrace::ReadExr(vl.exr);
+      const auto& Z = exr.at("Z");
+      std::vector<float> mx, my;
+      rect.left.DecodeView(0, &mx, &my);
+      struct Band { double lo, hi; std::vector<double> rel; int pixels = 0; };
+      std::vector<Band> bands = {{1, 2, {}}, {2, 4, {}}, {4, 8, {}}, {8, 16, {}}, {16, 64, {}}};
+      for (size_t k = 0; k < mx.size(); ++k) {
+        if (mx[k] < 0) continue;
+        const double z = Z[size_t(std::lround(my[k])) * exr.width + size_t(std::lround(mx[k]))];
+        if (!std::isfinite(z)) continue;
+        for (auto& b : bands)
+          if (z >= b.lo && z < b.hi) {
+            ++b.pixels;
+            if (d.valid[k]) b.rel.push_back(std::abs(d.range[k] - z) / z);
+          }
+      }
+      nlohmann::json rows = nlohmann::json::array();
+      table = "  band (m)    pixels   valid   median rel. error   within 5 % (of all)\n";
+      for (auto& b : bands) {
+        std::sort(b.rel.begin(), b.rel.end());
+        const double median = b.rel.empty() ? NAN : b.rel[b.rel.size() / 2];
+        const double within = double(std::count_if(b.rel.begin(), b.rel.end(), [](double e) { return e <= 0.05; })) /
+                              std::max(1, b.pixels);
+        const double valid = double(b.rel.size()) / std::max(1, b.pixels);
+        rows.push_back({{"band_m", {b.lo, b.hi}}, {"pixels", b.pixels}, {"valid_fraction", valid},
+                        {"median_relative_error", b.rel.empty() ? nlohmann::json() : nlohmann::json(median)},
+                        {"within_5_percent_fraction", within}});
+        char line[160];
+        std::snprintf(line, sizeof line, "  %5.0f-%-5.0f %8d %6.1f %%   %8.2f %%          %6.1f %%\n", b.lo, b.hi,
+                      b.pixels, 100 * valid, 100 * median, 100 * within);
+        table += line;
+      }
+      j["ground_truth"] = {{"exr", vl.exr.string()}, {"bands", rows}};
+    }
+    WriteFileAtomic(staged.staging() / "depth.json", j.dump(1));
+    staged.Commit();
+    if (!global->quiet) {
+      std::printf("hovs depth: baseline %.4f m, %zu valid pixels of %d x %d, matching %.0f ms -> %s\n", rect.baseline,
+                  nvalid, d.width, d.height, d.match_ms, o->out.c_str());
+      if (!table.empty()) std::printf("against the range channel of %s:\n%s", vl.unit.c_str(), table.c_str());
+    }
+    return 0;
+  };
+}
+
+}  // namespace hovs::apps
