@@ -32,5 +32,6 @@ Runner SetupDataset(CLI::App* sub, const GlobalOptions* global);
 Runner SetupCalibrate(CLI::App* sub, const GlobalOptions* global);
 Runner SetupUnwrap(CLI::App* sub, const GlobalOptions* global);
 Runner SetupDepth(CLI::App* sub, const GlobalOptions* global);
+Runner SetupStereoCalibrate(CLI::App* sub, const GlobalOptions* global);
 
 }  // namespace hovs::apps

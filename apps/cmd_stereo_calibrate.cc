@@ -1,0 +1,176 @@
+// hovs stereo-calibrate: the relative pose of two units from ArUco board pairs (a stereo_aruco dataset, synthetic
+// or real). Models: the manifest's units (exact rigs), or --left-model / --right-model (calibrated polynomial
+// models). Writes stereo.json (relative pose, baseline, standard deviations, per-pair errors, detection counts,
+// and with a synthetic manifest the errors against the true rig), stereo.yaml (OpenCV FileStorage: R, T) and
+// summary.txt; the folder is replaced atomically.
+#include <cstdio>
+#include <nlohmann/json.hpp>
+#include <opencv2/core.hpp>
+
+#include "apps/commands.h"
+#include "calib/ocam_io.h"
+#include "core/error.h"
+#include "core/io.h"
+#include "depth/stereo_calibration.h"
+#include "design/study.h"
+#include "raytrace/render.h"
+#include "scenes/ground_truth.h"
+#include "scenes/scene_config.h"
+
+namespace hovs::apps {
+namespace {
+namespace fs = std::filesystem;
+
+unwrap::Image8 LoadImage8(const fs::path& path) {
+  int w = 0, h = 0, c = 0;
+  const std::vector<float> px = raytrace::ReadImage(path, &w, &h, &c);
+  HOVS_REQUIRE(c == 1 || c >= 3, path.string(), "unsupported channel count ", c);
+  unwrap::Image8 im;
+  im.width = w, im.height = h, im.channels = c == 1 ? 1 : 3;
+  im.data.resize(size_t(w) * h * im.channels);
+  for (size_t k = 0; k < size_t(w) * h; ++k)
+    for (int ch = 0; ch < im.channels; ++ch)
+      im.data[k * im.channels + ch] = uint8_t(std::lround(std::clamp(px[k * c + ch], 0.f, 1.f) * 255));
+  return im;
+}
+
+AnyModel PolyModelFile(const std::string& path) {
+  if (path.size() > 4 && path.substr(path.size() - 4) == ".txt") return AnyModel::Polynomial(calib::LoadOcamCalibResults(path));
+  const auto j = nlohmann::json::parse(ReadFile(path), nullptr, false);
+  HOVS_REQUIRE(!j.is_discarded() && j.contains("polynomial"), path, "not calib_results.txt or a hovs calibration.json");
+  const auto& p = j["polynomial"];
+  PolynomialModel<double> m;
+  try {
+    m.width = p.at("width"), m.height = p.at("height");
+    m.cx = p.at("cx"), m.cy = p.at("cy"), m.c = p.at("c"), m.d = p.at("d"), m.e = p.at("e");
+    m.poly = p.at("poly").get<std::vector<double>>();
+    m.inv_poly = p.at("inv_poly").get<std::vector<double>>();
+    m.rho_min = p.at("rho_range")[0], m.rho_max = p.at("rho_range")[1];
+  } catch (const nlohmann::json::exception& e) {
+    throw Error(path, std::string("incomplete polynomial model: ") + e.what());
+  }
+  return AnyModel::Polynomial(m);
+}
+
+scenes::BoardSpec BoardFromJson(const nlohmann::json& b, const std::string& where) {
+  scenes::BoardSpec s;
+  try {
+    HOVS_REQUIRE(b.at("type") == "aruco", where, "the board is not an ArUco board (type ", b.at("type").dump(), ")");
+    s.kind = scenes::BoardSpec::Kind::kAruco;
+    s.markers_x = b.at("markers")[0], s.markers_y = b.at("markers")[1];
+    s.marker_length = b.at("marker_length"), s.marker_separation = b.at("separation");
+    s.dictionary = b.at("dictionary"), s.margin = b.at("margin");
+  } catch (const nlohmann::json::exception& e) {
+    throw Error(where, std::string("board description incomplete: ") + e.what());
+  }
+  scenes::CheckBoard(s, where);
+  return s;
+}
+
+}  // namespace
+
+Runner SetupStereoCalibrate(CLI::App* sub, const GlobalOptions* global) {
+  struct Options {
+    std::string dataset, out = "results/stereo-calibration", left_model, right_model;
+    double huber = 1.0;
+  };
+  auto o = std::make_shared<Options>();
+  sub->add_option("--dataset", o->dataset, "stereo_aruco dataset manifest (two units per frame)")->required();
+  sub->add_option("--left-model", o->left_model, "calibrated model of the first unit (calib_results.txt or calibration.json)");
+  sub->add_option("--right-model", o->right_model, "calibrated model of the second unit");
+  sub->add_option("--huber", o->huber, "robust loss scale, px")->capture_default_str();
+  sub->add_option("-o,--out", o->out, "output folder (replaced atomically)")->capture_default_str();
+  return [o, global]() {
+    const fs::path manifest(o->dataset);
+    const auto m = nlohmann::json::parse(ReadFile(manifest), nullptr, false);
+    HOVS_REQUIRE(!m.is_discarded() && m.value("format", "") == "hovs-dataset", o->dataset, "not a hovs dataset manifest");
+    const auto& units = m.at("units");
+    HOVS_REQUIRE(units.size() >= 2, o->dataset, "stereo calibration needs two units; the manifest has ", units.size());
+    const auto ul = scenes::UnitFromJson(units[0], o->dataset + " (units)");
+    const auto ur = scenes::UnitFromJson(units[1], o->dataset + " (units)");
+    HOVS_REQUIRE(m.contains("boards") && !m["boards"].empty(), o->dataset,
+                 "the manifest does not describe the board (key 'boards')");
+    const scenes::BoardSpec spec = BoardFromJson(m["boards"][0], o->dataset + " (boards[0])");
+    std::map<int, Vec3d> board;
+    for (const auto& [id, p] : spec.Corners()) board[id] = Vec3d(p.x(), p.y(), 0);
+    const AnyModel left = o->left_model.empty() ? AnyModel::Exact(ul.rig) : PolyModelFile(o->left_model);
+    const AnyModel right = o->right_model.empty() ? AnyModel::Exact(ur.rig) : PolyModelFile(o->right_model);
+    depth::MarkerDetectOptions dop;
+    dop.dictionary = spec.dictionary;
+    const depth::MarkerDetector dl(left, dop), dr(right, dop);
+
+    std::vector<depth::StereoPairObservation> pairs;
+    nlohmann::json detections = nlohmann::json::array();
+    for (const auto& fr : m.at("frames")) {
+      depth::StereoPairObservation p;
+      p.name = "frame" + std::to_string(fr.at("id").get<int>());
+      bool have_l = false, have_r = false;
+      for (const auto& v : fr.at("views")) {
+        const fs::path img = manifest.parent_path() / v.at("image").get<std::string>();
+        if (v.at("unit") == ul.name) p.left = dl.Detect(LoadImage8(img)), have_l = true;
+        if (v.at("unit") == ur.name) p.right = dr.Detect(LoadImage8(img)), have_r = true;
+      }
+      HOVS_REQUIRE(have_l && have_r, o->dataset, p.name, " lacks an image of both units");
+      detections.push_back({{"pair", p.name}, {"left_corners", p.left.size()}, {"right_corners", p.right.size()}});
+      if (!global->quiet)
+        std::fprintf(stderr, "  %s: %zu corners left, %zu right\n", p.name.c_str(), p.left.size(), p.right.size());
+      pairs.push_back(std::move(p));
+    }
+    depth::StereoCalibrationOptions so;
+    so.huber_px = o->huber;
+    const depth::StereoCalibration c = depth::CalibrateStereo(left, right, pairs, board, so);
+
+    const auto& q = c.right_from_left.rotation;
+    const Vec3d& t = c.right_from_left.translation;
+    nlohmann::json per = nlohmann::json::array();
+    for (size_t k = 0; k < c.pair_names.size(); ++k)
+      per.push_back({{"pair", c.pair_names[k]}, {"rms_left_px", c.pair_rms_left_px[k]},
+                     {"rms_right_px", c.pair_rms_right_px[k]}, {"corners_left", c.pair_corners_left[k]},
+                     {"corners_right", c.pair_corners_right[k]},
+                     {"above_10px", std::max(c.pair_rms_left_px[k], c.pair_rms_right_px[k]) > 10}});
+    nlohmann::json j = {{"tool", "hovs stereo-calibrate"}, {"versions", design::DesignVersions()},
+                        {"dataset", o->dataset}, {"models", {left.KindName(), right.KindName()}},
+                        {"right_from_left", {{"q", {q.w(), q.x(), q.y(), q.z()}}, {"t", {t.x(), t.y(), t.z()}}}},
+                        {"baseline_m", c.baseline}, {"sigma_baseline_m", c.sigma_baseline},
+                        {"sigma_translation_m", {c.sigma_translation.x(), c.sigma_translation.y(), c.sigma_translation.z()}},
+                        {"sigma_rotation_deg", {c.sigma_rotation_deg.x(), c.sigma_rotation_deg.y(), c.sigma_rotation_deg.z()}},
+                        {"rms_px", c.rms_px}, {"converged", c.converged}, {"solver", c.solver_report},
+                        {"pairs", per}, {"detections", detections}};
+    std::string summary = "hovs stereo-calibrate: " + std::to_string(c.pair_names.size()) + " pairs, baseline " +
+                          std::to_string(c.baseline) + " m (sigma " + std::to_string(c.sigma_baseline * 1e3) +
+                          " mm), RMS " + std::to_string(c.rms_px) + " px\n";
+    if (o->left_model.empty() && o->right_model.empty()) {
+      const Rigid3d truth = ur.world_from_mirror.Inverse() * ul.world_from_mirror;
+      const double rot = 2 * std::asin(std::min(1.0, (c.right_from_left.rotation * truth.rotation.conjugate()).vec().norm())) * 180 / M_PI;
+      j["ground_truth"] = {{"baseline_m", truth.translation.norm()},
+                           {"baseline_error_mm", 1e3 * (c.baseline - truth.translation.norm())},
+                           {"translation_error_mm", 1e3 * (c.right_from_left.translation - truth.translation).norm()},
+                           {"rotation_error_deg", rot}};
+      char line[200];
+      std::snprintf(line, sizeof line, "  against the true rig: baseline error %.3f mm, rotation error %.4f deg\n",
+                    1e3 * (c.baseline - truth.translation.norm()), rot);
+      summary += line;
+    }
+    StagedDirectory staged(o->out);
+    WriteFileAtomic(staged.staging() / "stereo.json", j.dump(1));
+    {
+      // OpenCV FileStorage (stereoCalibrate's names: R, T).
+      cv::FileStorage fs((staged.staging() / "stereo.yaml").string(), cv::FileStorage::WRITE);
+      HOVS_REQUIRE(fs.isOpened(), (staged.staging() / "stereo.yaml").string(), "cannot write");
+      const Mat3<double> R = q.toRotationMatrix();
+      cv::Mat Rm(3, 3, CV_64F), Tm(3, 1, CV_64F);
+      for (int r = 0; r < 3; ++r) {
+        for (int k = 0; k < 3; ++k) Rm.at<double>(r, k) = R(r, k);
+        Tm.at<double>(r) = t(r);
+      }
+      fs << "R" << Rm << "T" << Tm << "baseline" << c.baseline << "sigma_baseline" << c.sigma_baseline
+         << "rms_px" << c.rms_px << "frames" << "right mirror frame from left mirror frame, metres";
+    }
+    WriteFileAtomic(staged.staging() / "summary.txt", summary);
+    staged.Commit();
+    if (!global->quiet) std::printf("%s", summary.c_str());
+    return 0;
+  };
+}
+
+}  // namespace hovs::apps

@@ -1,0 +1,349 @@
+#include "depth/stereo_calibration.h"
+
+#include <ceres/ceres.h>
+
+#include <opencv2/aruco.hpp>
+#include <opencv2/calib3d.hpp>
+#include <opencv2/imgproc.hpp>
+#include <set>
+
+#include "core/error.h"
+
+namespace hovs::depth {
+namespace {
+
+constexpr double kDeg = M_PI / 180;
+
+int DictionaryId(const std::string& name) {
+  static const std::map<std::string, int> ids = {
+      {"DICT_4X4_50", cv::aruco::DICT_4X4_50},   {"DICT_4X4_250", cv::aruco::DICT_4X4_250},
+      {"DICT_5X5_100", cv::aruco::DICT_5X5_100}, {"DICT_5X5_250", cv::aruco::DICT_5X5_250},
+      {"DICT_6X6_250", cv::aruco::DICT_6X6_250}, {"DICT_6X6_1000", cv::aruco::DICT_6X6_1000},
+      {"DICT_ARUCO_ORIGINAL", cv::aruco::DICT_ARUCO_ORIGINAL}};
+  const auto it = ids.find(name);
+  return it == ids.end() ? -1 : it->second;
+}
+
+// Pose parameters: Eigen quaternion storage (x, y, z, w) and a translation.
+struct PoseParams {
+  double q[4], t[3];
+  static PoseParams From(const Rigid3d& p) {
+    PoseParams r;
+    const Eigen::Quaterniond q = p.rotation.normalized();
+    r.q[0] = q.x(), r.q[1] = q.y(), r.q[2] = q.z(), r.q[3] = q.w();
+    for (int i = 0; i < 3; ++i) r.t[i] = p.translation(i);
+    return r;
+  }
+};
+Rigid3d ToPose(const double* q, const double* t) {
+  return Rigid3d(Eigen::Quaterniond(q[3], q[0], q[1], q[2]).normalized(), Vec3d(t[0], t[1], t[2]));
+}
+
+// Reprojection of a board point through a catadioptric model, for a unit whose board pose is
+// unit_from_left * left_from_board (unit_from_left absent for the left unit).
+struct LeftCost {
+  const AnyModel* model;
+  Vec3d X;
+  Vec2d obs;
+  bool operator()(const double* q, const double* t, double* r) const {
+    Vec2d uv;
+    if (!model->ImgFromMirror(ToPose(q, t) * X, &uv)) return false;
+    r[0] = uv(0) - obs(0), r[1] = uv(1) - obs(1);
+    return true;
+  }
+};
+struct RightCost {
+  const AnyModel* model;
+  Vec3d X;
+  Vec2d obs;
+  bool operator()(const double* qrl, const double* trl, const double* q, const double* t, double* r) const {
+    Vec2d uv;
+    if (!model->ImgFromMirror(ToPose(qrl, trl) * (ToPose(q, t) * X), &uv)) return false;
+    r[0] = uv(0) - obs(0), r[1] = uv(1) - obs(1);
+    return true;
+  }
+};
+
+double Rms(const AnyModel& model, const Rigid3d& mirror_from_board, const std::vector<CornerObservation>& c,
+           const std::map<int, Vec3d>& board) {
+  double s = 0;
+  int n = 0;
+  for (const auto& o : c) {
+    const auto it = board.find(o.id);
+    if (it == board.end()) continue;
+    Vec2d uv;
+    if (!model.ImgFromMirror(mirror_from_board * it->second, &uv)) continue;
+    s += (uv - o.pixel).squaredNorm();
+    ++n;
+  }
+  return n ? std::sqrt(s / n) : HUGE_VAL;
+}
+
+}  // namespace
+
+void MarkerDetectOptions::Check(const std::string& where) const {
+  HOVS_REQUIRE(DictionaryId(dictionary) >= 0, where, "unknown ArUco dictionary '", dictionary, "'");
+  HOVS_REQUIRE(views >= 1 && views <= 64, where, "views must be 1..64");
+  HOVS_REQUIRE(hfov_deg > 0 && hfov_deg < 170 && width >= 64 && height >= 64, where, "bad view size or field");
+}
+
+void StereoCalibrationOptions::Check(const std::string& where) const {
+  HOVS_REQUIRE(huber_px > 0 && min_common_markers >= 1 && max_iterations >= 1, where, "bad options");
+}
+
+MarkerDetector::MarkerDetector(const AnyModel& model, const MarkerDetectOptions& o) : model_(model), options_(o) {
+  o.Check("marker detection");
+  unwrap::Layout layout;
+  layout.name = "aruco-ring";
+  for (int i = 0; i < o.views; ++i) {
+    unwrap::ViewSpec v;
+    v.name = "ring" + std::to_string(i);
+    v.width = o.width, v.height = o.height;
+    v.yaw_deg = 360.0 * i / o.views, v.pitch_deg = o.pitch_deg, v.hfov_deg = o.hfov_deg;
+    layout.views.push_back(v);
+  }
+  table_ = unwrap::BuildRemapTable(model_, layout, {});
+}
+
+std::vector<CornerObservation> MarkerDetector::Detect(const unwrap::Image8& image) const {
+  HOVS_REQUIRE(image.width == model_.width() && image.height == model_.height(), "marker detection", "the image is ",
+               image.width, " x ", image.height, " but the model is for ", model_.width(), " x ", model_.height());
+  unwrap::Remapper remapper(table_);
+  std::vector<unwrap::Image8> views;
+  remapper.Run(image.View(image.channels == 3 ? unwrap::PixelFormat::kRgb8 : unwrap::PixelFormat::kGray8),
+               unwrap::Interpolation::kBicubic, &views);
+  const auto dict = cv::aruco::getPredefinedDictionary(DictionaryId(options_.dictionary));
+  auto params = cv::aruco::DetectorParameters::create();
+  params->cornerRefinementMethod = cv::aruco::CORNER_REFINE_SUBPIX;
+  params->cornerRefinementWinSize = 4;
+  params->cornerRefinementMinAccuracy = 0.01;
+  // Best detection per marker: the one nearest its view's centre.
+  struct Best {
+    double dist = HUGE_VAL;
+    std::array<Vec2d, 4> px;
+  };
+  std::map<int, Best> best;
+  for (size_t v = 0; v < views.size(); ++v) {
+    cv::Mat m(views[v].height, views[v].width, views[v].channels == 3 ? CV_8UC3 : CV_8UC1, views[v].data.data());
+    cv::Mat grey;
+    if (views[v].channels == 3) cv::cvtColor(m, grey, cv::COLOR_RGB2GRAY); else grey = m;
+    std::vector<std::vector<cv::Point2f>> corners;
+    std::vector<int> ids;
+    cv::aruco::detectMarkers(grey, dict, corners, ids, params);
+    const auto& view = table_.views[v].view;
+    for (size_t k = 0; k < ids.size(); ++k) {
+      Vec2d c = Vec2d::Zero();
+      std::array<Vec2d, 4> src;
+      bool ok = true;
+      for (int j = 0; j < 4; ++j) {
+        const Vec2d p(corners[k][j].x, corners[k][j].y);
+        c += 0.25 * p;
+        Vec3d b;
+        ok = ok && view.MirrorFromImg(p, &b) && model_.ImgFromMirror(b, &src[j]);
+      }
+      if (!ok) continue;
+      const double dist = (c - Vec2d(0.5 * (view.width - 1), 0.5 * (view.height - 1))).norm();
+      Best& b = best[ids[k]];
+      if (dist < b.dist) b.dist = dist, b.px = src;
+    }
+  }
+  // Sub-pixel refinement in the catadioptric image itself (the views are resampled; the corner is not).
+  cv::Mat src(image.height, image.width, image.channels == 3 ? CV_8UC3 : CV_8UC1, const_cast<uint8_t*>(image.data.data()));
+  cv::Mat grey;
+  if (image.channels == 3) cv::cvtColor(src, grey, cv::COLOR_RGB2GRAY); else grey = src;
+  std::vector<cv::Point2f> pts;
+  std::vector<int> ids;
+  for (const auto& [id, b] : best)
+    for (int j = 0; j < 4; ++j) {
+      pts.emplace_back(float(b.px[j].x()), float(b.px[j].y()));
+      ids.push_back(4 * id + j);
+    }
+  std::vector<cv::Point2f> refined = pts;
+  if (!refined.empty())
+    cv::cornerSubPix(grey, refined, cv::Size(options_.refine_window, options_.refine_window), cv::Size(-1, -1),
+                     cv::TermCriteria(cv::TermCriteria::EPS + cv::TermCriteria::COUNT, 50, 1e-3));
+  std::vector<CornerObservation> out;
+  for (size_t i = 0; i < pts.size(); ++i) {
+    const Vec2d a(pts[i].x, pts[i].y), r(refined[i].x, refined[i].y);
+    // A refinement that wanders off is not a marker corner (another edge, a partly hidden marker): dropped.
+    if ((a - r).norm() > options_.max_refine_shift_px) continue;
+    out.push_back({ids[i], r});
+  }
+  return out;
+}
+
+bool BoardPose(const AnyModel& model, const std::vector<CornerObservation>& corners, const std::map<int, Vec3d>& board,
+               Rigid3d* mirror_from_board, double* rms_px) {
+  std::vector<Vec3d> bearings, pts;
+  std::vector<Vec2d> obs;
+  for (const auto& c : corners) {
+    const auto it = board.find(c.id);
+    Vec3d b;
+    if (it == board.end() || !model.MirrorFromImg(c.pixel, &b)) continue;
+    bearings.push_back(b.normalized());
+    pts.push_back(it->second);
+    obs.push_back(c.pixel);
+  }
+  if (bearings.size() < 4) return false;
+  // A virtual pinhole looking along the mean bearing: PnP on the bearings' normalised coordinates.
+  Vec3d z = Vec3d::Zero();
+  for (const auto& b : bearings) z += b;
+  z.normalize();
+  const Vec3d x = (std::abs(z.z()) < 0.9 ? Vec3d::UnitZ() : Vec3d::UnitX()).cross(z).normalized();
+  const Vec3d y = z.cross(x);
+  Mat3<double> R;
+  R.col(0) = x, R.col(1) = y, R.col(2) = z;   // mirror_from_virtual
+  std::vector<cv::Point3f> op;
+  std::vector<cv::Point2f> ip;
+  for (size_t i = 0; i < bearings.size(); ++i) {
+    const Vec3d v = R.transpose() * bearings[i];
+    if (v.z() <= 0.05) continue;
+    op.emplace_back(float(pts[i].x()), float(pts[i].y()), float(pts[i].z()));
+    ip.emplace_back(float(v.x() / v.z()), float(v.y() / v.z()));
+  }
+  if (op.size() < 4) return false;
+  cv::Mat rvec, tvec;
+  if (!cv::solvePnP(op, ip, cv::Mat::eye(3, 3, CV_64F), cv::noArray(), rvec, tvec, false, cv::SOLVEPNP_SQPNP))
+    return false;
+  const Vec3d aa(rvec.at<double>(0), rvec.at<double>(1), rvec.at<double>(2));
+  const Rigid3d virtual_from_board(QuaternionFromAngleAxis<double>(aa),
+                                   Vec3d(tvec.at<double>(0), tvec.at<double>(1), tvec.at<double>(2)));
+  Rigid3d pose = Rigid3d(Eigen::Quaterniond(R), Vec3d::Zero()) * virtual_from_board;
+  // Refinement through the catadioptric model (pixel residuals).
+  PoseParams p = PoseParams::From(pose);
+  ceres::Problem problem;
+  for (size_t i = 0; i < pts.size(); ++i) {
+    auto* cost = new ceres::NumericDiffCostFunction<LeftCost, ceres::CENTRAL, 2, 4, 3>(new LeftCost{&model, pts[i], obs[i]});
+    problem.AddResidualBlock(cost, new ceres::HuberLoss(1.0), p.q, p.t);
+  }
+  problem.SetManifold(p.q, new ceres::EigenQuaternionManifold);
+  ceres::Solver::Options so;
+  so.max_num_iterations = 100;
+  so.linear_solver_type = ceres::DENSE_QR;
+  ceres::Solver::Summary summary;
+  ceres::Solve(so, &problem, &summary);
+  if (summary.termination_type == ceres::FAILURE) return false;
+  pose = ToPose(p.q, p.t);
+  *mirror_from_board = pose;
+  if (rms_px) *rms_px = Rms(model, pose, corners, board);
+  return true;
+}
+
+StereoCalibration CalibrateStereo(const AnyModel& left, const AnyModel& right,
+                                  const std::vector<StereoPairObservation>& pairs, const std::map<int, Vec3d>& board,
+                                  const StereoCalibrationOptions& o) {
+  o.Check("stereo calibration");
+  HOVS_REQUIRE(pairs.size() >= 2, "stereo calibration", "needs at least two pairs (got ", pairs.size(), ")");
+  struct Pair {
+    size_t index;
+    Rigid3d left_from_board, right_from_board;
+  };
+  std::vector<Pair> usable;
+  std::string rejected;
+  for (size_t i = 0; i < pairs.size(); ++i) {
+    std::set<int> ml, mr;
+    for (const auto& c : pairs[i].left) ml.insert(c.id / 4);
+    for (const auto& c : pairs[i].right) mr.insert(c.id / 4);
+    int common = 0;
+    for (int m : ml) common += mr.count(m);
+    Pair p{i, {}, {}};
+    double rl = 0, rr = 0;
+    if (common < o.min_common_markers) {
+      rejected += " " + pairs[i].name + " (" + std::to_string(common) + " common markers)";
+      continue;
+    }
+    if (!BoardPose(left, pairs[i].left, board, &p.left_from_board, &rl) ||
+        !BoardPose(right, pairs[i].right, board, &p.right_from_board, &rr)) {
+      rejected += " " + pairs[i].name + " (no board pose)";
+      continue;
+    }
+    usable.push_back(p);
+  }
+  HOVS_REQUIRE(usable.size() >= 2, "stereo calibration", "fewer than two usable pairs; rejected:", rejected);
+  // Initial relative pose: the pair with the most corners.
+  size_t best = 0;
+  for (size_t k = 1; k < usable.size(); ++k)
+    if (pairs[usable[k].index].left.size() + pairs[usable[k].index].right.size() >
+        pairs[usable[best].index].left.size() + pairs[usable[best].index].right.size())
+      best = k;
+  PoseParams rl = PoseParams::From(usable[best].right_from_board * usable[best].left_from_board.Inverse());
+  std::vector<PoseParams> lb(usable.size());
+  ceres::Problem problem;
+  for (size_t k = 0; k < usable.size(); ++k) {
+    lb[k] = PoseParams::From(usable[k].left_from_board);
+    const auto& pr = pairs[usable[k].index];
+    for (const auto& c : pr.left) {
+      const auto it = board.find(c.id);
+      if (it == board.end()) continue;
+      problem.AddResidualBlock(new ceres::NumericDiffCostFunction<LeftCost, ceres::CENTRAL, 2, 4, 3>(
+                                   new LeftCost{&left, it->second, c.pixel}),
+                               new ceres::HuberLoss(o.huber_px), lb[k].q, lb[k].t);
+    }
+    for (const auto& c : pr.right) {
+      const auto it = board.find(c.id);
+      if (it == board.end()) continue;
+      problem.AddResidualBlock(new ceres::NumericDiffCostFunction<RightCost, ceres::CENTRAL, 2, 4, 3, 4, 3>(
+                                   new RightCost{&right, it->second, c.pixel}),
+                               new ceres::HuberLoss(o.huber_px), rl.q, rl.t, lb[k].q, lb[k].t);
+    }
+    problem.SetManifold(lb[k].q, new ceres::EigenQuaternionManifold);
+  }
+  problem.SetManifold(rl.q, new ceres::EigenQuaternionManifold);
+  ceres::Solver::Options so;
+  so.max_num_iterations = o.max_iterations;
+  so.linear_solver_type = ceres::DENSE_SCHUR;
+  so.function_tolerance = 1e-12, so.parameter_tolerance = 1e-12, so.gradient_tolerance = 1e-12;
+  ceres::Solver::Summary summary;
+  ceres::Solve(so, &problem, &summary);
+  HOVS_REQUIRE(summary.termination_type != ceres::FAILURE, "stereo calibration", "the solver failed: ",
+               summary.message);
+
+  StereoCalibration out;
+  out.converged = summary.termination_type == ceres::CONVERGENCE;
+  out.solver_report = summary.BriefReport();
+  out.right_from_left = ToPose(rl.q, rl.t);
+  const Vec3d t(rl.t[0], rl.t[1], rl.t[2]);
+  out.baseline = t.norm();
+  double s2 = 0;
+  int n = 0;
+  for (size_t k = 0; k < usable.size(); ++k) {
+    const auto& pr = pairs[usable[k].index];
+    const Rigid3d L = ToPose(lb[k].q, lb[k].t);
+    out.left_from_board.push_back(L);
+    out.pair_names.push_back(pr.name);
+    const double el = Rms(left, L, pr.left, board), er = Rms(right, out.right_from_left * L, pr.right, board);
+    out.pair_rms_left_px.push_back(el);
+    out.pair_rms_right_px.push_back(er);
+    out.pair_corners_left.push_back(static_cast<int>(pr.left.size()));
+    out.pair_corners_right.push_back(static_cast<int>(pr.right.size()));
+    s2 += el * el * pr.left.size() + er * er * pr.right.size();
+    n += static_cast<int>(pr.left.size() + pr.right.size());
+  }
+  out.rms_px = std::sqrt(s2 / std::max(1, n));
+  // Covariance of the relative pose, scaled by the residual variance (pixels are not known to 1 px).
+  ceres::Covariance::Options co;
+  co.algorithm_type = ceres::DENSE_SVD;
+  co.null_space_rank = -1;
+  ceres::Covariance cov(co);
+  std::vector<std::pair<const double*, const double*>> blocks = {{rl.q, rl.q}, {rl.t, rl.t}};
+  if (cov.Compute(blocks, &problem)) {
+    const double dof = std::max(1.0, double(summary.num_residuals - summary.num_effective_parameters));
+    const double scale = 2 * summary.final_cost / dof;   // residual variance
+    double cq[9], ct[9];
+    cov.GetCovarianceMatrixInTangentSpace({rl.q}, cq);
+    cov.GetCovarianceBlock(rl.t, rl.t, ct);
+    // Ceres' quaternion tangent delta rotates by 2 |delta|.
+    for (int i = 0; i < 3; ++i) {
+      out.sigma_rotation_deg(i) = 2 * std::sqrt(std::max(0.0, cq[4 * i] * scale)) / kDeg;
+      out.sigma_translation(i) = std::sqrt(std::max(0.0, ct[4 * i] * scale));
+    }
+    const Vec3d u = t / out.baseline;
+    double var = 0;
+    for (int i = 0; i < 3; ++i)
+      for (int j = 0; j < 3; ++j) var += u(i) * ct[3 * i + j] * u(j);
+    out.sigma_baseline = std::sqrt(std::max(0.0, var * scale));
+  }
+  return out;
+}
+
+}  // namespace hovs::depth

@@ -1,0 +1,94 @@
+// Binocular calibration with an ArUco marker board (the article's 3.2.2, done right).
+//
+// Detection: ArUco knows no catadioptric camera, so each image is unwrapped into overlapping virtual
+// perspective views (a ring of views around the mirror axis), markers are detected there with sub-pixel corner
+// refinement, and every corner is mapped back to the catadioptric image through the same model (the source
+// pixel the view shows at that position), then refined there (cornerSubPix; corners that move more than
+// max_refine_shift_px are dropped). A marker seen in two views keeps the detection nearest a view centre.
+//
+// Calibration: per pair, each unit's board pose starts from PnP in the view that holds the most markers; then
+// one Ceres problem over all pairs: the relative pose right_from_left (rotation as a quaternion on its
+// manifold) and left_from_board per pair, with 2-D reprojection residuals of every corner through both
+// catadioptric models (the law-of-reflection projection for a misaligned exact rig), and a robust (Huber) loss.
+// Pairs may show different marker subsets in the two units. Standard deviations of the baseline, the offsets and
+// the rotation angles come from the covariance.
+#pragma once
+
+#include <map>
+#include <string>
+#include <vector>
+
+#include "core/any_model.h"
+#include "core/rigid.h"
+#include "unwrap/remap.h"
+
+namespace hovs::depth {
+
+struct MarkerDetectOptions {
+  std::string dictionary = "DICT_6X6_250";
+  int views = 8;                 // perspective views around the axis (yaw step 360 / views)
+  double pitch_deg = -25, hfov_deg = 80;
+  int width = 1000, height = 750;
+  int refine_window = 4;                // half size (px) of the corner refinement in the catadioptric image
+  double max_refine_shift_px = 1.5;     // corners the refinement moves further are dropped
+  void Check(const std::string& where) const;
+};
+
+// One detected marker corner: corner id = 4 * marker id + k (k as OpenCV orders a marker's corners).
+struct CornerObservation {
+  int id = 0;
+  Vec2d pixel = Vec2d::Zero();   // catadioptric image
+};
+
+class MarkerDetector {
+ public:
+  MarkerDetector(const AnyModel& model, const MarkerDetectOptions& options);   // builds the view tables
+  // image: 8-bit grey or RGB of the model's size. Throws on a size mismatch.
+  std::vector<CornerObservation> Detect(const unwrap::Image8& image) const;
+  int views() const { return static_cast<int>(table_.views.size()); }
+
+ private:
+  AnyModel model_;
+  MarkerDetectOptions options_;
+  unwrap::RemapTable table_;
+};
+
+struct StereoPairObservation {
+  std::string name;
+  std::vector<CornerObservation> left, right;
+};
+
+struct StereoCalibrationOptions {
+  double huber_px = 1.0;
+  int min_common_markers = 1;      // pairs need at least this many markers seen by both units
+  int max_iterations = 200;
+  void Check(const std::string& where) const;
+};
+
+struct StereoCalibration {
+  Rigid3d right_from_left;
+  double baseline = 0;                 // m
+  double sigma_baseline = 0;           // m
+  Vec3d sigma_translation = Vec3d::Zero();   // m, components of right_from_left.translation
+  Vec3d sigma_rotation_deg = Vec3d::Zero();  // about x, y, z (tangent space of the rotation)
+  double rms_px = 0;
+  std::vector<std::string> pair_names;
+  std::vector<double> pair_rms_left_px, pair_rms_right_px;
+  std::vector<int> pair_corners_left, pair_corners_right;
+  std::vector<Rigid3d> left_from_board;
+  bool converged = false;
+  std::string solver_report;
+};
+
+// board: corner id -> point in the board frame (metres). Throws hovs::Error naming the problem for fewer than
+// two usable pairs, pairs without common markers, or a failed solve.
+StereoCalibration CalibrateStereo(const AnyModel& left, const AnyModel& right,
+                                  const std::vector<StereoPairObservation>& pairs,
+                                  const std::map<int, Vec3d>& board, const StereoCalibrationOptions& options);
+
+// Pose of the board in one unit's mirror frame from its corners (PnP in a virtual view, then refined through
+// the catadioptric model). False when fewer than 4 corners or the solve fails.
+bool BoardPose(const AnyModel& model, const std::vector<CornerObservation>& corners, const std::map<int, Vec3d>& board,
+               Rigid3d* mirror_from_board, double* rms_px);
+
+}  // namespace hovs::depth

@@ -1,0 +1,171 @@
+// Stereo calibration against the true rig: the joint solve on exact corner projections with noise recovers the
+// baseline and rotation (12 pairs, the article's board and rig, the right unit misaligned); ArUco detection in
+// unwrapped views of a render finds the markers at their ground-truth pixels; bad input is rejected.
+#include <gtest/gtest.h>
+
+#include <cstdio>
+#include <random>
+
+#include "core/error.h"
+#include "depth/stereo_calibration.h"
+#include "raytrace/render.h"
+#include "scenes/dataset.h"
+#include "scenes/ground_truth.h"
+#include "scenes/scene_config.h"
+
+namespace hovs::depth {
+namespace {
+
+constexpr double kDeg = M_PI / 180;
+
+scenes::SceneConfig StereoScene() {
+  return scenes::LoadSceneConfig(std::string(HOVS_SOURCE_DIR) + "/scenes/reference_stereo.yaml");
+}
+
+std::map<int, Vec3d> BoardPoints(const scenes::BoardSpec& spec) {
+  std::map<int, Vec3d> out;
+  for (const auto& [id, p] : spec.Corners()) out[id] = Vec3d(p.x(), p.y(), 0);
+  return out;
+}
+
+// Exact corner pixels of the board at world_from_board in unit u, with noise; only corners that project.
+std::vector<CornerObservation> Observe(const raytrace::CatadioptricUnit& unit, const std::map<int, Vec3d>& board,
+                                       const Rigid3d& world_from_board, double noise, std::mt19937* rng) {
+  std::normal_distribution<double> N(0, noise);
+  std::vector<CornerObservation> out;
+  const Rigid3d mirror_from_board = unit.world_from_mirror.Inverse() * world_from_board;
+  for (const auto& [id, X] : board) {
+    Vec2d uv;
+    if (unit.rig.ImgFromMirror(mirror_from_board * X, &uv) != ProjectionStatus::kOk) continue;
+    out.push_back({id, uv + Vec2d(N(*rng), N(*rng))});
+  }
+  return out;
+}
+
+TEST(StereoCalibration, RecoversTheRigFromTwelvePairs) {
+  const auto cfg = StereoScene();
+  const auto& units = cfg.description.units;
+  const auto opts = scenes::DatasetOptions::ForKind("stereo_aruco");
+  const auto poses = scenes::DrawBoardPoses(cfg, opts);
+  ASSERT_EQ(poses.size(), 12u);
+  const auto board = BoardPoints(opts.board);
+  const Rigid3d truth = units[1].world_from_mirror.Inverse() * units[0].world_from_mirror;
+  const AnyModel left = AnyModel::Exact(units[0].rig), right = AnyModel::Exact(units[1].rig);
+  EXPECT_FALSE(units[1].rig.IsSingleViewpoint()) << "the right unit is misaligned in the reference rig";
+  for (double noise : {0.0, 0.2}) {
+    std::mt19937 rng(5);
+    std::vector<StereoPairObservation> pairs;
+    for (size_t i = 0; i < poses.size(); ++i)
+      pairs.push_back({"pair" + std::to_string(i), Observe(units[0], board, poses[i], noise, &rng),
+                       Observe(units[1], board, poses[i], noise, &rng)});
+    const StereoCalibration c = CalibrateStereo(left, right, pairs, board, {});
+    const double baseline_err = std::abs(c.baseline - truth.translation.norm());
+    const double rot_err = 2 * std::asin(std::min(1.0, (c.right_from_left.rotation * truth.rotation.conjugate()).vec().norm())) / kDeg;
+    const double t_err = (c.right_from_left.translation - truth.translation).norm();
+    std::printf("[ figure ] stereo calibration, 12 pairs, %.1f px noise: baseline %.5f m (true %.5f, error %.3f mm, "
+                "sigma %.3f mm), rotation error %.4f deg (sigma %.4f %.4f %.4f deg), translation error %.3f mm, RMS %.3f px\n",
+                noise, c.baseline, truth.translation.norm(), 1e3 * baseline_err, 1e3 * c.sigma_baseline, rot_err,
+                c.sigma_rotation_deg.x(), c.sigma_rotation_deg.y(), c.sigma_rotation_deg.z(), 1e3 * t_err, c.rms_px);
+    EXPECT_EQ(c.pair_names.size(), 12u);
+    EXPECT_LE(baseline_err, 0.0005);
+    EXPECT_LE(rot_err, 0.02);
+    if (noise == 0) {
+      EXPECT_LT(c.rms_px, 0.01);
+      EXPECT_LT(t_err, 1e-4);
+    } else {
+      EXPECT_NEAR(c.rms_px, noise * std::sqrt(2.0), 0.05);   // 2-D residuals of noise per axis
+      EXPECT_LT(baseline_err, 4 * c.sigma_baseline + 1e-6) << "sigma must describe the error";
+    }
+  }
+}
+
+TEST(StereoCalibration, RejectsTooFewPairsAndPairsWithoutCommonMarkers) {
+  const auto cfg = StereoScene();
+  const auto& units = cfg.description.units;
+  const auto opts = scenes::DatasetOptions::ForKind("stereo_aruco");
+  const auto poses = scenes::DrawBoardPoses(cfg, opts);
+  const auto board = BoardPoints(opts.board);
+  std::mt19937 rng(1);
+  const AnyModel left = AnyModel::Exact(units[0].rig), right = AnyModel::Exact(units[1].rig);
+  std::vector<StereoPairObservation> one = {{"only", Observe(units[0], board, poses[0], 0.1, &rng),
+                                             Observe(units[1], board, poses[0], 0.1, &rng)}};
+  EXPECT_THROW(CalibrateStereo(left, right, one, board, {}), Error);
+  // Two pairs whose right views see none of the markers the left views see.
+  std::vector<StereoPairObservation> disjoint;
+  for (int i = 0; i < 2; ++i) {
+    auto l = Observe(units[0], board, poses[i], 0.1, &rng), r = Observe(units[1], board, poses[i], 0.1, &rng);
+    l.erase(std::remove_if(l.begin(), l.end(), [](const CornerObservation& c) { return c.id / 4 >= 12; }), l.end());
+    r.erase(std::remove_if(r.begin(), r.end(), [](const CornerObservation& c) { return c.id / 4 < 12; }), r.end());
+    disjoint.push_back({"pair" + std::to_string(i), l, r});
+  }
+  try {
+    CalibrateStereo(left, right, disjoint, board, {});
+    ADD_FAILURE() << "no error";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("common markers"), std::string::npos) << e.what();
+  }
+}
+
+TEST(MarkerDetection, FindsTheMarkersOfARenderAtTheirTruePixels) {
+  auto cfg = StereoScene();
+  const auto opts = scenes::DatasetOptions::ForKind("stereo_aruco");
+  const auto poses = scenes::DrawBoardPoses(cfg, opts);
+  const auto board = BoardPoints(opts.board);
+  scenes::BoardInstance inst;
+  inst.name = "aruco_board", inst.spec = opts.board, inst.world_from_board = poses[2];
+  inst.object_id = raytrace::kFirstObjectId + static_cast<int>(cfg.description.objects.size());
+  inst.rect_index = static_cast<int>(cfg.description.rects.size());
+  cfg.description.rects.push_back(scenes::MakeBoardRect(opts.board, inst.world_from_board, inst.object_id));
+  cfg.description.objects.push_back({inst.object_id, inst.name, "board"});
+  const raytrace::RayScene scene(cfg.description);
+  const auto& unit = scene.description().units[0];
+  // Ground truth with visibility (the other unit's hardware can hide part of the board).
+  std::vector<CornerObservation> truth;
+  int hidden = 0;
+  for (const auto& c : scenes::BoardCornerTruth(scene, inst, 0)) {
+    if (c.status == "visible") truth.push_back({c.id, c.pixel});
+    else ++hidden;
+  }
+  ASSERT_GT(truth.size(), 40u);
+  // Render only around the board.
+  double x0 = 1e9, y0 = 1e9, x1 = -1e9, y1 = -1e9;
+  for (const auto& c : truth) {
+    x0 = std::min(x0, c.pixel.x()), x1 = std::max(x1, c.pixel.x());
+    y0 = std::min(y0, c.pixel.y()), y1 = std::max(y1, c.pixel.y());
+  }
+  raytrace::RenderOptions ro;
+  ro.samples = 9;
+  ro.ground_truth = false;
+  ro.region = {int(x0) - 30, int(y0) - 30, int(x1) + 30, int(y1) + 30};
+  const raytrace::Frame f = raytrace::Render(scene, raytrace::ViewCamera::Unit(0), ro);
+  unwrap::Image8 img;
+  img.width = f.width, img.height = f.height, img.channels = 3;
+  img.data.resize(f.rgb.size());
+  for (size_t k = 0; k < f.rgb.size(); ++k) img.data[k] = uint8_t(std::lround(std::clamp(f.rgb[k], 0.f, 1.f) * 255));
+  const MarkerDetector detector(AnyModel::Exact(unit.rig), {});
+  const auto found = detector.Detect(img);
+  std::map<int, Vec2d> truth_by_id;
+  for (const auto& c : truth) truth_by_id[c.id] = c.pixel;
+  double s2 = 0, worst = 0;
+  int matched = 0, false_corners = 0;
+  for (const auto& c : found) {
+    const auto it = truth_by_id.find(c.id);
+    if (it == truth_by_id.end()) {   // a marker partly hidden by the other unit can still decode
+      ++false_corners;
+      continue;
+    }
+    const double e = (c.pixel - it->second).norm();
+    if (std::getenv("HOVS_VERBOSE")) std::printf("corner %d err %.3f d %.3f %.3f at %.0f %.0f\n", c.id, e, c.pixel.x() - it->second.x(), c.pixel.y() - it->second.y(), c.pixel.x(), c.pixel.y());
+    s2 += e * e, worst = std::max(worst, e);
+    ++matched;
+  }
+  const double rms = std::sqrt(s2 / std::max(1, matched));
+  std::printf("[ figure ] ArUco in unwrapped views: %d of %zu visible corners found (%d hidden, %d detected at hidden "
+              "corners), RMS %.3f px, worst %.3f px\n", matched, truth.size(), hidden, false_corners, rms, worst);
+  EXPECT_LE(false_corners, 4);
+  EXPECT_GE(matched, int(0.8 * truth.size()));
+  EXPECT_LE(rms, 0.3);
+}
+
+}  // namespace
+}  // namespace hovs::depth
