@@ -13,6 +13,7 @@
 #include <nlohmann/json.hpp>
 
 #include "apps/commands.h"
+#include "apps/model_files.h"
 #include "calib/ocam_io.h"
 #include "core/error.h"
 #include "core/io.h"
@@ -29,37 +30,6 @@ struct View {
   std::string unit;
   fs::path image, exr;
 };
-
-unwrap::Image8 Load8(const fs::path& path, int* w, int* h) {
-  int c = 0;
-  const std::vector<float> px = raytrace::ReadImage(path, w, h, &c);
-  HOVS_REQUIRE(c == 1 || c >= 3, path.string(), "unsupported channel count ", c);
-  unwrap::Image8 im;
-  im.width = *w, im.height = *h, im.channels = c == 1 ? 1 : 3;
-  im.data.resize(size_t(*w) * *h * im.channels);
-  for (size_t k = 0; k < size_t(*w) * *h; ++k)
-    for (int ch = 0; ch < im.channels; ++ch)
-      im.data[k * im.channels + ch] = uint8_t(std::lround(std::clamp(px[k * c + ch], 0.f, 1.f) * 255));
-  return im;
-}
-
-AnyModel ModelFile(const std::string& path) {
-  if (path.size() > 4 && path.substr(path.size() - 4) == ".txt") return AnyModel::Polynomial(calib::LoadOcamCalibResults(path));
-  const auto j = nlohmann::json::parse(ReadFile(path), nullptr, false);
-  HOVS_REQUIRE(!j.is_discarded() && j.contains("polynomial"), path, "not calib_results.txt or a hovs calibration.json");
-  const auto& p = j["polynomial"];
-  PolynomialModel<double> m;
-  try {
-    m.width = p.at("width"), m.height = p.at("height");
-    m.cx = p.at("cx"), m.cy = p.at("cy"), m.c = p.at("c"), m.d = p.at("d"), m.e = p.at("e");
-    m.poly = p.at("poly").get<std::vector<double>>();
-    m.inv_poly = p.at("inv_poly").get<std::vector<double>>();
-    m.rho_min = p.at("rho_range")[0], m.rho_max = p.at("rho_range")[1];
-  } catch (const nlohmann::json::exception& e) {
-    throw Error(path, std::string("incomplete polynomial model: ") + e.what());
-  }
-  return AnyModel::Polynomial(m);
-}
 
 }  // namespace
 
@@ -112,11 +82,11 @@ Runner SetupDepth(CLI::App* sub, const GlobalOptions* global) {
     }
     HOVS_REQUIRE(!vl.unit.empty() && !vr.unit.empty(), o->dataset, "frame ", o->frame, " lacks a view of both units");
 
-    depth::StereoRig rig{o->left_model.empty() ? AnyModel::Exact(ul.rig) : ModelFile(o->left_model),
-                         o->right_model.empty() ? AnyModel::Exact(ur.rig) : ModelFile(o->right_model),
+    depth::StereoRig rig{o->left_model.empty() ? AnyModel::Exact(ul.rig) : AnyModel::Polynomial(LoadPolynomialModelFile(o->left_model)),
+                         o->right_model.empty() ? AnyModel::Exact(ur.rig) : AnyModel::Polynomial(LoadPolynomialModelFile(o->right_model)),
                          ur.world_from_mirror.Inverse() * ul.world_from_mirror};
-    int wl = 0, hl = 0, wr = 0, hr = 0;
-    const unwrap::Image8 il8 = Load8(vl.image, &wl, &hl), ir8 = Load8(vr.image, &wr, &hr);
+    const unwrap::Image8 il8 = LoadImage8(vl.image), ir8 = LoadImage8(vr.image);
+    const int wl = il8.width, hl = il8.height, wr = ir8.width, hr = ir8.height;
     HOVS_REQUIRE(wl == wr && hl == hr, o->dataset, "the two images differ in size (", wl, " x ", hl, " and ", wr, " x ", hr, ")");
     HOVS_REQUIRE(wl == rig.left.width() && hl == rig.left.height() && wr == rig.right.width() && hr == rig.right.height(),
                  vl.image.string(), "the images are ", wl, " x ", hl, " but the models are for ", rig.left.width(), " x ",

@@ -8,6 +8,7 @@
 #include <opencv2/core.hpp>
 
 #include "apps/commands.h"
+#include "apps/model_files.h"
 #include "calib/ocam_io.h"
 #include "core/error.h"
 #include "core/io.h"
@@ -20,37 +21,6 @@
 namespace hovs::apps {
 namespace {
 namespace fs = std::filesystem;
-
-unwrap::Image8 LoadImage8(const fs::path& path) {
-  int w = 0, h = 0, c = 0;
-  const std::vector<float> px = raytrace::ReadImage(path, &w, &h, &c);
-  HOVS_REQUIRE(c == 1 || c >= 3, path.string(), "unsupported channel count ", c);
-  unwrap::Image8 im;
-  im.width = w, im.height = h, im.channels = c == 1 ? 1 : 3;
-  im.data.resize(size_t(w) * h * im.channels);
-  for (size_t k = 0; k < size_t(w) * h; ++k)
-    for (int ch = 0; ch < im.channels; ++ch)
-      im.data[k * im.channels + ch] = uint8_t(std::lround(std::clamp(px[k * c + ch], 0.f, 1.f) * 255));
-  return im;
-}
-
-AnyModel PolyModelFile(const std::string& path) {
-  if (path.size() > 4 && path.substr(path.size() - 4) == ".txt") return AnyModel::Polynomial(calib::LoadOcamCalibResults(path));
-  const auto j = nlohmann::json::parse(ReadFile(path), nullptr, false);
-  HOVS_REQUIRE(!j.is_discarded() && j.contains("polynomial"), path, "not calib_results.txt or a hovs calibration.json");
-  const auto& p = j["polynomial"];
-  PolynomialModel<double> m;
-  try {
-    m.width = p.at("width"), m.height = p.at("height");
-    m.cx = p.at("cx"), m.cy = p.at("cy"), m.c = p.at("c"), m.d = p.at("d"), m.e = p.at("e");
-    m.poly = p.at("poly").get<std::vector<double>>();
-    m.inv_poly = p.at("inv_poly").get<std::vector<double>>();
-    m.rho_min = p.at("rho_range")[0], m.rho_max = p.at("rho_range")[1];
-  } catch (const nlohmann::json::exception& e) {
-    throw Error(path, std::string("incomplete polynomial model: ") + e.what());
-  }
-  return AnyModel::Polynomial(m);
-}
 
 scenes::BoardSpec BoardFromJson(const nlohmann::json& b, const std::string& where) {
   scenes::BoardSpec s;
@@ -93,8 +63,8 @@ Runner SetupStereoCalibrate(CLI::App* sub, const GlobalOptions* global) {
     const scenes::BoardSpec spec = BoardFromJson(m["boards"][0], o->dataset + " (boards[0])");
     std::map<int, Vec3d> board;
     for (const auto& [id, p] : spec.Corners()) board[id] = Vec3d(p.x(), p.y(), 0);
-    const AnyModel left = o->left_model.empty() ? AnyModel::Exact(ul.rig) : PolyModelFile(o->left_model);
-    const AnyModel right = o->right_model.empty() ? AnyModel::Exact(ur.rig) : PolyModelFile(o->right_model);
+    const AnyModel left = o->left_model.empty() ? AnyModel::Exact(ul.rig) : AnyModel::Polynomial(LoadPolynomialModelFile(o->left_model));
+    const AnyModel right = o->right_model.empty() ? AnyModel::Exact(ur.rig) : AnyModel::Polynomial(LoadPolynomialModelFile(o->right_model));
     depth::MarkerDetectOptions dop;
     dop.dictionary = spec.dictionary;
     const depth::MarkerDetector dl(left, dop), dr(right, dop);

@@ -16,6 +16,7 @@
 #include <nlohmann/json.hpp>
 
 #include "apps/commands.h"
+#include "apps/model_files.h"
 #include "apps/unwrap_viewer.h"
 #include "calib/ocam_io.h"
 #include "core/error.h"
@@ -34,25 +35,6 @@ bool EndsWith(const std::string& s, const std::string& e) {
   return s.size() >= e.size() && s.compare(s.size() - e.size(), e.size(), e) == 0;
 }
 
-PolynomialModel<double> PolynomialFromCalibrationJson(const fs::path& path) {
-  const auto j = nlohmann::json::parse(ReadFile(path), nullptr, false);
-  HOVS_REQUIRE(!j.is_discarded() && j.contains("polynomial"), path.string(),
-               "not a hovs calibration.json (no 'polynomial' model)");
-  const auto& p = j["polynomial"];
-  try {
-    PolynomialModel<double> m;
-    m.width = p.at("width"), m.height = p.at("height");
-    m.cx = p.at("cx"), m.cy = p.at("cy"), m.c = p.at("c"), m.d = p.at("d"), m.e = p.at("e");
-    m.poly = p.at("poly").get<std::vector<double>>();
-    m.inv_poly = p.at("inv_poly").get<std::vector<double>>();
-    m.rho_min = p.at("rho_range")[0], m.rho_max = p.at("rho_range")[1];
-    m.Check(path.string());
-    return m;
-  } catch (const nlohmann::json::exception& e) {
-    throw Error(path.string(), std::string("polynomial model is incomplete: ") + e.what());
-  }
-}
-
 // The model named on the command line; `unit` selects a unit of a scene or manifest.
 AnyModel LoadModel(const std::string& spec, const std::string& unit, double scene_distance) {
   const fs::path path(spec);
@@ -69,7 +51,7 @@ AnyModel LoadModel(const std::string& spec, const std::string& unit, double scen
     const size_t i = pick(units.size(), [&](size_t k) { return units[k].name; });
     return AnyModel::Exact(units[i].rig, scene_distance);
   }
-  if (EndsWith(spec, ".txt")) return AnyModel::Polynomial(calib::LoadOcamCalibResults(path));
+  if (EndsWith(spec, ".txt")) return AnyModel::Polynomial(LoadPolynomialModelFile(path));
   const auto j = nlohmann::json::parse(ReadFile(path), nullptr, false);
   HOVS_REQUIRE(!j.is_discarded(), path.string(), "not JSON, YAML or calib_results.txt");
   if (j.value("format", "") == "hovs-dataset") {
@@ -77,7 +59,7 @@ AnyModel LoadModel(const std::string& spec, const std::string& unit, double scen
     const size_t i = pick(units.size(), [&](size_t k) { return units[k]["name"].get<std::string>(); });
     return AnyModel::Exact(scenes::UnitFromJson(units[i], spec + " (units)").rig, scene_distance);
   }
-  return AnyModel::Polynomial(PolynomialFromCalibrationJson(path));
+  return AnyModel::Polynomial(LoadPolynomialModelFile(path));
 }
 
 struct Frame {
@@ -174,16 +156,9 @@ Runner SetupUnwrap(CLI::App* sub, const GlobalOptions* global) {
                    "needs --model (views are rebuilt as you move them) and --input");
       const AnyModel model = LoadModel(o->model, o->unit, o->scene_distance);
       const auto frame = ListInputs(o->input, o->unit).front();
-      int w = 0, h = 0, c = 0;
-      const std::vector<float> px = raytrace::ReadImage(frame.image, &w, &h, &c);
-      HOVS_REQUIRE(c == 1 || c >= 3, frame.image.string(), "unsupported channel count ", c);
-      const int oc = c == 1 ? 1 : 3;
-      std::vector<uint8_t> bytes(size_t(w) * h * oc);
-      for (size_t k = 0; k < size_t(w) * h; ++k)
-        for (int ch = 0; ch < oc; ++ch) bytes[k * oc + ch] = uint8_t(std::lround(std::clamp(px[k * c + ch], 0.f, 1.f) * 255));
+      const unwrap::Image8 im = LoadImage8(frame.image);
       RunUnwrapViewer(model, unwrap::ResolveLayout(o->layout),
-                      {bytes.data(), w, h, size_t(w) * oc, oc == 1 ? unwrap::PixelFormat::kGray8 : unwrap::PixelFormat::kRgb8},
-                      o->layout_out);
+                      im.View(im.channels == 1 ? unwrap::PixelFormat::kGray8 : unwrap::PixelFormat::kRgb8), o->layout_out);
       return 0;
     }
     HOVS_REQUIRE(!o->input.empty() || !o->save_map.empty(), "hovs unwrap", "give --input (and/or --save-map)");

@@ -1,0 +1,47 @@
+#include "apps/model_files.h"
+
+#include <algorithm>
+#include <cmath>
+#include <nlohmann/json.hpp>
+
+#include "calib/ocam_io.h"
+#include "core/error.h"
+#include "core/io.h"
+#include "raytrace/render.h"
+
+namespace hovs::apps {
+
+PolynomialModel<double> LoadPolynomialModelFile(const std::filesystem::path& path) {
+  if (path.extension() == ".txt") return calib::LoadOcamCalibResults(path);
+  const auto j = nlohmann::json::parse(ReadFile(path), nullptr, false);
+  HOVS_REQUIRE(!j.is_discarded() && j.contains("polynomial"), path.string(),
+               "not calib_results.txt or a hovs calibration.json (no 'polynomial' model)");
+  const auto& p = j["polynomial"];
+  PolynomialModel<double> m;
+  try {
+    m.width = p.at("width"), m.height = p.at("height");
+    m.cx = p.at("cx"), m.cy = p.at("cy"), m.c = p.at("c"), m.d = p.at("d"), m.e = p.at("e");
+    m.poly = p.at("poly").get<std::vector<double>>();
+    m.inv_poly = p.at("inv_poly").get<std::vector<double>>();
+    m.rho_min = p.at("rho_range")[0], m.rho_max = p.at("rho_range")[1];
+  } catch (const nlohmann::json::exception& e) {
+    throw Error(path.string(), std::string("polynomial model is incomplete: ") + e.what());
+  }
+  m.Check(path.string());
+  return m;
+}
+
+unwrap::Image8 LoadImage8(const std::filesystem::path& path) {
+  int w = 0, h = 0, c = 0;
+  const std::vector<float> px = raytrace::ReadImage(path, &w, &h, &c);
+  HOVS_REQUIRE(c == 1 || c >= 3, path.string(), "unsupported channel count ", c, " (grey or RGB expected)");
+  unwrap::Image8 im;
+  im.width = w, im.height = h, im.channels = c == 1 ? 1 : 3;
+  im.data.resize(size_t(w) * h * im.channels);
+  for (size_t k = 0; k < size_t(w) * h; ++k)
+    for (int ch = 0; ch < im.channels; ++ch)
+      im.data[k * im.channels + ch] = uint8_t(std::lround(std::clamp(px[k * c + ch], 0.f, 1.f) * 255));
+  return im;
+}
+
+}  // namespace hovs::apps

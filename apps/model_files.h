@@ -1,0 +1,18 @@
+// Shared by the subcommands: calibrated models from files and 8-bit images from any OpenImageIO format.
+#pragma once
+
+#include <filesystem>
+#include <string>
+
+#include "core/any_model.h"
+#include "unwrap/remap.h"
+
+namespace hovs::apps {
+
+// OCamCalib's calib_results.txt (by extension .txt) or the polynomial model of a hovs calibration.json.
+PolynomialModel<double> LoadPolynomialModelFile(const std::filesystem::path& path);
+
+// An image as 8-bit grey (one channel) or RGB (three or more channels: alpha dropped).
+unwrap::Image8 LoadImage8(const std::filesystem::path& path);
+
+}  // namespace hovs::apps
