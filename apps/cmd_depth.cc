@@ -14,7 +14,6 @@
 
 #include "apps/commands.h"
 #include "apps/model_files.h"
-#include "calib/ocam_io.h"
 #include "core/error.h"
 #include "core/io.h"
 #include "depth/stereo.h"
@@ -35,7 +34,7 @@ struct View {
 
 Runner SetupDepth(CLI::App* sub, const GlobalOptions* global) {
   struct Options {
-    std::string dataset, out = "results/depth", left, right, left_model, right_model;
+    std::string dataset, out = "results/depth", left, right, left_model, right_model, stereo;
     int frame = 0, width = 2048, height = 512, disparities = 320, block = 5, max_points = 200000;
     double sigma_px = 0.5, max_rel_sigma = 0.05;
   };
@@ -45,6 +44,7 @@ Runner SetupDepth(CLI::App* sub, const GlobalOptions* global) {
   sub->add_option("--right", o->right, "right unit name (default: the second)");
   sub->add_option("--left-model", o->left_model, "calibrated model of the left unit (calib_results.txt or calibration.json)");
   sub->add_option("--right-model", o->right_model, "calibrated model of the right unit");
+  sub->add_option("--stereo", o->stereo, "relative pose from hovs stereo-calibrate (stereo.json) instead of the manifest's");
   sub->add_option("--frame", o->frame, "frame index in the manifest")->capture_default_str();
   sub->add_option("--width", o->width, "rectified width (angle from the baseline)")->capture_default_str();
   sub->add_option("--height", o->height, "rectified height (angle around the baseline)")->capture_default_str();
@@ -85,6 +85,21 @@ Runner SetupDepth(CLI::App* sub, const GlobalOptions* global) {
     depth::StereoRig rig{o->left_model.empty() ? AnyModel::Exact(ul.rig) : AnyModel::Polynomial(LoadPolynomialModelFile(o->left_model)),
                          o->right_model.empty() ? AnyModel::Exact(ur.rig) : AnyModel::Polynomial(LoadPolynomialModelFile(o->right_model)),
                          ur.world_from_mirror.Inverse() * ul.world_from_mirror};
+    std::string pose_source = "manifest";
+    if (!o->stereo.empty()) {
+      const auto sj = nlohmann::json::parse(ReadFile(o->stereo), nullptr, false);
+      HOVS_REQUIRE(!sj.is_discarded() && sj.contains("right_from_left"), o->stereo,
+                   "not a hovs stereo-calibrate result (no right_from_left)");
+      try {
+        const auto& q = sj["right_from_left"].at("q");
+        const auto& t = sj["right_from_left"].at("t");
+        rig.right_from_left = Rigid3d(Eigen::Quaterniond(q.at(0), q.at(1), q.at(2), q.at(3)).normalized(),
+                                      Vec3d(t.at(0), t.at(1), t.at(2)));
+      } catch (const nlohmann::json::exception& e) {
+        throw Error(o->stereo, std::string("right_from_left is incomplete: ") + e.what());
+      }
+      pose_source = o->stereo;
+    }
     const unwrap::Image8 il8 = LoadImage8(vl.image), ir8 = LoadImage8(vr.image);
     const int wl = il8.width, hl = il8.height, wr = ir8.width, hr = ir8.height;
     HOVS_REQUIRE(wl == wr && hl == hr, o->dataset, "the two images differ in size (", wl, " x ", hl, " and ", wr, " x ", hr, ")");
@@ -148,7 +163,7 @@ Runner SetupDepth(CLI::App* sub, const GlobalOptions* global) {
 
     nlohmann::json j = {{"tool", "hovs depth"}, {"versions", versions}, {"dataset", o->dataset}, {"frame", o->frame},
                         {"units", {ul.name, ur.name}}, {"models", {rig.left.KindName(), rig.right.KindName()}},
-                        {"baseline_m", rect.baseline},
+                        {"baseline_m", rect.baseline}, {"relative_pose_from", pose_source},
                         {"rectification", {{"width", ro.width}, {"height", ro.height},
                                            {"theta_deg", {ro.theta_min_deg, ro.theta_max_deg}},
                                            {"phi_deg", {ro.phi_min_deg, ro.phi_max_deg}}, {"dtheta_deg", rect.dtheta * 180 / M_PI}}},

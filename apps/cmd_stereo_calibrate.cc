@@ -6,10 +6,12 @@
 #include <cstdio>
 #include <nlohmann/json.hpp>
 #include <opencv2/core.hpp>
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
+#include <algorithm>
 
 #include "apps/commands.h"
 #include "apps/model_files.h"
-#include "calib/ocam_io.h"
 #include "core/error.h"
 #include "core/io.h"
 #include "depth/stereo_calibration.h"
@@ -122,6 +124,60 @@ Runner SetupStereoCalibrate(CLI::App* sub, const GlobalOptions* global) {
       summary += line;
     }
     StagedDirectory staged(o->out);
+    // Reprojection figure per pair and unit (the article's Fig. 28): a crop of the catadioptric image around
+    // the board, detected corners (green circles), reprojected corners (red crosses) and the residual magnified
+    // 20 times (yellow).
+    fs::create_directories(staged.staging() / "figures");
+    std::map<std::string, std::pair<fs::path, fs::path>> images;
+    for (const auto& fr : m.at("frames")) {
+      auto& e = images["frame" + std::to_string(fr.at("id").get<int>())];
+      for (const auto& v : fr.at("views")) {
+        const fs::path img = manifest.parent_path() / v.at("image").get<std::string>();
+        if (v.at("unit") == ul.name) e.first = img;
+        if (v.at("unit") == ur.name) e.second = img;
+      }
+    }
+    for (size_t k = 0; k < c.pair_names.size(); ++k) {
+      const auto& name = c.pair_names[k];
+      const auto& obs = *std::find_if(pairs.begin(), pairs.end(), [&](const auto& p) { return p.name == name; });
+      for (int side = 0; side < 2; ++side) {
+        const auto& corners = side == 0 ? obs.left : obs.right;
+        if (corners.empty()) continue;
+        const AnyModel& model = side == 0 ? left : right;
+        const Rigid3d mirror_from_board = side == 0 ? c.left_from_board[k] : c.right_from_left * c.left_from_board[k];
+        const unwrap::Image8 im = LoadImage8(side == 0 ? images[name].first : images[name].second);
+        double x0 = 1e9, y0 = 1e9, x1 = -1e9, y1 = -1e9;
+        for (const auto& p : corners)
+          x0 = std::min(x0, p.pixel.x()), x1 = std::max(x1, p.pixel.x()), y0 = std::min(y0, p.pixel.y()),
+          y1 = std::max(y1, p.pixel.y());
+        const cv::Rect roi = cv::Rect(cv::Point(int(x0) - 40, int(y0) - 40), cv::Point(int(x1) + 40, int(y1) + 40)) &
+                             cv::Rect(0, 0, im.width, im.height);
+        cv::Mat full(im.height, im.width, im.channels == 3 ? CV_8UC3 : CV_8UC1, const_cast<uint8_t*>(im.data.data()));
+        cv::Mat crop;
+        if (im.channels == 3) cv::cvtColor(full(roi), crop, cv::COLOR_RGB2BGR); else cv::cvtColor(full(roi), crop, cv::COLOR_GRAY2BGR);
+        const double scale = 800.0 / std::max(roi.width, roi.height);
+        cv::resize(crop, crop, cv::Size(), scale, scale, cv::INTER_CUBIC);
+        const auto at = [&](const Vec2d& p) {
+          return cv::Point2d((p.x() - roi.x + 0.5) * scale - 0.5, (p.y() - roi.y + 0.5) * scale - 0.5);
+        };
+        for (const auto& p : corners) {
+          const auto it = board.find(p.id);
+          Vec2d uv;
+          if (it == board.end() || !model.ImgFromMirror(mirror_from_board * it->second, &uv)) continue;
+          cv::circle(crop, at(p.pixel), 5, cv::Scalar(0, 200, 0), 1, cv::LINE_AA);
+          cv::drawMarker(crop, at(uv), cv::Scalar(0, 0, 255), cv::MARKER_CROSS, 8, 1, cv::LINE_AA);
+          cv::line(crop, at(p.pixel), at(p.pixel + 20 * (uv - p.pixel)), cv::Scalar(0, 220, 255), 1, cv::LINE_AA);
+        }
+        char text[160];
+        std::snprintf(text, sizeof text, "%s %s: RMS %.3f px, %zu corners (residuals x20)", name.c_str(),
+                      side == 0 ? ul.name.c_str() : ur.name.c_str(),
+                      side == 0 ? c.pair_rms_left_px[k] : c.pair_rms_right_px[k], corners.size());
+        cv::putText(crop, text, cv::Point(8, 20), cv::FONT_HERSHEY_SIMPLEX, 0.5, cv::Scalar(255, 255, 255), 2, cv::LINE_AA);
+        cv::putText(crop, text, cv::Point(8, 20), cv::FONT_HERSHEY_SIMPLEX, 0.5, cv::Scalar(0, 0, 0), 1, cv::LINE_AA);
+        const fs::path fig = staged.staging() / "figures" / (name + "_" + (side == 0 ? ul.name : ur.name) + ".png");
+        HOVS_REQUIRE(cv::imwrite(fig.string(), crop), fig.string(), "cannot write the figure");
+      }
+    }
     WriteFileAtomic(staged.staging() / "stereo.json", j.dump(1));
     {
       // OpenCV FileStorage (stereoCalibrate's names: R, T).

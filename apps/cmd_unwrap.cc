@@ -18,7 +18,6 @@
 #include "apps/commands.h"
 #include "apps/model_files.h"
 #include "apps/unwrap_viewer.h"
-#include "calib/ocam_io.h"
 #include "core/error.h"
 #include "core/io.h"
 #include "design/study.h"

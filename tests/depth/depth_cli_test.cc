@@ -33,13 +33,17 @@ TEST(StereoCli, CalibratesRenderedPairsAndComputesDepth) {
   EXPECT_LE(r_err, 0.05);
   EXPECT_TRUE(fs::exists(dir / "cal/stereo.yaml"));
   EXPECT_NE(ReadFile(dir / "cal/stereo.yaml").find("baseline"), std::string::npos);
+  EXPECT_TRUE(fs::exists(dir / "cal/figures/frame0_left.png"));   // reprojection figure per pair and unit
 
-  // Depth of the first pair's frame (the board and the floor) against its range channel.
-  const auto d = Hovs("--quiet depth --dataset " + (dir / "stereo/dataset.json").string() + " --width 1024 --height 256 "
-                      "--num-disparities 160 -o " + (dir / "depth").string());
+  // Depth of the first pair's frame (the board and the floor) against its range channel, with the calibrated
+  // relative pose.
+  const auto d = Hovs("--quiet depth --dataset " + (dir / "stereo/dataset.json").string() + " --stereo " +
+                      (dir / "cal/stereo.json").string() + " --width 1024 --height 256 --num-disparities 160 -o " +
+                      (dir / "depth").string());
   ASSERT_EQ(d.exit_code, 0) << d.output;
   const auto dj = nlohmann::json::parse(ReadFile(dir / "depth/depth.json"));
   ASSERT_TRUE(dj.contains("ground_truth"));
+  EXPECT_NE(dj["relative_pose_from"].get<std::string>().find("stereo.json"), std::string::npos);
   const auto& band = dj["ground_truth"]["bands"][1];   // 2-4 m: most of the floor
   EXPECT_LT(band["median_relative_error"].get<double>(), 0.03) << band.dump();
   for (const char* f : {"range.exr", "points.ply", "points.vtp", "rectified_left.png", "disparity.png"})
