@@ -108,9 +108,14 @@ Runner SetupStereoCalibrate(CLI::App* sub, const GlobalOptions* global) {
                         {"sigma_rotation_deg", {c.sigma_rotation_deg.x(), c.sigma_rotation_deg.y(), c.sigma_rotation_deg.z()}},
                         {"rms_px", c.rms_px}, {"converged", c.converged}, {"solver", c.solver_report},
                         {"pairs", per}, {"detections", detections}};
+    nlohmann::json outl = nlohmann::json::array();
+    for (const auto& x : c.outliers)
+      outl.push_back({{"pair", x.pair}, {"unit", x.unit}, {"corner", x.corner}, {"residual_px", x.residual_px}});
+    j["outliers"] = {{"threshold_px", so.outlier_px}, {"dropped", outl}};
     std::string summary = "hovs stereo-calibrate: " + std::to_string(c.pair_names.size()) + " pairs, baseline " +
                           std::to_string(c.baseline) + " m (sigma " + std::to_string(c.sigma_baseline * 1e3) +
-                          " mm), RMS " + std::to_string(c.rms_px) + " px\n";
+                          " mm), RMS " + std::to_string(c.rms_px) + " px, " + std::to_string(c.outliers.size()) +
+                          " outlier corners dropped (listed in stereo.json)\n";
     if (o->left_model.empty() && o->right_model.empty()) {
       const Rigid3d truth = ur.world_from_mirror.Inverse() * ul.world_from_mirror;
       const double rot = 2 * std::asin(std::min(1.0, (c.right_from_left.rotation * truth.rotation.conjugate()).vec().norm())) * 180 / M_PI;

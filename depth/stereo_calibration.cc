@@ -5,6 +5,7 @@
 #include <opencv2/aruco.hpp>
 #include <opencv2/calib3d.hpp>
 #include <opencv2/imgproc.hpp>
+#include <memory>
 #include <set>
 
 #include "core/error.h"
@@ -268,35 +269,68 @@ StereoCalibration CalibrateStereo(const AnyModel& left, const AnyModel& right,
       best = k;
   PoseParams rl = PoseParams::From(usable[best].right_from_board * usable[best].left_from_board.Inverse());
   std::vector<PoseParams> lb(usable.size());
-  ceres::Problem problem;
+  std::vector<StereoPairObservation> obs;
   for (size_t k = 0; k < usable.size(); ++k) {
     lb[k] = PoseParams::From(usable[k].left_from_board);
-    const auto& pr = pairs[usable[k].index];
-    for (const auto& c : pr.left) {
-      const auto it = board.find(c.id);
-      if (it == board.end()) continue;
-      problem.AddResidualBlock(new ceres::NumericDiffCostFunction<LeftCost, ceres::CENTRAL, 2, 4, 3>(
-                                   new LeftCost{&left, it->second, c.pixel}),
-                               new ceres::HuberLoss(o.huber_px), lb[k].q, lb[k].t);
-    }
-    for (const auto& c : pr.right) {
-      const auto it = board.find(c.id);
-      if (it == board.end()) continue;
-      problem.AddResidualBlock(new ceres::NumericDiffCostFunction<RightCost, ceres::CENTRAL, 2, 4, 3, 4, 3>(
-                                   new RightCost{&right, it->second, c.pixel}),
-                               new ceres::HuberLoss(o.huber_px), rl.q, rl.t, lb[k].q, lb[k].t);
-    }
-    problem.SetManifold(lb[k].q, new ceres::EigenQuaternionManifold);
+    obs.push_back(pairs[usable[k].index]);
   }
-  problem.SetManifold(rl.q, new ceres::EigenQuaternionManifold);
-  ceres::Solver::Options so;
-  so.max_num_iterations = o.max_iterations;
-  so.linear_solver_type = ceres::DENSE_SCHUR;
-  so.function_tolerance = 1e-12, so.parameter_tolerance = 1e-12, so.gradient_tolerance = 1e-12;
+  std::vector<StereoOutlier> outliers;
+  std::unique_ptr<ceres::Problem> problem;
   ceres::Solver::Summary summary;
-  ceres::Solve(so, &problem, &summary);
-  HOVS_REQUIRE(summary.termination_type != ceres::FAILURE, "stereo calibration", "the solver failed: ",
-               summary.message);
+  // Solve; drop corners whose residual exceeds outlier_px (a marker partly hidden can still decode), solve again.
+  for (int pass = 0; pass < 2; ++pass) {
+    problem = std::make_unique<ceres::Problem>();
+    for (size_t k = 0; k < obs.size(); ++k) {
+      for (const auto& c : obs[k].left) {
+        const auto it = board.find(c.id);
+        if (it == board.end()) continue;
+        problem->AddResidualBlock(new ceres::NumericDiffCostFunction<LeftCost, ceres::CENTRAL, 2, 4, 3>(
+                                      new LeftCost{&left, it->second, c.pixel}),
+                                  new ceres::HuberLoss(o.huber_px), lb[k].q, lb[k].t);
+      }
+      for (const auto& c : obs[k].right) {
+        const auto it = board.find(c.id);
+        if (it == board.end()) continue;
+        problem->AddResidualBlock(new ceres::NumericDiffCostFunction<RightCost, ceres::CENTRAL, 2, 4, 3, 4, 3>(
+                                      new RightCost{&right, it->second, c.pixel}),
+                                  new ceres::HuberLoss(o.huber_px), rl.q, rl.t, lb[k].q, lb[k].t);
+      }
+      problem->SetManifold(lb[k].q, new ceres::EigenQuaternionManifold);
+    }
+    problem->SetManifold(rl.q, new ceres::EigenQuaternionManifold);
+    ceres::Solver::Options so;
+    so.max_num_iterations = o.max_iterations;
+    so.linear_solver_type = ceres::DENSE_SCHUR;
+    so.function_tolerance = 1e-12, so.parameter_tolerance = 1e-12, so.gradient_tolerance = 1e-12;
+    ceres::Solve(so, problem.get(), &summary);
+    HOVS_REQUIRE(summary.termination_type != ceres::FAILURE, "stereo calibration", "the solver failed: ",
+                 summary.message);
+    if (pass == 1 || !(o.outlier_px > 0)) break;
+    size_t dropped = 0;
+    const Rigid3d R = ToPose(rl.q, rl.t);
+    for (size_t k = 0; k < obs.size(); ++k) {
+      const Rigid3d L = ToPose(lb[k].q, lb[k].t);
+      for (int side = 0; side < 2; ++side) {
+        auto& cs = side == 0 ? obs[k].left : obs[k].right;
+        const AnyModel& model = side == 0 ? left : right;
+        const Rigid3d pose = side == 0 ? L : R * L;
+        std::vector<CornerObservation> kept;
+        for (const auto& c : cs) {
+          const auto it = board.find(c.id);
+          Vec2d uv;
+          const double e = it != board.end() && model.ImgFromMirror(pose * it->second, &uv) ? (uv - c.pixel).norm() : HUGE_VAL;
+          if (e > o.outlier_px) {
+            outliers.push_back({obs[k].name, side == 0 ? "left" : "right", c.id, e});
+            ++dropped;
+          } else {
+            kept.push_back(c);
+          }
+        }
+        cs = kept;
+      }
+    }
+    if (dropped == 0) break;
+  }
 
   StereoCalibration out;
   out.converged = summary.termination_type == ceres::CONVERGENCE;
@@ -307,7 +341,7 @@ StereoCalibration CalibrateStereo(const AnyModel& left, const AnyModel& right,
   double s2 = 0;
   int n = 0;
   for (size_t k = 0; k < usable.size(); ++k) {
-    const auto& pr = pairs[usable[k].index];
+    const auto& pr = obs[k];
     const Rigid3d L = ToPose(lb[k].q, lb[k].t);
     out.left_from_board.push_back(L);
     out.pair_names.push_back(pr.name);
@@ -320,13 +354,14 @@ StereoCalibration CalibrateStereo(const AnyModel& left, const AnyModel& right,
     n += static_cast<int>(pr.left.size() + pr.right.size());
   }
   out.rms_px = std::sqrt(s2 / std::max(1, n));
+  out.outliers = outliers;
   // Covariance of the relative pose, scaled by the residual variance (pixels are not known to 1 px).
   ceres::Covariance::Options co;
   co.algorithm_type = ceres::DENSE_SVD;
   co.null_space_rank = -1;
   ceres::Covariance cov(co);
   std::vector<std::pair<const double*, const double*>> blocks = {{rl.q, rl.q}, {rl.t, rl.t}};
-  if (cov.Compute(blocks, &problem)) {
+  if (cov.Compute(blocks, problem.get())) {
     const double dof = std::max(1.0, double(summary.num_residuals - summary.num_effective_parameters));
     const double scale = 2 * summary.final_cost / dof;   // residual variance
     double cq[9], ct[9];

@@ -10,7 +10,8 @@
 // one Ceres problem over all pairs: the relative pose right_from_left (rotation as a quaternion on its
 // manifold) and left_from_board per pair, with 2-D reprojection residuals of every corner through both
 // catadioptric models (the law-of-reflection projection for a misaligned exact rig), and a robust (Huber) loss.
-// Pairs may show different marker subsets in the two units. Standard deviations of the baseline, the offsets and
+// Pairs may show different marker subsets in the two units. Corners with a residual above outlier_px after
+// the first solve are dropped and listed, and the problem is solved again. Standard deviations of the baseline, the offsets and
 // the rotation angles come from the covariance.
 #pragma once
 
@@ -62,7 +63,14 @@ struct StereoCalibrationOptions {
   double huber_px = 1.0;
   int min_common_markers = 1;      // pairs need at least this many markers seen by both units
   int max_iterations = 200;
+  double outlier_px = 3.0;         // corners with a larger residual after the first solve are dropped (0: keep all)
   void Check(const std::string& where) const;
+};
+
+struct StereoOutlier {
+  std::string pair, unit;   // unit: "left" or "right"
+  int corner = 0;
+  double residual_px = 0;
 };
 
 struct StereoCalibration {
@@ -76,6 +84,7 @@ struct StereoCalibration {
   std::vector<double> pair_rms_left_px, pair_rms_right_px;
   std::vector<int> pair_corners_left, pair_corners_right;
   std::vector<Rigid3d> left_from_board;
+  std::vector<StereoOutlier> outliers;   // dropped after the first solve, listed
   bool converged = false;
   std::string solver_report;
 };

@@ -58,7 +58,17 @@ TEST(StereoCalibration, RecoversTheRigFromTwelvePairs) {
     for (size_t i = 0; i < poses.size(); ++i)
       pairs.push_back({"pair" + std::to_string(i), Observe(units[0], board, poses[i], noise, &rng),
                        Observe(units[1], board, poses[i], noise, &rng)});
+    // One gross outlier (a wrongly decoded corner, 10 px off) in the noisy run: dropped and listed.
+    if (noise > 0) pairs[3].right[5].pixel += Vec2d(10, -4);
     const StereoCalibration c = CalibrateStereo(left, right, pairs, board, {});
+    if (noise > 0) {
+      ASSERT_EQ(c.outliers.size(), 1u);
+      EXPECT_EQ(c.outliers[0].pair, "pair3");
+      EXPECT_EQ(c.outliers[0].unit, "right");
+      EXPECT_EQ(c.outliers[0].corner, pairs[3].right[5].id);
+    } else {
+      EXPECT_TRUE(c.outliers.empty());
+    }
     const double baseline_err = std::abs(c.baseline - truth.translation.norm());
     const double rot_err = 2 * std::asin(std::min(1.0, (c.right_from_left.rotation * truth.rotation.conjugate()).vec().norm())) / kDeg;
     const double t_err = (c.right_from_left.translation - truth.translation).norm();
