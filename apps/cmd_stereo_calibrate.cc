@@ -54,8 +54,7 @@ Runner SetupStereoCalibrate(CLI::App* sub, const GlobalOptions* global) {
   sub->add_option("-o,--out", o->out, "output folder (replaced atomically)")->capture_default_str();
   return [o, global]() {
     const fs::path manifest(o->dataset);
-    const auto m = nlohmann::json::parse(ReadFile(manifest), nullptr, false);
-    HOVS_REQUIRE(!m.is_discarded() && m.value("format", "") == "hovs-dataset", o->dataset, "not a hovs dataset manifest");
+    const auto m = LoadDatasetManifest(manifest);
     const auto& units = m.at("units");
     HOVS_REQUIRE(units.size() >= 2, o->dataset, "stereo calibration needs two units; the manifest has ", units.size());
     const auto ul = scenes::UnitFromJson(units[0], o->dataset + " (units)");

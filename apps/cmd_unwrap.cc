@@ -82,8 +82,7 @@ std::vector<Frame> ListInputs(const std::string& input, const std::string& unit)
     return frames;
   }
   if (EndsWith(input, ".json")) {
-    const auto m = nlohmann::json::parse(ReadFile(p), nullptr, false);
-    HOVS_REQUIRE(!m.is_discarded() && m.value("format", "") == "hovs-dataset", input, "not a hovs dataset manifest");
+    const auto m = LoadDatasetManifest(p);
     const std::string want = unit.empty() ? m.at("units")[0]["name"].get<std::string>() : unit;
     for (const auto& fr : m.at("frames"))
       for (const auto& v : fr.at("views"))

@@ -1,7 +1,9 @@
-// Shared by the subcommands: calibrated models from files and 8-bit images from any OpenImageIO format.
+// Shared by the subcommands: calibrated models from files, dataset manifests, 8-bit images from any
+// OpenImageIO format.
 #pragma once
 
 #include <filesystem>
+#include <nlohmann/json.hpp>
 #include <string>
 
 #include "core/any_model.h"
@@ -11,6 +13,9 @@ namespace hovs::apps {
 
 // OCamCalib's calib_results.txt (by extension .txt) or the polynomial model of a hovs calibration.json.
 PolynomialModel<double> LoadPolynomialModelFile(const std::filesystem::path& path);
+
+// A hovs dataset manifest (dataset.json), checked for its format tag. Throws hovs::Error naming the file.
+nlohmann::json LoadDatasetManifest(const std::filesystem::path& path);
 
 // An image as 8-bit grey (one channel) or RGB (three or more channels: alpha dropped).
 unwrap::Image8 LoadImage8(const std::filesystem::path& path);

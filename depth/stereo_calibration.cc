@@ -8,6 +8,7 @@
 #include <memory>
 #include <set>
 
+#include "calib/aruco_dictionary.h"
 #include "core/error.h"
 
 namespace hovs::depth {
@@ -15,15 +16,6 @@ namespace {
 
 constexpr double kDeg = M_PI / 180;
 
-int DictionaryId(const std::string& name) {
-  static const std::map<std::string, int> ids = {
-      {"DICT_4X4_50", cv::aruco::DICT_4X4_50},   {"DICT_4X4_250", cv::aruco::DICT_4X4_250},
-      {"DICT_5X5_100", cv::aruco::DICT_5X5_100}, {"DICT_5X5_250", cv::aruco::DICT_5X5_250},
-      {"DICT_6X6_250", cv::aruco::DICT_6X6_250}, {"DICT_6X6_1000", cv::aruco::DICT_6X6_1000},
-      {"DICT_ARUCO_ORIGINAL", cv::aruco::DICT_ARUCO_ORIGINAL}};
-  const auto it = ids.find(name);
-  return it == ids.end() ? -1 : it->second;
-}
 
 // Pose parameters: Eigen quaternion storage (x, y, z, w) and a translation.
 struct PoseParams {
@@ -83,7 +75,7 @@ double Rms(const AnyModel& model, const Rigid3d& mirror_from_board, const std::v
 }  // namespace
 
 void MarkerDetectOptions::Check(const std::string& where) const {
-  HOVS_REQUIRE(DictionaryId(dictionary) >= 0, where, "unknown ArUco dictionary '", dictionary, "'");
+  HOVS_REQUIRE(calib::ArucoDictionaryId(dictionary) >= 0, where, "unknown ArUco dictionary '", dictionary, "' (known: ", calib::ArucoDictionaryNames(), ")");
   HOVS_REQUIRE(views >= 1 && views <= 64, where, "views must be 1..64");
   HOVS_REQUIRE(hfov_deg > 0 && hfov_deg < 170 && width >= 64 && height >= 64, where, "bad view size or field");
 }
@@ -113,7 +105,7 @@ std::vector<CornerObservation> MarkerDetector::Detect(const unwrap::Image8& imag
   std::vector<unwrap::Image8> views;
   remapper.Run(image.View(image.channels == 3 ? unwrap::PixelFormat::kRgb8 : unwrap::PixelFormat::kGray8),
                unwrap::Interpolation::kBicubic, &views);
-  const auto dict = cv::aruco::getPredefinedDictionary(DictionaryId(options_.dictionary));
+  const auto dict = cv::aruco::getPredefinedDictionary(calib::ArucoDictionaryId(options_.dictionary));
   auto params = cv::aruco::DetectorParameters::create();
   params->cornerRefinementMethod = cv::aruco::CORNER_REFINE_SUBPIX;
   params->cornerRefinementWinSize = 4;

@@ -6,6 +6,7 @@
 #include <cmath>
 #include <map>
 
+#include "calib/aruco_dictionary.h"
 #include "core/error.h"
 #include "core/io.h"
 #include "core/yaml_reader.h"
@@ -18,20 +19,11 @@ using raytrace::Texture;
 namespace {
 constexpr double kDeg = M_PI / 180.0;
 
-int DictionaryId(const std::string& name) {
-  static const std::map<std::string, int> ids = {
-      {"DICT_4X4_50", cv::aruco::DICT_4X4_50},   {"DICT_4X4_250", cv::aruco::DICT_4X4_250},
-      {"DICT_5X5_100", cv::aruco::DICT_5X5_100}, {"DICT_5X5_250", cv::aruco::DICT_5X5_250},
-      {"DICT_6X6_250", cv::aruco::DICT_6X6_250}, {"DICT_6X6_1000", cv::aruco::DICT_6X6_1000},
-      {"DICT_ARUCO_ORIGINAL", cv::aruco::DICT_ARUCO_ORIGINAL}};
-  const auto it = ids.find(name);
-  return it == ids.end() ? -1 : it->second;
-}
 
 cv::Ptr<cv::aruco::GridBoard> MakeGridBoard(const BoardSpec& s) {
   return cv::aruco::GridBoard::create(s.markers_x, s.markers_y, static_cast<float>(s.marker_length),
                                       static_cast<float>(s.marker_separation),
-                                      cv::aruco::getPredefinedDictionary(DictionaryId(s.dictionary)));
+                                      cv::aruco::getPredefinedDictionary(calib::ArucoDictionaryId(s.dictionary)));
 }
 }  // namespace
 
@@ -71,7 +63,7 @@ void CheckBoard(const BoardSpec& s, const std::string& where) {
     HOVS_REQUIRE(s.squares_x >= 2 && s.squares_y >= 2, where, "a checkerboard needs at least 2 x 2 squares");
     HOVS_REQUIRE(s.square > 0 && std::isfinite(s.square), where, "square size must be positive");
   } else {
-    HOVS_REQUIRE(DictionaryId(s.dictionary) >= 0, where, "unknown ArUco dictionary '", s.dictionary, "'");
+    HOVS_REQUIRE(calib::ArucoDictionaryId(s.dictionary) >= 0, where, "unknown ArUco dictionary '", s.dictionary, "' (known: ", calib::ArucoDictionaryNames(), ")");
     HOVS_REQUIRE(s.markers_x >= 1 && s.markers_y >= 1, where, "needs at least one marker");
     HOVS_REQUIRE(s.marker_length > 0 && s.marker_separation >= 0, where, "marker sizes must be positive");
   }
