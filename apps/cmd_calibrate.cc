@@ -1,12 +1,17 @@
-// hovs calibrate: monocular calibration from a corner table (e.g. shared/data/vmr) or from a dataset manifest.
-// With a synthetic manifest, the ground-truth corners are used (optionally with seeded noise) and the result is
-// compared with the exact rig: this checks the solver until hovs' own detector lands (issue 4).
+// hovs calibrate: monocular calibration from a corner table (e.g. shared/data/vmr), a dataset manifest
+// (synthetic or real) or a folder of images. Corners come from hovs' checkerboard detector (every image gets a
+// detection status; with ground truth, the detected corners are compared with the exact ones); with
+// --truth-corners a synthetic manifest's exact corners are used instead (optionally with seeded noise) to check
+// the solver alone. With a synthetic manifest the result is compared with the exact rig.
 #include <cstdio>
 #include <iostream>
 #include <nlohmann/json.hpp>
+#include <opencv2/imgproc.hpp>
 #include <random>
 
 #include "apps/commands.h"
+#include "apps/model_files.h"
+#include "calib/checkerboard_detector.h"
 #include "calib/ocam_io.h"
 #include "calib/omnidir_reference.h"
 #include "calib/polynomial_calibration.h"
@@ -31,12 +36,57 @@ struct Input {
   int width = 0, height = 0;
   std::optional<raytrace::CatadioptricUnit> truth;  // synthetic datasets only
   nlohmann::json description;
+  nlohmann::json detection = nlohmann::json::array();  // per image: status, corners, error against truth
 };
 
-Input FromDataset(const std::filesystem::path& manifest, const std::string& unit_name, double noise, uint64_t seed) {
-  const auto m = nlohmann::json::parse(ReadFile(manifest), nullptr, false);
-  HOVS_REQUIRE(!m.is_discarded() && m.value("format", "") == "hovs-dataset", manifest.string(),
-               "not a hovs dataset manifest");
+cv::Mat GreyImage(const std::filesystem::path& path) {
+  const unwrap::Image8 im = LoadImage8(path);
+  cv::Mat m(im.height, im.width, im.channels == 3 ? CV_8UC3 : CV_8UC1, const_cast<uint8_t*>(im.data.data()));
+  cv::Mat grey;
+  if (im.channels == 3) cv::cvtColor(m, grey, cv::COLOR_RGB2GRAY);
+  else grey = m.clone();
+  return grey;
+}
+
+// Runs the detector on one image; records its status (never drops an image silently). With ground-truth
+// pixels, the detected corners are matched to the nearest true corner and the distances reported.
+void DetectInto(const std::filesystem::path& path, const std::string& name, const calib::CheckerboardDetectOptions& o,
+                const std::vector<Vec2d>* truth, Input* in, int* width, int* height) {
+  const cv::Mat grey = GreyImage(path);
+  if (*width == 0) *width = grey.cols, *height = grey.rows;
+  HOVS_REQUIRE(grey.cols == *width && grey.rows == *height, path.string(), "image size ", grey.cols, "x", grey.rows,
+               " differs from the first image's ", *width, "x", *height);
+  const auto det = calib::DetectCheckerboard(grey, o);
+  nlohmann::json row = {{"image", name}, {"status", det.status}, {"found", det.found}, {"complete", det.complete},
+                        {"corners", det.pixels.size()}, {"candidates", det.candidates}};
+  if (truth && det.found) {
+    double ss = 0, worst = 0;
+    for (const auto& p : det.pixels) {
+      double best = 1e30;
+      for (const auto& t : *truth) best = std::min(best, (t - p).norm());
+      ss += best * best, worst = std::max(worst, best);
+    }
+    row["rms_to_truth_px"] = std::sqrt(ss / det.pixels.size());
+    row["max_to_truth_px"] = worst;
+  }
+  in->detection.push_back(row);
+  if (det.found) in->obs.push_back(calib::ToObservation(det, name));
+}
+
+calib::CheckerboardSpec ParseBoard(const std::string& text) {
+  calib::CheckerboardSpec b;
+  char x1 = 0, x2 = 0;
+  HOVS_REQUIRE(std::sscanf(text.c_str(), "%d%c%d%c%lf", &b.cols, &x1, &b.rows, &x2, &b.square) == 5 && x1 == 'x' &&
+                   x2 == 'x',
+               "--board", "expected COLSxROWSxSQUARE (inner corners, square in metres), e.g. 7x6x0.03 (got '", text,
+               "')");
+  b.Check("--board");
+  return b;
+}
+
+Input FromDataset(const std::filesystem::path& manifest, const std::string& unit_name, bool truth_corners,
+                  double noise, uint64_t seed, const calib::CheckerboardDetectOptions& detect) {
+  const auto m = LoadDatasetManifest(manifest);
   Input in;
   const auto dir = manifest.parent_path();
   int unit_index = -1;
@@ -44,15 +94,37 @@ Input FromDataset(const std::filesystem::path& manifest, const std::string& unit
     if (unit_name.empty() ? u == 0 : m["units"][u]["name"] == unit_name) unit_index = static_cast<int>(u);
   HOVS_REQUIRE(unit_index >= 0, manifest.string(), "no unit '", unit_name, "' in the manifest");
   const auto& uj = m["units"][unit_index];
-  in.truth = scenes::UnitFromJson(uj, manifest.string() + " (units)");
-  in.width = in.truth->rig.camera.width, in.height = in.truth->rig.camera.height;
+  const bool synthetic = uj.contains("mirror");
+  if (synthetic) {
+    in.truth = scenes::UnitFromJson(uj, manifest.string() + " (units)");
+    in.width = in.truth->rig.camera.width, in.height = in.truth->rig.camera.height;
+  }
+  calib::CheckerboardDetectOptions o = detect;
+  if (m.contains("boards") && !m["boards"].empty() && m["boards"][0].value("type", "") == "checker") {
+    const auto& b = m["boards"][0];
+    o.board.cols = b.at("inner_corners")[0], o.board.rows = b.at("inner_corners")[1], o.board.square = b.at("square");
+  } else {
+    HOVS_REQUIRE(o.board.square > 0 && !truth_corners, manifest.string(),
+                 "the manifest describes no checkerboard; give --board");
+  }
   std::mt19937_64 rng(seed);
   std::normal_distribution<double> N(0, noise > 0 ? noise : 1);
   for (const auto& fr : m["frames"])
     for (const auto& v : fr["views"]) {
       if (v["unit"] != uj["name"]) continue;
-      HOVS_REQUIRE(v.contains("ground_truth"), manifest.string(),
-                   "frame without ground truth: corner detection is not in hovs yet (issue 4); use --corners");
+      HOVS_REQUIRE(!truth_corners || v.contains("ground_truth"), manifest.string(),
+                   "--truth-corners needs ground truth, and frame ", v.value("image", "?"), " has none");
+      if (!truth_corners) {
+        std::vector<Vec2d> gt;
+        if (v.contains("ground_truth")) {
+          const auto side = nlohmann::json::parse(ReadFile(dir / v["ground_truth"]["sidecar"].get<std::string>()));
+          for (const auto& c : side["boards"][0]["corners"])
+            if (c["status"] == "visible") gt.emplace_back(c["pixel"][0].get<double>(), c["pixel"][1].get<double>());
+        }
+        DetectInto(dir / v["image"].get<std::string>(), v["image"], o, v.contains("ground_truth") ? &gt : nullptr,
+                   &in, &in.width, &in.height);
+        continue;
+      }
       const auto side = nlohmann::json::parse(ReadFile(dir / v["ground_truth"]["sidecar"].get<std::string>()));
       calib::BoardObservation o;
       o.image = v["image"];
@@ -65,8 +137,9 @@ Input FromDataset(const std::filesystem::path& manifest, const std::string& unit
       }
       in.obs.push_back(o);
     }
-  in.description = {{"dataset", manifest.string()}, {"unit", uj["name"]}, {"corners", "ground truth"},
-                    {"corner_noise_px", noise}, {"seed", seed}};
+  in.description = {{"dataset", manifest.string()}, {"unit", uj["name"]}};
+  if (truth_corners) in.description.update({{"corners", "ground truth"}, {"corner_noise_px", noise}, {"seed", seed}});
+  else in.description.update({{"corners", "hovs checkerboard detector"}, {"board", {o.board.cols, o.board.rows, o.board.square}}});
   return in;
 }
 
@@ -90,7 +163,9 @@ nlohmann::json PolyJson(const calib::PolynomialCalibration& r, const std::vector
 
 Runner SetupCalibrate(CLI::App* sub, const GlobalOptions* global) {
   struct Options {
-    std::string corners, size, dataset, unit, out = "results/calibration", loss = "none";
+    std::string corners, size, dataset, unit, images, board, out = "results/calibration", loss = "none";
+    bool truth_corners = false;
+    int subpix = 0;
     std::vector<int> degrees = {2, 3, 4, 5, 6};
     int degree = 4;
     double loss_scale = 1.0, noise = 0.0;
@@ -100,7 +175,12 @@ Runner SetupCalibrate(CLI::App* sub, const GlobalOptions* global) {
   auto o = std::make_shared<Options>();
   sub->add_option("--corners", o->corners, "corner table: image,corner,board_x_mm,board_y_mm,u_px,v_px");
   sub->add_option("--size", o->size, "image size WxH (with --corners)");
-  sub->add_option("--dataset", o->dataset, "dataset manifest (dataset.json) with ground-truth corners");
+  sub->add_option("--dataset", o->dataset, "dataset manifest (dataset.json): corners detected in its images");
+  sub->add_option("--images", o->images, "folder of images (png, jpg, tif, exr): corners detected");
+  sub->add_option("--board", o->board, "checkerboard COLSxROWSxSQUARE: inner corners and square (m), e.g. 7x6x0.03");
+  sub->add_flag("--truth-corners", o->truth_corners, "use a synthetic manifest's exact corners instead of detecting");
+  sub->add_option("--subpix-window", o->subpix, "cornerSubPix half window, px (0: 0.35 x the local square)")
+      ->capture_default_str();
   sub->add_option("--unit", o->unit, "unit name in the manifest (default: the first)");
   sub->add_option("--corner-noise", o->noise, "Gaussian noise added to ground-truth corners, px")->capture_default_str();
   sub->add_option("--seed", o->seed, "seed of the corner noise")->capture_default_str();
@@ -110,7 +190,12 @@ Runner SetupCalibrate(CLI::App* sub, const GlobalOptions* global) {
   sub->add_flag("--compare-omnidir", o->omnidir, "also run OpenCV omnidir on the same corners");
   sub->add_option("-o,--out", o->out, "report folder (replaced atomically)")->capture_default_str();
   return [o, global]() {
-    HOVS_REQUIRE(o->corners.empty() != o->dataset.empty(), "hovs calibrate", "give either --corners or --dataset");
+    HOVS_REQUIRE(int(!o->corners.empty()) + int(!o->dataset.empty()) + int(!o->images.empty()) == 1,
+                 "hovs calibrate", "give exactly one of --corners, --dataset and --images");
+    calib::CheckerboardDetectOptions detect;
+    detect.subpix_half_window = o->subpix;
+    if (!o->board.empty()) detect.board = ParseBoard(o->board);
+    else detect.board.square = 0;  // from the manifest
     Input in;
     if (!o->corners.empty()) {
       int w = 0, h = 0;
@@ -124,8 +209,32 @@ Runner SetupCalibrate(CLI::App* sub, const GlobalOptions* global) {
         for (const auto& p : ob.pixels)
           HOVS_REQUIRE(p.x() >= -0.5 && p.y() >= -0.5 && p.x() <= w - 0.5 && p.y() <= h - 0.5, o->corners,
                        "corner (", p.x(), ", ", p.y(), ") of ", ob.image, " lies outside the ", w, "x", h, " image");
+    } else if (!o->dataset.empty()) {
+      in = FromDataset(o->dataset, o->unit, o->truth_corners, o->noise, o->seed, detect);
     } else {
-      in = FromDataset(o->dataset, o->unit, o->noise, o->seed);
+      HOVS_REQUIRE(!o->board.empty(), "--images", "a folder of images needs --board");
+      HOVS_REQUIRE(std::filesystem::is_directory(o->images), o->images, "not a folder");
+      std::vector<std::filesystem::path> files;
+      for (const auto& e : std::filesystem::directory_iterator(o->images)) {
+        std::string ext = e.path().extension().string();
+        std::transform(ext.begin(), ext.end(), ext.begin(), ::tolower);
+        if (ext == ".png" || ext == ".jpg" || ext == ".jpeg" || ext == ".tif" || ext == ".tiff" || ext == ".exr" ||
+            ext == ".bmp" || ext == ".pgm")
+          files.push_back(e.path());
+      }
+      std::sort(files.begin(), files.end());
+      HOVS_REQUIRE(!files.empty(), o->images, "no images (png, jpg, tif, exr, bmp, pgm) in the folder");
+      for (const auto& f : files) DetectInto(f, f.filename().string(), detect, nullptr, &in, &in.width, &in.height);
+      in.description = {{"images", o->images}, {"corners", "hovs checkerboard detector"},
+                        {"board", {detect.board.cols, detect.board.rows, detect.board.square}}};
+    }
+    if (!in.detection.empty()) {
+      std::string failed;
+      for (const auto& d : in.detection)
+        if (!d["found"].get<bool>()) failed += "\n  " + d["image"].get<std::string>() + ": " + d["status"].get<std::string>();
+      if (!global->quiet && !failed.empty()) std::fprintf(stderr, "hovs calibrate: no board in%s\n", failed.c_str());
+      HOVS_REQUIRE(in.obs.size() >= 3, o->dataset.empty() ? o->images : o->dataset, "only ", in.obs.size(),
+                   " of ", in.detection.size(), " images have a usable board (at least 3 needed):", failed);
     }
     calib::PolynomialCalibrationOptions po;
     po.loss = o->loss, po.loss_scale = o->loss_scale;
@@ -150,6 +259,28 @@ Runner SetupCalibrate(CLI::App* sub, const GlobalOptions* global) {
     j["versions"] = design::DesignVersions();
     j["input"] = in.description;
     j["input"]["images"] = in.obs.size();
+    if (!in.detection.empty()) j["detection"] = in.detection;
+    std::string detection_summary;
+    if (!in.detection.empty()) {
+      int complete = 0, corners = 0;
+      double ss = 0;
+      int with_truth = 0;
+      for (const auto& d : in.detection) {
+        complete += d["complete"].get<bool>();
+        if (!d["found"].get<bool>()) continue;
+        corners += d["corners"].get<int>();
+        if (d.contains("rms_to_truth_px"))
+          ss += std::pow(d["rms_to_truth_px"].get<double>(), 2) * d["corners"].get<int>(), with_truth += d["corners"].get<int>();
+      }
+      detection_summary += "  detection: board in " + std::to_string(in.obs.size()) + " of " + std::to_string(in.detection.size()) +
+                 " images (" + std::to_string(complete) + " complete), " + std::to_string(corners) + " corners";
+      if (with_truth) {
+        const double rms = std::sqrt(ss / with_truth);
+        j["detection_rms_to_truth_px"] = rms;
+        detection_summary += ", RMS " + F("%.4f", rms) + " px from the exact corners";
+      }
+      detection_summary += "\n";
+    }
     j["polynomial"] = PolyJson(*chosen, in.obs);
     j["unified"] = {{"model", "unified_radtan"}, {"xi", uni.model.xi}, {"fx", uni.model.fx}, {"fy", uni.model.fy},
                     {"cx", uni.model.cx}, {"cy", uni.model.cy},
@@ -184,7 +315,7 @@ Runner SetupCalibrate(CLI::App* sub, const GlobalOptions* global) {
     StagedDirectory stage(o->out);
     WriteFileAtomic(stage.staging() / "calibration.json", j.dump(2) + "\n");
     WriteFileAtomic(stage.staging() / "calib_results.txt", calib::FormatOcamCalibResults(chosen->model));
-    std::string summary = "hovs calibrate: " + std::to_string(in.obs.size()) + " images\n";
+    std::string summary = "hovs calibrate: " + std::to_string(in.obs.size()) + " images\n" + detection_summary;
     summary += "  polynomial (degree " + std::to_string(chosen->model.Degree()) + "): RMS " + F("%.4f", chosen->rms) +
                " px, mean " + F("%.4f", chosen->mean) + " px (linear start " + F("%.3f", chosen->initial_rms) + " px)\n";
     summary += "  unified + radtan:         RMS " + F("%.4f", uni.rms) + " px\n";

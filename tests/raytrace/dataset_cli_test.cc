@@ -109,13 +109,31 @@ TEST(CalibrateCli, CalibratesASyntheticSetAgainstGroundTruthAndRejectsBadInput) 
   o.count = 9;
   const fs::path dir = test::Scratch("calibrate-cli", "work");
   scenes::WriteCalibrationDataset(cfg, o, dir / "set", {{"hovs", "test"}});
-  const auto ok = test::Hovs("-q calibrate --dataset " + (dir / "set" / "dataset.json").string() + " --out " +
-                             (dir / "cal").string());
+  // The solver alone, on the exact corners.
+  const auto ok = test::Hovs("-q calibrate --truth-corners --dataset " + (dir / "set" / "dataset.json").string() +
+                             " --out " + (dir / "cal").string());
   ASSERT_EQ(ok.exit_code, 0) << ok.output;
   const auto j = nlohmann::json::parse(ReadFile(dir / "cal" / "calibration.json"));
   EXPECT_LT(j["polynomial"]["rms_px"].get<double>(), 0.01);
   EXPECT_LT(j["ground_truth"]["mean_ray_angle_deg"].get<double>(), 0.01);
   EXPECT_EQ(j["order_selection"].size(), 5u);
+  // Detection + calibration on the images, at half the resolution (1375 x 1100, squares of 20-55 px) and 2
+  // samples per pixel.
+  auto half = scenes::LoadSceneConfig(std::string(HOVS_SOURCE_DIR) + "/scenes/reference_calibration.yaml");
+  half.description.units[0].rig.camera = PinholeCamera<double>::FromPhysical(0.016, 2 * 4.54e-6, 1375, 1100);
+  half.render.samples = 2;
+  scenes::WriteCalibrationDataset(half, o, dir / "half", {{"hovs", "test"}});
+  const auto det = test::Hovs("-q calibrate --dataset " + (dir / "half" / "dataset.json").string() + " --out " +
+                              (dir / "cal-det").string());
+  ASSERT_EQ(det.exit_code, 0) << det.output;
+  const auto jd = nlohmann::json::parse(ReadFile(dir / "cal-det" / "calibration.json"));
+  ASSERT_EQ(jd["detection"].size(), 9u);
+  for (const auto& d : jd["detection"]) EXPECT_TRUE(d["complete"].get<bool>()) << d.dump();
+  std::printf("[ figure ] 1375 x 1100, 2 spp: detection RMS %.3f px from the exact corners, calibration RMS %.3f px, "
+              "mean ray angle %.4f deg\n", jd["detection_rms_to_truth_px"].get<double>(),
+              jd["polynomial"]["rms_px"].get<double>(), jd["ground_truth"]["mean_ray_angle_deg"].get<double>());
+  EXPECT_LT(jd["detection_rms_to_truth_px"].get<double>(), 0.3);
+  EXPECT_LT(jd["polynomial"]["rms_px"].get<double>(), 0.3);
   // Bad input: one clear error, exit 2, no report.
   const auto rejected = [&](const std::string& args, const std::string& needle) {
     const auto r = test::Hovs("calibrate " + args + " --out " + (dir / "bad").string());
@@ -126,7 +144,10 @@ TEST(CalibrateCli, CalibratesASyntheticSetAgainstGroundTruthAndRejectsBadInput) 
   const std::string vmr = std::string(HOVS_SOURCE_DIR) + "/../shared/data/vmr/reference_corners.csv";
   rejected("--corners " + vmr + " --size 1024by768", "expected WxH");
   rejected("--corners " + vmr + " --size 640x480", "lies outside the 640x480 image");
-  rejected("--corners " + vmr + " --size 1024x768 --dataset x.json", "either --corners or --dataset");
+  rejected("--corners " + vmr + " --size 1024x768 --dataset x.json", "exactly one of --corners, --dataset and --images");
+  rejected("--images " + (dir / "set" / "images").string(), "needs --board");
+  rejected("--images " + (dir / "set" / "images").string() + " --board 5x4x0.03", "larger than the 5x4 board");
+  rejected("--images " + (dir / "set" / "images").string() + " --board 7x5", "expected COLSxROWSxSQUARE");
   rejected("--corners /nonexistent.csv --size 1024x768", "cannot open the corner table");
   std::ofstream(dir / "two.csv") << "image,corner,board_x_mm,board_y_mm,u_px,v_px\n"
                                  << "a.png,0,0,0,100,100\na.png,1,30,0,110,100\nb.png,0,0,0,200,200\n";

@@ -1,0 +1,71 @@
+// Checkerboard corners in catadioptric images, where cv::findChessboardCorners fails: the board is bent into an
+// arc, its squares shrink by a factor of several from one end to the other and it may be cut by the mirror rim or
+// the camera's own reflection.
+//
+// Method (in the original image, so no resampling touches the corners):
+//  1. Saddle candidates: the scale-normalised Hessian determinant -(Ixx Iyy - Ixy^2) at two scales, local maxima.
+//  2. Each candidate is refined (cv::cornerSubPix) and verified on a circle around it: exactly four
+//     bright/dark transitions, enough contrast, opposite transitions about 180 degrees apart (two edge lines
+//     cross there). The two edge directions and the polarity are kept.
+//  3. A grid grows from seed candidates: neighbours are found along the edge lines (adjacent corners share an
+//     edge, so the line joining them is an edge direction of both, and their polarity alternates); whole rows and
+//     columns are added while every new corner is found near its position extrapolated (quadratically) from the
+//     two or three corners before it, which follows the mirror's distortion. The largest grid wins.
+//  4. The grid is labelled against the board: its axes are matched to the board's, and its handedness is fixed by
+//     the expected orientation in the image (one mirror reflection mirrors the board; the sign is an option).
+//     Partial grids are labelled from their own first corner: for monocular calibration, where each image has its
+//     own pose, that is exact. Grids larger than the board are refused (the board does not match the image).
+//  5. Sub-pixel refinement (cv::cornerSubPix) with a window scaled to the local square size.
+// An optional validity predicate (from a prior model: outside the rim, the camera's reflection) drops candidates.
+// Every image gets a status: what was found, or why nothing was.
+#pragma once
+
+#include <functional>
+#include <opencv2/core.hpp>
+#include <string>
+#include <vector>
+
+#include "calib/polynomial_calibration.h"
+#include "core/types.h"
+
+namespace hovs::calib {
+
+struct CheckerboardSpec {
+  int cols = 7;          // inner corners along the board's x axis
+  int rows = 5;          // inner corners along y
+  double square = 0.03;  // metres
+  void Check(const std::string& where) const;
+};
+
+struct CheckerboardDetectOptions {
+  CheckerboardSpec board;
+  int min_corners = 12;          // smaller grids are not reported as found
+  bool allow_partial = true;     // false: only the complete board counts as found
+  // Expected sign of cross(x axis, y axis) of the board in the image ((u, v) pixels): -1 for a board seen through
+  // one mirror reflection from its printed side (catadioptric cameras), +1 for a direct view.
+  int orientation = -1;
+  double min_contrast = 0.06;    // bright minus dark on the verification circle, in [0, 1] grey
+  int max_seeds = 60;            // seed candidates tried (strongest first)
+  int subpix_half_window = 0;    // cv::cornerSubPix half window; 0: 0.35 x the local square size, in [2, 11]
+  std::function<bool(const Vec2d&)> valid;  // optional: pixels where the board can be seen (prior model)
+  void Check(const std::string& where) const;
+};
+
+struct CheckerboardDetection {
+  bool found = false;
+  bool complete = false;   // every inner corner of the board
+  std::string status;      // e.g. "complete 7x5", "partial 5x4 (20 of 35)", "no grid: 3 saddle candidates"
+  int candidates = 0;      // verified saddle points in the image
+  int grid_cols = 0, grid_rows = 0;
+  std::vector<Vec2d> pixels;        // refined corners (u, v)
+  std::vector<Vec3d> board_points;  // board frame, metres, z = 0
+  std::vector<Eigen::Vector2i> indices;      // (column, row) on the board
+};
+
+// image: 8-bit grey (CV_8UC1). Throws hovs::Error for an empty or non-grey image or bad options.
+CheckerboardDetection DetectCheckerboard(const cv::Mat& image, const CheckerboardDetectOptions& options);
+
+// Convenience: a detection as a calibration observation.
+BoardObservation ToObservation(const CheckerboardDetection& detection, const std::string& image_name);
+
+}  // namespace hovs::calib
