@@ -181,10 +181,15 @@ Runner SetupDepth(CLI::App* sub, const GlobalOptions* global) {
       rect.left.DecodeView(0, &mx, &my);
       struct Band { double lo, hi; std::vector<double> rel; int pixels = 0; };
       std::vector<Band> bands = {{1, 2, {}}, {2, 4, {}}, {4, 8, {}}, {8, 16, {}}, {16, 64, {}}};
+      // Error map (error_map.png): |relative error| from 0 (blue) to 5 % and above (red); black where the
+      // depth is masked, grey where there is no ground truth.
+      std::vector<float> emap(size_t(d.width) * d.height * 3, 0.25f);
       for (size_t k = 0; k < mx.size(); ++k) {
         if (mx[k] < 0) continue;
         const double z = Z[size_t(std::lround(my[k])) * exr.width + size_t(std::lround(mx[k]))];
         if (!std::isfinite(z)) continue;
+        const float t = d.valid[k] ? float(std::min(1.0, std::abs(d.range[k] - z) / z / 0.05)) : -1.f;
+        emap[3 * k] = t < 0 ? 0.f : t, emap[3 * k + 1] = t < 0 ? 0.f : 1 - std::abs(2 * t - 1), emap[3 * k + 2] = t < 0 ? 0.f : 1 - t;
         for (auto& b : bands)
           if (z >= b.lo && z < b.hi) {
             ++b.pixels;
@@ -207,7 +212,8 @@ Runner SetupDepth(CLI::App* sub, const GlobalOptions* global) {
                       b.pixels, 100 * valid, 100 * median, 100 * within);
         table += line;
       }
-      j["ground_truth"] = {{"exr", vl.exr.string()}, {"bands", rows}};
+      j["ground_truth"] = {{"exr", vl.exr.string()}, {"bands", rows}, {"error_map", "error_map.png"}};
+      raytrace::WriteImage(staged.staging() / "error_map.png", d.width, d.height, 3, emap, 8);
     }
     WriteFileAtomic(staged.staging() / "depth.json", j.dump(1));
     staged.Commit();

@@ -14,14 +14,17 @@ Runner SetupRender(CLI::App* sub, const GlobalOptions* global) {
     std::string out = "results/render";
     int samples = 0;
     long long seed = -1;
+    int downscale = 1;
   };
   auto o = std::make_shared<Options>();
   sub->add_option("-s,--scene", o->scene, "scene file (YAML)")->capture_default_str();
   sub->add_option("-o,--out", o->out, "output folder (replaced atomically)")->capture_default_str();
   sub->add_option("--samples", o->samples, "samples per pixel (overrides the scene)");
   sub->add_option("--seed", o->seed, "render seed (overrides the scene)");
+  sub->add_option("--downscale", o->downscale, "same optics at 1/N of the resolution (quick runs)")->capture_default_str();
   return [o, global]() {
     scenes::SceneConfig cfg = scenes::LoadSceneConfig(o->scene);
+    scenes::DownscaleCameras(&cfg, o->downscale);
     if (o->samples != 0) cfg.render.samples = o->samples;
     if (o->seed >= 0) cfg.render.seed = static_cast<uint64_t>(o->seed);
     cfg.render.Check("--samples/--seed");
@@ -39,6 +42,9 @@ Runner SetupDataset(CLI::App* sub, const GlobalOptions* global) {
     int count = 0;
     uint64_t seed = 1;
     int samples = 0;
+    int downscale = 1;
+    std::string unit;
+    std::vector<double> elevation;
   };
   auto o = std::make_shared<Options>();
   sub->add_option("-s,--scene", o->scene, "base scene: units, background (its boards are replaced)")->capture_default_str();
@@ -47,12 +53,19 @@ Runner SetupDataset(CLI::App* sub, const GlobalOptions* global) {
   sub->add_option("-n,--count", o->count, "frames (default: 9 mono, 12 stereo)");
   sub->add_option("--seed", o->seed, "seed of the board poses")->capture_default_str();
   sub->add_option("--samples", o->samples, "samples per pixel (overrides the scene)");
+  sub->add_option("--downscale", o->downscale, "same optics at 1/N of the resolution (quick runs)")->capture_default_str();
+  sub->add_option("--unit", o->unit, "mono_calibration: the unit to calibrate (default: the scene's first)");
+  sub->add_option("--elevation", o->elevation, "board centre elevation range MIN MAX, degrees (default: per kind)")
+      ->expected(2);
   return [o, global]() {
     scenes::SceneConfig cfg = scenes::LoadSceneConfig(o->scene);
+    scenes::DownscaleCameras(&cfg, o->downscale);
+    if (!o->unit.empty()) scenes::SelectUnit(&cfg, o->unit);
     if (o->samples != 0) cfg.render.samples = o->samples;
     cfg.render.Check("--samples");
     scenes::DatasetOptions d = scenes::DatasetOptions::ForKind(o->kind);
     if (o->count != 0) d.count = o->count;
+    if (!o->elevation.empty()) d.min_elevation_deg = o->elevation[0], d.max_elevation_deg = o->elevation[1];
     d.seed = o->seed;
     d.progress = !global->quiet;
     scenes::WriteCalibrationDataset(cfg, d, o->out, design::DesignVersions());

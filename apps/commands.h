@@ -24,6 +24,12 @@ struct Command {
 
 const std::vector<Command>& Commands();
 
+// Parses and runs one command line (argv[0] is the program). rethrow = false: errors are printed and turned into
+// exit codes (2 bad input, 3 internal); rethrow = true: hovs::Error propagates (used by hovs validate, which
+// names the failing stage).
+int RunCommandLine(int argc, const char* const* argv, bool rethrow);
+int RunCommandLine(const std::vector<std::string>& args, bool rethrow);  // args without the program name
+
 // One entry per subcommand, defined in cmd_<name>.cc.
 Runner SetupDesign(CLI::App* sub, const GlobalOptions* global);
 Runner SetupVersion(CLI::App* sub, const GlobalOptions* global);
@@ -33,5 +39,6 @@ Runner SetupCalibrate(CLI::App* sub, const GlobalOptions* global);
 Runner SetupUnwrap(CLI::App* sub, const GlobalOptions* global);
 Runner SetupDepth(CLI::App* sub, const GlobalOptions* global);
 Runner SetupStereoCalibrate(CLI::App* sub, const GlobalOptions* global);
+Runner SetupValidate(CLI::App* sub, const GlobalOptions* global);
 
 }  // namespace hovs::apps

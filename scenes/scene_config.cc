@@ -381,4 +381,27 @@ SceneConfig LoadSceneConfig(const std::filesystem::path& path) {
   return ParseSceneConfig(ReadFile(path), path.string(), path.parent_path());
 }
 
+void DownscaleCameras(SceneConfig* cfg, int factor) {
+  HOVS_REQUIRE(factor >= 1 && factor <= 16, "--downscale", "factor must lie in [1, 16] (got ", factor, ")");
+  if (factor == 1) return;
+  for (auto& u : cfg->description.units) {
+    auto& c = u.rig.camera;
+    HOVS_REQUIRE(c.width % factor == 0 && c.height % factor == 0, "--downscale", "unit ", u.name, ": ", c.width, "x",
+                 c.height, " is not divisible by ", factor);
+    // Pixel centres: u' = (u + 0.5) / f - 0.5.
+    c.width /= factor, c.height /= factor;
+    c.fx /= factor, c.fy /= factor;
+    c.cx = (c.cx + 0.5) / factor - 0.5, c.cy = (c.cy + 0.5) / factor - 0.5;
+  }
+}
+
+void SelectUnit(SceneConfig* cfg, const std::string& name) {
+  auto& units = cfg->description.units;
+  const auto it = std::find_if(units.begin(), units.end(), [&](const auto& u) { return u.name == name; });
+  std::string names;
+  for (const auto& u : units) names += " " + u.name;
+  HOVS_REQUIRE(it != units.end(), "--unit", "no unit '", name, "' in scene ", cfg->name, " (units:", names, ")");
+  std::rotate(units.begin(), it, it + 1);
+}
+
 }  // namespace hovs::scenes

@@ -50,6 +50,13 @@ SceneConfig ParseSceneConfig(const std::string& yaml_text, const std::string& so
                              const std::filesystem::path& base_dir);
 SceneConfig LoadSceneConfig(const std::filesystem::path& path);
 
+// The same optics at 1/factor of the resolution (pixel pitch times factor): for quick runs. Throws when a
+// camera's size is not divisible by factor.
+void DownscaleCameras(SceneConfig* cfg, int factor);
+
+// Moves the named unit to the front (monocular datasets render unit 0; the others stay in the scene as occluders).
+void SelectUnit(SceneConfig* cfg, const std::string& name);
+
 // The rect and texture for a board (ArUco boards are drawn with OpenCV's aruco module).
 raytrace::Rect MakeBoardRect(const BoardSpec& spec, const Rigid3d& world_from_board, int object_id);
 void CheckBoard(const BoardSpec& spec, const std::string& where);
