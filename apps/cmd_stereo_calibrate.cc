@@ -9,6 +9,8 @@
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 #include <algorithm>
+#include <set>
+#include <tuple>
 
 #include "apps/commands.h"
 #include "apps/model_files.h"
@@ -135,7 +137,10 @@ Runner SetupStereoCalibrate(CLI::App* sub, const GlobalOptions* global) {
       struct Band { double lo, hi; std::vector<double> rel; };
       std::vector<Band> bands = {{0, 1, {}}, {1, 2, {}}, {2, 3, {}}, {3, 5, {}}, {5, 1e9, {}}};
       double worst = 0, ss = 0;
-      int n = 0;
+      int n = 0, excluded = 0;
+      std::vector<double> all_rel;
+      std::set<std::tuple<std::string, std::string, int>> outlier_set;
+      for (const auto& x : c.outliers) outlier_set.insert({x.pair, x.unit, x.corner});
       for (const auto& fr : m.at("frames")) {
         if (!fr.contains("world_from_board")) continue;
         const std::string name = "frame" + std::to_string(fr.at("id").get<int>());
@@ -151,6 +156,11 @@ Runner SetupStereoCalibrate(CLI::App* sub, const GlobalOptions* global) {
           const auto r = rpx.find(p.id);
           const auto b = board.find(p.id);
           if (r == rpx.end() || b == board.end()) continue;
+          // Corners the calibration rejected as mis-detected (listed in stereo.json) are not triangulated.
+          if (outlier_set.count({name, "left", p.id}) || outlier_set.count({name, "right", p.id})) {
+            ++excluded;
+            continue;
+          }
           Vec3d bl, br;
           if (!left.MirrorFromImg(p.pixel, &bl) || !right.MirrorFromImg(r->second, &br)) continue;
           const auto t = depth::Triangulate(rig, bl, br, 1e-4);
@@ -160,6 +170,7 @@ Runner SetupStereoCalibrate(CLI::App* sub, const GlobalOptions* global) {
           for (auto& band : bands)
             if (true_range >= band.lo && true_range < band.hi) band.rel.push_back(std::abs(rel));
           worst = std::max(worst, std::abs(rel)), ss += rel * rel, ++n;
+          all_rel.push_back(std::abs(rel));
         }
       }
       nlohmann::json tab = nlohmann::json::array();
@@ -170,8 +181,11 @@ Runner SetupStereoCalibrate(CLI::App* sub, const GlobalOptions* global) {
                        {"median_rel_error", band.rel[band.rel.size() / 2]}, {"max_rel_error", band.rel.back()}});
       }
       if (n > 0) {
+        std::sort(all_rel.begin(), all_rel.end());
         j["sparse_depth"] = {{"points", n}, {"rms_rel_error", std::sqrt(ss / n)}, {"max_rel_error", worst},
-                             {"bands", tab}};
+                             {"median_rel_error", all_rel[all_rel.size() / 2]},
+                             {"p95_rel_error", all_rel[std::min(all_rel.size() - 1, all_rel.size() * 95 / 100)]},
+                             {"excluded_outlier_corners", excluded}, {"bands", tab}};
         std::snprintf(line, sizeof line, "  sparse depth of %d marker corners: RMS %.3f %%, worst %.3f %%\n", n,
                       100 * std::sqrt(ss / n), 100 * worst);
         summary += line;

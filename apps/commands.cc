@@ -16,6 +16,7 @@ const std::vector<Command>& Commands() {
       {"unwrap", "Virtual perspective views and panoramas from catadioptric images (any model), mapping files", SetupUnwrap},
       {"stereo-calibrate", "Relative pose of two units from ArUco board pairs (detection in unwrapped views, joint solve)", SetupStereoCalibrate},
       {"depth", "Dense and sparse binocular depth of a two-unit dataset (rectification, SGBM, point clouds)", SetupDepth},
+      {"capture", "Capture frames from GigE Vision cameras (Aravis), a replay or the GigE Vision simulator into a dataset", SetupCapture},
       {"validate", "End to end against ground truth: design, renders, detection, calibration, stereo, views, depth; report", SetupValidate},
       {"version", "Print the versions of hovs and its libraries", SetupVersion},
   };

@@ -40,5 +40,6 @@ Runner SetupUnwrap(CLI::App* sub, const GlobalOptions* global);
 Runner SetupDepth(CLI::App* sub, const GlobalOptions* global);
 Runner SetupStereoCalibrate(CLI::App* sub, const GlobalOptions* global);
 Runner SetupValidate(CLI::App* sub, const GlobalOptions* global);
+Runner SetupCapture(CLI::App* sub, const GlobalOptions* global);
 
 }  // namespace hovs::apps

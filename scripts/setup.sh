@@ -10,7 +10,7 @@ PACKAGES=(
   libopenimageio-dev openimageio-tools libopenexr-dev
   libopencv-dev libopencv-contrib-dev
   libvtk9-dev mpi-default-dev xvfb xauth
-  libaravis-dev aravis-tools libusb-1.0-0-dev
+  libaravis-dev aravis-tools libusb-1.0-0-dev iproute2 util-linux
   libcli11-dev nlohmann-json3-dev libyaml-cpp-dev libspdlog-dev libfmt-dev
   libgtest-dev libgmock-dev libbenchmark-dev
 )

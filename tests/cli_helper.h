@@ -16,8 +16,9 @@ struct CliRun {
   std::string output;
 };
 
-inline CliRun Hovs(const std::string& args) {
-  const std::string cmd = std::string(HOVS_BINARY) + " " + args + " 2>&1";
+// Any shell command line: exit code and combined output.
+inline CliRun Run(const std::string& command) {
+  const std::string cmd = command + " 2>&1";
   CliRun r;
   FILE* pipe = popen(cmd.c_str(), "r");
   if (!pipe) return r;
@@ -28,6 +29,8 @@ inline CliRun Hovs(const std::string& args) {
   r.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
   return r;
 }
+
+inline CliRun Hovs(const std::string& args) { return Run(std::string(HOVS_BINARY) + " " + args); }
 
 // A fresh folder path under the system temp folder (removed first), unique per process.
 inline std::filesystem::path Scratch(const std::string& suite, const std::string& name) {

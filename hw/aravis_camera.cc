@@ -1,0 +1,292 @@
+// The Aravis 0.8 camera source.
+#include <arv.h>
+
+#include <chrono>
+#include <cstring>
+
+#include "core/error.h"
+#include "hw/camera_source.h"
+
+namespace hovs::hw {
+
+void CaptureSettings::Check(const std::string& where) const {
+  HOVS_REQUIRE(pixel_format == "Mono8" || pixel_format == "BayerRG8" || pixel_format == "Mono16", where,
+               "unsupported pixel format '", pixel_format, "' (Mono8, BayerRG8, Mono16)");
+  HOVS_REQUIRE(width >= 0 && height >= 0 && offset_x >= 0 && offset_y >= 0, where, "region must not be negative");
+  HOVS_REQUIRE(buffers >= 2 && buffers <= 256, where, "buffers must lie in [2, 256] (got ", buffers, ")");
+  HOVS_REQUIRE(trigger == "free" || trigger == "software" || trigger.rfind("Line", 0) == 0, where,
+               "trigger must be free, software or a line name like Line0 (got '", trigger, "')");
+  HOVS_REQUIRE(packet_size == 0 || (packet_size >= 576 && packet_size <= 16384), where,
+               "packet size must lie in [576, 16384] bytes (got ", packet_size, ")");
+  HOVS_REQUIRE(socket_buffer_bytes >= 0, where, "socket buffer size must not be negative");
+}
+
+nlohmann::json StreamStats::ToJson() const {
+  return {{"completed", completed}, {"failures", failures}, {"underruns", underruns},
+          {"missing_packets", missing_packets}, {"resent_packets", resent_packets},
+          {"incomplete_seen", incomplete_seen}};
+}
+
+namespace {
+
+uint64_t MonotonicNs() {
+  return static_cast<uint64_t>(
+      std::chrono::duration_cast<std::chrono::nanoseconds>(std::chrono::steady_clock::now().time_since_epoch()).count());
+}
+
+// Throws when err is set, with the camera and the step in the message; frees err.
+void Check(GError* err, const std::string& camera, const std::string& what) {
+  if (!err) return;
+  const std::string msg = err->message ? err->message : "unknown error";
+  g_error_free(err);
+  throw Error("camera " + camera, what + ": " + msg);
+}
+
+const char* StatusName(ArvBufferStatus s) {
+  switch (s) {
+    case ARV_BUFFER_STATUS_SUCCESS: return "success";
+    case ARV_BUFFER_STATUS_CLEARED: return "cleared";
+    case ARV_BUFFER_STATUS_TIMEOUT: return "timeout";
+    case ARV_BUFFER_STATUS_MISSING_PACKETS: return "missing packets";
+    case ARV_BUFFER_STATUS_WRONG_PACKET_ID: return "wrong packet id";
+    case ARV_BUFFER_STATUS_SIZE_MISMATCH: return "size mismatch";
+    case ARV_BUFFER_STATUS_FILLING: return "filling";
+    case ARV_BUFFER_STATUS_ABORTED: return "aborted";
+    default: return "unknown";
+  }
+}
+
+class AravisCamera : public CameraSource {
+ public:
+  AravisCamera(const std::string& id, const CaptureSettings& s) : id_(id), settings_(s) {
+    s.Check("camera " + id);
+    try {
+      Configure();
+    } catch (...) {
+      // Release the control channel at once: a camera left open keeps its exclusive control privilege.
+      if (camera_) g_object_unref(camera_);
+      camera_ = nullptr;
+      throw;
+    }
+  }
+
+  void Configure() {
+    const std::string& id = id_;
+    const CaptureSettings& s = settings_;
+    GError* err = nullptr;
+    camera_ = arv_camera_new(id.c_str(), &err);
+    if (!camera_) {
+      std::string msg = err && err->message ? err->message : "no such device";
+      if (err) g_error_free(err);
+      throw Error("camera " + id, "not found (" + msg + "); list cameras with arv-tool-0.8");
+    }
+    Check(err, id, "open");
+    const bool gv = arv_camera_is_gv_device(camera_);
+    if (gv) {
+      arv_camera_gv_set_stream_options(camera_, s.packet_socket ? ARV_GV_STREAM_OPTION_NONE
+                                                                : ARV_GV_STREAM_OPTION_PACKET_SOCKET_DISABLED);
+      if (s.packet_size > 0) {
+        arv_camera_gv_set_packet_size(camera_, s.packet_size, &err);
+        Check(err, id, "packet size " + std::to_string(s.packet_size));
+      }
+      if (s.packet_delay_ns >= 0) {
+        arv_camera_gv_set_packet_delay(camera_, s.packet_delay_ns, &err);
+        Check(err, id, "packet delay");
+      }
+    }
+    // Pixel format: only those hovs can process, and only if the camera offers it.
+    guint n = 0;
+    const char** formats = arv_camera_dup_available_pixel_formats_as_strings(camera_, &n, &err);
+    Check(err, id, "pixel formats");
+    bool offered = false;
+    std::string list;
+    for (guint k = 0; k < n; ++k) {
+      offered = offered || s.pixel_format == formats[k];
+      list += std::string(k ? ", " : "") + formats[k];
+    }
+    g_free(formats);
+    HOVS_REQUIRE(offered, "camera " + id, "pixel format ", s.pixel_format, " is not offered (the camera has: ", list, ")");
+    arv_camera_set_pixel_format_from_string(camera_, s.pixel_format.c_str(), &err);
+    Check(err, id, "pixel format " + s.pixel_format);
+    if (s.width > 0 || s.height > 0 || s.offset_x > 0 || s.offset_y > 0) {
+      gint sw = 0, sh = 0;
+      arv_camera_get_sensor_size(camera_, &sw, &sh, &err);
+      Check(err, id, "sensor size");
+      const int w = s.width > 0 ? s.width : sw - s.offset_x, h = s.height > 0 ? s.height : sh - s.offset_y;
+      HOVS_REQUIRE(s.offset_x + w <= sw && s.offset_y + h <= sh, "camera " + id, "region ", w, "x", h, "+",
+                   s.offset_x, "+", s.offset_y, " exceeds the ", sw, "x", sh, " sensor");
+      arv_camera_set_region(camera_, s.offset_x, s.offset_y, w, h, &err);
+      Check(err, id, "region");
+    }
+    if (s.exposure_us >= 0) {
+      arv_camera_set_exposure_time(camera_, s.exposure_us, &err);
+      Check(err, id, "exposure");
+    }
+    if (s.gain >= 0) {
+      arv_camera_set_gain(camera_, s.gain, &err);
+      Check(err, id, "gain");
+    }
+    if (s.trigger == "free") {
+      arv_camera_clear_triggers(camera_, &err);
+      Check(err, id, "free running (clear triggers)");
+      if (s.frame_rate > 0) {
+        arv_camera_set_frame_rate(camera_, s.frame_rate, &err);
+        Check(err, id, "frame rate");
+      }
+    } else {
+      arv_camera_set_trigger(camera_, s.trigger == "software" ? "Software" : s.trigger.c_str(), &err);
+      Check(err, id, "trigger " + s.trigger);
+    }
+    for (const auto& [name, value] : s.features) SetFeature(name, value);
+  }
+
+  ~AravisCamera() override {
+    try {
+      Stop();
+    } catch (...) {
+    }
+    if (stream_) g_object_unref(stream_);
+    if (camera_) g_object_unref(camera_);
+  }
+
+  void SetFeature(const std::string& name, const std::string& value) {
+    ArvDevice* dev = arv_camera_get_device(camera_);
+    ArvGcNode* node = arv_device_get_feature(dev, name.c_str());
+    HOVS_REQUIRE(node && ARV_IS_GC_FEATURE_NODE(node), "camera " + id_, "has no GenICam feature '", name, "'");
+    GError* err = nullptr;
+    if (ARV_IS_GC_COMMAND(node)) {
+      arv_gc_command_execute(ARV_GC_COMMAND(node), &err);
+    } else {
+      arv_gc_feature_node_set_value_from_string(ARV_GC_FEATURE_NODE(node), value.c_str(), &err);
+    }
+    Check(err, id_, "feature " + name + " = " + value);
+    applied_features_[name] = value;
+  }
+
+  nlohmann::json Info() const override {
+    GError* err = nullptr;
+    auto str = [&](const char* v) { return std::string(v ? v : ""); };
+    nlohmann::json j = {{"id", id_},
+                        {"vendor", str(arv_camera_get_vendor_name(camera_, &err))},
+                        {"model", str(arv_camera_get_model_name(camera_, &err))},
+                        {"serial", str(arv_camera_get_device_serial_number(camera_, &err))},
+                        {"pixel_format", settings_.pixel_format},
+                        {"trigger", settings_.trigger}};
+    if (err) g_error_free(err), err = nullptr;
+    gint x = 0, y = 0, w = 0, h = 0;
+    arv_camera_get_region(camera_, &x, &y, &w, &h, &err);
+    if (!err) j["region"] = {x, y, w, h};
+    else g_error_free(err), err = nullptr;
+    const double exposure = arv_camera_get_exposure_time(camera_, &err);
+    if (!err) j["exposure_us"] = exposure;
+    else g_error_free(err), err = nullptr;
+    const double gain = arv_camera_get_gain(camera_, &err);
+    if (!err) j["gain"] = gain;
+    else g_error_free(err), err = nullptr;
+    if (arv_camera_is_gv_device(camera_)) {
+      const int ps = arv_camera_gv_get_packet_size(camera_, &err);
+      if (!err) j["packet_size"] = ps;
+      else g_error_free(err), err = nullptr;
+    }
+    j["features"] = applied_features_;
+    return j;
+  }
+
+  void Start() override {
+    HOVS_REQUIRE(!running_, "camera " + id_, "already started");
+    GError* err = nullptr;
+    if (!stream_) {
+      stream_ = arv_camera_create_stream(camera_, nullptr, nullptr, &err);
+      Check(err, id_, "create stream");
+      HOVS_REQUIRE(stream_, "camera " + id_, "cannot create a stream");
+      if (ARV_IS_GV_STREAM(stream_)) {
+        if (settings_.socket_buffer_bytes > 0)
+          g_object_set(stream_, "socket-buffer", ARV_GV_STREAM_SOCKET_BUFFER_FIXED, "socket-buffer-size",
+                       settings_.socket_buffer_bytes, nullptr);
+        g_object_set(stream_, "packet-resend",
+                     settings_.packet_resend ? ARV_GV_STREAM_PACKET_RESEND_ALWAYS : ARV_GV_STREAM_PACKET_RESEND_NEVER,
+                     nullptr);
+      }
+      const guint payload = arv_camera_get_payload(camera_, &err);
+      Check(err, id_, "payload size");
+      for (int k = 0; k < settings_.buffers; ++k) arv_stream_push_buffer(stream_, arv_buffer_new(payload, nullptr));
+    }
+    arv_camera_start_acquisition(camera_, &err);
+    Check(err, id_, "start acquisition");
+    running_ = true;
+  }
+
+  std::optional<Frame> Grab(double timeout_s) override {
+    HOVS_REQUIRE(running_, "camera " + id_, "Grab before Start");
+    ArvBuffer* b = arv_stream_timeout_pop_buffer(stream_, static_cast<guint64>(timeout_s * 1e6));
+    if (!b) return std::nullopt;
+    Frame f;
+    const ArvBufferStatus st = arv_buffer_get_status(b);
+    f.complete = st == ARV_BUFFER_STATUS_SUCCESS;
+    f.status = StatusName(st);
+    f.frame_id = arv_buffer_get_frame_id(b);
+    f.device_ns = arv_buffer_get_timestamp(b);
+    f.system_ns = MonotonicNs();
+    f.pixel_format = settings_.pixel_format;
+    if (f.complete && arv_buffer_get_payload_type(b) == ARV_BUFFER_PAYLOAD_TYPE_IMAGE) {
+      f.width = arv_buffer_get_image_width(b), f.height = arv_buffer_get_image_height(b);
+      size_t size = 0;
+      const auto* data = static_cast<const uint8_t*>(arv_buffer_get_data(b, &size));
+      const size_t need = size_t(f.width) * f.height * f.BytesPerPixel();
+      if (size >= need) f.data.assign(data, data + need);
+      else f.complete = false, f.status = "short image payload";
+    } else if (f.complete) {
+      f.complete = false, f.status = "not an image payload";
+    }
+    if (!f.complete) ++incomplete_;
+    arv_stream_push_buffer(stream_, b);
+    return f;
+  }
+
+  void SoftwareTrigger() override {
+    HOVS_REQUIRE(settings_.trigger == "software", "camera " + id_, "software trigger needs --trigger software");
+    GError* err = nullptr;
+    arv_camera_software_trigger(camera_, &err);
+    Check(err, id_, "software trigger");
+  }
+
+  void Stop() override {
+    if (!running_) return;
+    GError* err = nullptr;
+    arv_camera_stop_acquisition(camera_, &err);
+    running_ = false;
+    Check(err, id_, "stop acquisition");
+  }
+
+  StreamStats Stats() const override {
+    StreamStats s;
+    s.incomplete_seen = incomplete_;
+    if (!stream_) return s;
+    guint64 c = 0, f = 0, u = 0;
+    arv_stream_get_statistics(stream_, &c, &f, &u);
+    s.completed = c, s.failures = f, s.underruns = u;
+    if (ARV_IS_GV_STREAM(stream_)) {
+      guint64 resent = 0, missing = 0;
+      arv_gv_stream_get_statistics(ARV_GV_STREAM(stream_), &resent, &missing);
+      s.resent_packets = resent, s.missing_packets = missing;
+    }
+    return s;
+  }
+
+ private:
+  std::string id_;
+  CaptureSettings settings_;
+  ArvCamera* camera_ = nullptr;
+  ArvStream* stream_ = nullptr;
+  bool running_ = false;
+  uint64_t incomplete_ = 0;
+  std::map<std::string, std::string> applied_features_;
+};
+
+}  // namespace
+
+std::unique_ptr<CameraSource> OpenAravisCamera(const std::string& id, const CaptureSettings& settings) {
+  return std::make_unique<AravisCamera>(id, settings);
+}
+
+}  // namespace hovs::hw

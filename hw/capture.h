@@ -1,0 +1,44 @@
+// Capture to a dataset: the same manifest the renderer writes (dataset.json, format hovs-dataset), without
+// ground truth, with per-frame metadata (device and host timestamps, frame ids, exposure, gain, serial numbers)
+// and the stream statistics. Only complete frames are written; incomplete ones are counted and listed. Images
+// and the manifest are written atomically (temporary file + rename) and the manifest is rewritten after every
+// frame, so an interrupted capture (Ctrl-C, a full disk) leaves a valid dataset of the frames written so far.
+#pragma once
+
+#include <atomic>
+#include <filesystem>
+#include <memory>
+#include <nlohmann/json.hpp>
+#include <string>
+#include <vector>
+
+#include "hw/camera_source.h"
+
+namespace hovs::hw {
+
+struct CaptureOptions {
+  int frames = 10;                    // frames (pairs) to write
+  double max_seconds = 0;             // 0: no limit
+  double grab_timeout_s = 3;          // per frame; a camera silent this long stops the capture with an error
+  uint64_t pair_tolerance_ns = 2'000'000;
+  bool software_trigger = false;      // trigger every camera before each frame
+  std::vector<std::string> unit_names;  // one per source (default unit0, unit1)
+  bool progress = false;
+  void Check(size_t sources, const std::string& where) const;
+};
+
+struct CaptureResult {
+  int written = 0;
+  int incomplete = 0;     // frames the stream delivered incomplete (not written)
+  uint64_t unpaired = 0;  // two cameras: frames without a partner within the tolerance
+  bool interrupted = false;
+  nlohmann::json manifest;
+};
+
+// sources: one or two started-or-not sources (Start is called here). stop: set asynchronously (SIGINT) to end
+// the capture early with a valid manifest.
+CaptureResult CaptureDataset(const std::vector<CameraSource*>& sources, const CaptureOptions& options,
+                             const std::filesystem::path& out, const nlohmann::json& versions,
+                             const std::atomic<bool>* stop);
+
+}  // namespace hovs::hw
