@@ -14,6 +14,8 @@
 #include "calib/checkerboard_detector.h"
 #include "calib/ocam_io.h"
 #include "calib/omnidir_reference.h"
+#include "calib/physical_calibration.h"
+#include "scenes/scene_config.h"
 #include "calib/polynomial_calibration.h"
 #include "core/error.h"
 #include "core/io.h"
@@ -164,7 +166,8 @@ nlohmann::json PolyJson(const calib::PolynomialCalibration& r, const std::vector
 Runner SetupCalibrate(CLI::App* sub, const GlobalOptions* global) {
   struct Options {
     std::string corners, size, dataset, unit, images, board, out = "results/calibration", loss = "none";
-    bool truth_corners = false;
+    bool truth_corners = false, physical = false, physical_intrinsics = false, physical_mirror = false;
+    std::string nominal;
     int subpix = 0;
     std::vector<int> degrees = {2, 3, 4, 5, 6};
     int degree = 4;
@@ -178,6 +181,16 @@ Runner SetupCalibrate(CLI::App* sub, const GlobalOptions* global) {
   sub->add_option("--dataset", o->dataset, "dataset manifest (dataset.json): corners detected in its images");
   sub->add_option("--images", o->images, "folder of images (png, jpg, tif, exr): corners detected");
   sub->add_option("--board", o->board, "checkerboard COLSxROWSxSQUARE: inner corners and square (m), e.g. 7x6x0.03");
+  sub->add_flag("--physical", o->physical,
+                "also calibrate the physical model: mirror a, b and the camera's tilt and offset, exact projection");
+  sub->add_option("--nominal", o->nominal,
+                  "--physical: scene YAML with the unit's design (default: the manifest's unit, aligned)");
+  sub->add_flag("--physical-intrinsics", o->physical_intrinsics,
+                "--physical: also estimate the camera intrinsics (default: held at the nominal camera's, i.e. a camera "
+                "calibrated without its mirror)");
+  sub->add_flag("--physical-mirror", o->physical_mirror,
+                "--physical: also estimate the mirror's a and b (default: held at the design; their common scale is "
+                "weakly observable and drifts with corner noise)");
   sub->add_flag("--truth-corners", o->truth_corners, "use a synthetic manifest's exact corners instead of detecting");
   sub->add_option("--subpix-window", o->subpix, "cornerSubPix half window, px (0: 0.35 x the local square)")
       ->capture_default_str();
@@ -254,6 +267,29 @@ Runner SetupCalibrate(CLI::App* sub, const GlobalOptions* global) {
       chosen = calib::CalibratePolynomial(in.obs, in.width, in.height, po);
     }
     const calib::UnifiedCalibration uni = calib::CalibrateUnified(in.obs, in.width, in.height, *chosen, o->loss, o->loss_scale);
+    std::optional<calib::PhysicalCalibration> phys;
+    std::optional<raytrace::CatadioptricUnit> phys_unit;
+    if (o->physical) {
+      raytrace::CatadioptricUnit nominal;
+      if (!o->nominal.empty()) {
+        auto cfg = scenes::LoadSceneConfig(o->nominal);
+        if (!o->unit.empty()) scenes::SelectUnit(&cfg, o->unit);
+        nominal = cfg.description.units[0];
+      } else {
+        HOVS_REQUIRE(in.truth.has_value(), "--physical", "give the unit's design with --nominal scene.yaml");
+        nominal = *in.truth;  // the design of the manifest's unit, without its misalignment
+      }
+      nominal.rig.cam_from_mirror = scenes::MisalignedCamFromMirror(nominal.rig.mirror, Vec3d::Zero(), Vec3d::Zero(), 0);
+      HOVS_REQUIRE(nominal.rig.camera.width == in.width && nominal.rig.camera.height == in.height, "--physical",
+                   "the nominal camera is ", nominal.rig.camera.width, "x", nominal.rig.camera.height,
+                   " but the images are ", in.width, "x", in.height);
+      calib::PhysicalCalibrationOptions popt;
+      popt.estimate_intrinsics = o->physical_intrinsics;
+      popt.estimate_mirror = o->physical_mirror;
+      phys = calib::CalibratePhysical(in.obs, nominal.rig, *chosen, popt);
+      phys_unit = nominal;
+      phys_unit->rig = phys->rig;
+    }
     nlohmann::json j;
     j["tool"] = "hovs calibrate";
     j["versions"] = design::DesignVersions();
@@ -287,6 +323,16 @@ Runner SetupCalibrate(CLI::App* sub, const GlobalOptions* global) {
                     {"distortion", {uni.model.distortion.k1, uni.model.distortion.k2, uni.model.distortion.p1, uni.model.distortion.p2}},
                     {"rms_px", uni.rms}, {"mean_px", uni.mean}, {"converged", uni.converged}, {"solver", uni.solver_report}};
     j["order_selection"] = orders;
+    if (phys) {
+      const double deg = 180 / M_PI;
+      j["physical"] = {{"model", "physical (hyperboloid + camera pose, exact projection)"},
+                       {"a", phys->rig.mirror.a}, {"b", phys->rig.mirror.b},
+                       {"tilt_deg", {phys->tilt.x() * deg, phys->tilt.y() * deg, phys->tilt.z() * deg}},
+                       {"offset_m", {phys->offset.x(), phys->offset.y(), phys->offset.z()}},
+                       {"intrinsics_estimated", o->physical_intrinsics}, {"mirror_estimated", o->physical_mirror},
+                       {"rms_px", phys->rms}, {"converged", phys->converged}, {"solver", phys->solver_report},
+                       {"unit", scenes::UnitToJson(*phys_unit)}};
+    }
     if (o->omnidir) {
       const auto cv = calib::RunOpenCvOmnidir(in.obs, in.width, in.height);
       j["opencv_omnidir"] = cv.ok ? nlohmann::json{{"rms_px", cv.rms}, {"opencv_reported_rms", cv.opencv_rms},
@@ -295,7 +341,7 @@ Runner SetupCalibrate(CLI::App* sub, const GlobalOptions* global) {
                                   : nlohmann::json{{"error", cv.error}};
     }
     if (in.truth) {
-      // Mean angle between calibrated and true rays over the calibrated annulus.
+      // Mean angle between calibrated and true rays over the calibrated annulus (points at 2 m).
       const auto& rig = in.truth->rig;
       double sum = 0, worst = 0;
       int n = 0;
@@ -306,8 +352,12 @@ Runner SetupCalibrate(CLI::App* sub, const GlobalOptions* global) {
           const Vec2d uv(u, v);
           const double rho = chosen->model.SensorFromImg(uv).norm();
           if (!rig.SeesMirror(uv) || rho < chosen->model.rho_min || rho > chosen->model.rho_max) continue;
-          Vec3d a, b;
-          if (!rig.CamFromImg(uv, &a) || !chosen->model.CamFromImg(uv, &b)) continue;
+          // The true direction, from the viewpoint F1, of the point the pixel sees at 2 m: for a misaligned
+          // (not single-viewpoint) rig the rays do not meet in F1, and a central model can only be right for
+          // points at some distance.
+          Vec3d M, d, b;
+          if (!rig.RayFromImg(uv, &M, &d) || !chosen->model.CamFromImg(uv, &b)) continue;
+          const Vec3d a = (M + 2.0 * d).normalized();
           const double ang = std::atan2(a.cross(b).norm(), a.dot(b)) * 180 / M_PI;
           sum += ang, worst = std::max(worst, ang), ++n;
           rays.emplace_back(a.normalized(), b.normalized());
@@ -329,6 +379,28 @@ Runner SetupCalibrate(CLI::App* sub, const GlobalOptions* global) {
         sum_al += ang, worst_al = std::max(worst_al, ang);
       }
       const double frame_rot = Eigen::AngleAxisd(R).angle() * 180 / M_PI;
+      if (phys) {
+        double ps = 0, pw = 0;
+        int pn = 0;
+        for (int v = 0; v < in.height; v += step)
+          for (int u = 0; u < in.width; u += step) {
+            const Vec2d uv(u, v);
+            Vec3d M, d, Mp, dp;
+            if (!rig.SeesMirror(uv) || !rig.RayFromImg(uv, &M, &d) || !phys->rig.RayFromImg(uv, &Mp, &dp)) continue;
+            const Vec3d a = (M + 2.0 * d).normalized(), b = (Mp + 2.0 * dp).normalized();
+            const double ang = std::atan2(a.cross(b).norm(), a.dot(b)) * 180 / M_PI;
+            ps += ang, pw = std::max(pw, ang), ++pn;
+          }
+        // Camera pose error: the rotation between the true and the calibrated cam_from_mirror (the tilt error),
+        // and the distance between the camera centres.
+        const Eigen::Quaterniond dq = rig.cam_from_mirror.rotation * phys->rig.cam_from_mirror.rotation.conjugate();
+        const double tilt_err = 2 * std::asin(std::min(1.0, dq.vec().norm())) * 180 / M_PI;
+        const double centre_err = (rig.CameraCentre() - phys->rig.CameraCentre()).norm();
+        j["physical"]["ground_truth"] = {{"mean_ray_angle_deg", pn ? ps / pn : 0.0}, {"max_ray_angle_deg", pw},
+                                         {"tilt_error_deg", tilt_err}, {"camera_centre_error_m", centre_err},
+                                         {"pixels", pn}, {"true_a", rig.mirror.a}, {"true_b", rig.mirror.b},
+                                         {"note", "over the whole mirror image, points at 2 m, mirror frame"}};
+      }
       j["ground_truth"] = {{"mean_ray_angle_deg", n ? sum / n : 0.0}, {"max_ray_angle_deg", worst}, {"pixels", n},
                            {"mean_ray_angle_aligned_deg", n ? sum_al / n : 0.0}, {"max_ray_angle_aligned_deg", worst_al},
                            {"frame_rotation_deg", frame_rot}, {"true_centre", {rig.camera.cx, rig.camera.cy}}};
@@ -347,6 +419,15 @@ Runner SetupCalibrate(CLI::App* sub, const GlobalOptions* global) {
                  " deg; " + F("%.5f", j["ground_truth"]["mean_ray_angle_aligned_deg"].get<double>()) +
                  " deg after removing a frame rotation of " + F("%.4f", j["ground_truth"]["frame_rotation_deg"].get<double>()) +
                  " deg\n";
+    if (phys) {
+      summary += "  physical model: RMS " + F("%.4f", phys->rms) + " px, a " + F("%.5f", phys->rig.mirror.a) + " m, b " +
+                 F("%.5f", phys->rig.mirror.b) + " m, tilt (" + F("%.3f", phys->tilt.x() * 180 / M_PI) + ", " +
+                 F("%.3f", phys->tilt.y() * 180 / M_PI) + ") deg, offset (" + F("%.2f", phys->offset.x() * 1e3) + ", " +
+                 F("%.2f", phys->offset.y() * 1e3) + ", " + F("%.2f", phys->offset.z() * 1e3) + ") mm\n";
+      if (j.contains("physical") && j["physical"].contains("ground_truth"))
+        summary += "  physical model vs ground truth: mean ray angle " +
+                   F("%.5f", j["physical"]["ground_truth"]["mean_ray_angle_deg"].get<double>()) + " deg\n";
+    }
     for (size_t i = 0; i < in.obs.size(); ++i)
       if (chosen->per_image_mean[i] > 5.0) summary += "  POOR: " + in.obs[i].image + " mean error above 5 px\n";
     WriteFileAtomic(stage.staging() / "summary.txt", summary);

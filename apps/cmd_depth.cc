@@ -34,7 +34,7 @@ struct View {
 
 Runner SetupDepth(CLI::App* sub, const GlobalOptions* global) {
   struct Options {
-    std::string dataset, out = "results/depth", left, right, left_model, right_model, stereo;
+    std::string dataset, out = "results/depth", left, right, left_model, right_model, stereo, model_kind = "auto";
     int frame = 0, width = 2048, height = 512, disparities = 320, block = 5, max_points = 200000;
     double sigma_px = 0.5, max_rel_sigma = 0.05;
   };
@@ -43,6 +43,8 @@ Runner SetupDepth(CLI::App* sub, const GlobalOptions* global) {
   sub->add_option("--left", o->left, "left unit name (default: the first)");
   sub->add_option("--right", o->right, "right unit name (default: the second)");
   sub->add_option("--left-model", o->left_model, "calibrated model of the left unit (calib_results.txt or calibration.json)");
+  sub->add_option("--model-kind", o->model_kind, "with calibration.json models: auto (physical if present) | physical | polynomial")
+      ->capture_default_str();
   sub->add_option("--right-model", o->right_model, "calibrated model of the right unit");
   sub->add_option("--stereo", o->stereo, "relative pose from hovs stereo-calibrate (stereo.json) instead of the manifest's");
   sub->add_option("--frame", o->frame, "frame index in the manifest")->capture_default_str();
@@ -81,8 +83,8 @@ Runner SetupDepth(CLI::App* sub, const GlobalOptions* global) {
     }
     HOVS_REQUIRE(!vl.unit.empty() && !vr.unit.empty(), o->dataset, "frame ", o->frame, " lacks a view of both units");
 
-    depth::StereoRig rig{o->left_model.empty() ? AnyModel::Exact(ul.rig) : AnyModel::Polynomial(LoadPolynomialModelFile(o->left_model)),
-                         o->right_model.empty() ? AnyModel::Exact(ur.rig) : AnyModel::Polynomial(LoadPolynomialModelFile(o->right_model)),
+    depth::StereoRig rig{o->left_model.empty() ? AnyModel::Exact(ul.rig) : LoadCalibratedModel(o->left_model, o->model_kind),
+                         o->right_model.empty() ? AnyModel::Exact(ur.rig) : LoadCalibratedModel(o->right_model, o->model_kind),
                          ur.world_from_mirror.Inverse() * ul.world_from_mirror};
     std::string pose_source = "manifest";
     if (!o->stereo.empty()) {

@@ -46,12 +46,14 @@ scenes::BoardSpec BoardFromJson(const nlohmann::json& b, const std::string& wher
 
 Runner SetupStereoCalibrate(CLI::App* sub, const GlobalOptions* global) {
   struct Options {
-    std::string dataset, out = "results/stereo-calibration", left_model, right_model;
+    std::string dataset, out = "results/stereo-calibration", left_model, right_model, model_kind = "auto";
     double huber = 1.0;
   };
   auto o = std::make_shared<Options>();
   sub->add_option("--dataset", o->dataset, "stereo_aruco dataset manifest (two units per frame)")->required();
   sub->add_option("--left-model", o->left_model, "calibrated model of the first unit (calib_results.txt or calibration.json)");
+  sub->add_option("--model-kind", o->model_kind, "with calibration.json models: auto (physical if present) | physical | polynomial")
+      ->capture_default_str();
   sub->add_option("--right-model", o->right_model, "calibrated model of the second unit");
   sub->add_option("--huber", o->huber, "robust loss scale, px")->capture_default_str();
   sub->add_option("-o,--out", o->out, "output folder (replaced atomically)")->capture_default_str();
@@ -67,8 +69,8 @@ Runner SetupStereoCalibrate(CLI::App* sub, const GlobalOptions* global) {
     const scenes::BoardSpec spec = BoardFromJson(m["boards"][0], o->dataset + " (boards[0])");
     std::map<int, Vec3d> board;
     for (const auto& [id, p] : spec.Corners()) board[id] = Vec3d(p.x(), p.y(), 0);
-    const AnyModel left = o->left_model.empty() ? AnyModel::Exact(ul.rig) : AnyModel::Polynomial(LoadPolynomialModelFile(o->left_model));
-    const AnyModel right = o->right_model.empty() ? AnyModel::Exact(ur.rig) : AnyModel::Polynomial(LoadPolynomialModelFile(o->right_model));
+    const AnyModel left = o->left_model.empty() ? AnyModel::Exact(ul.rig) : LoadCalibratedModel(o->left_model, o->model_kind);
+    const AnyModel right = o->right_model.empty() ? AnyModel::Exact(ur.rig) : LoadCalibratedModel(o->right_model, o->model_kind);
     depth::MarkerDetectOptions dop;
     dop.dictionary = spec.dictionary;
     const depth::MarkerDetector dl(left, dop), dr(right, dop);

@@ -58,7 +58,7 @@ AnyModel LoadModel(const std::string& spec, const std::string& unit, double scen
     const size_t i = pick(units.size(), [&](size_t k) { return units[k]["name"].get<std::string>(); });
     return AnyModel::Exact(scenes::UnitFromJson(units[i], spec + " (units)").rig, scene_distance);
   }
-  return AnyModel::Polynomial(LoadPolynomialModelFile(path));
+  return LoadCalibratedModel(path, "auto", scene_distance);
 }
 
 struct Frame {

@@ -8,6 +8,7 @@
 #include "core/error.h"
 #include "core/io.h"
 #include "raytrace/render.h"
+#include "scenes/ground_truth.h"
 
 namespace hovs::apps {
 
@@ -29,6 +30,20 @@ PolynomialModel<double> LoadPolynomialModelFile(const std::filesystem::path& pat
   }
   m.Check(path.string());
   return m;
+}
+
+AnyModel LoadCalibratedModel(const std::filesystem::path& path, const std::string& prefer, double scene_distance) {
+  HOVS_REQUIRE(prefer == "auto" || prefer == "physical" || prefer == "polynomial", "--model-kind",
+               "expected auto, physical or polynomial (got '", prefer, "')");
+  if (path.extension() != ".txt" && prefer != "polynomial") {
+    const auto j = nlohmann::json::parse(ReadFile(path), nullptr, false);
+    HOVS_REQUIRE(!j.is_discarded(), path.string(), "not JSON");
+    if (j.contains("physical") && j["physical"].contains("unit"))
+      return AnyModel::Exact(scenes::UnitFromJson(j["physical"]["unit"], path.string() + " (physical.unit)").rig,
+                             scene_distance);
+    HOVS_REQUIRE(prefer != "physical", path.string(), "has no physical model (calibrate with --physical)");
+  }
+  return AnyModel::Polynomial(LoadPolynomialModelFile(path));
 }
 
 nlohmann::json LoadDatasetManifest(const std::filesystem::path& path) {

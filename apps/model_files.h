@@ -14,6 +14,12 @@ namespace hovs::apps {
 // OCamCalib's calib_results.txt (by extension .txt) or the polynomial model of a hovs calibration.json.
 PolynomialModel<double> LoadPolynomialModelFile(const std::filesystem::path& path);
 
+// A calibrated model file as a handle: calib_results.txt -> polynomial; a hovs calibration.json -> its physical
+// model (mirror + camera pose, through the exact projection) when it has one and prefer is "auto" or "physical",
+// else its polynomial model. prefer: auto | physical | polynomial.
+AnyModel LoadCalibratedModel(const std::filesystem::path& path, const std::string& prefer = "auto",
+                             double scene_distance = 10.0);
+
 // A hovs dataset manifest (dataset.json), checked for its format tag. Throws hovs::Error naming the file.
 nlohmann::json LoadDatasetManifest(const std::filesystem::path& path);
 
