@@ -167,6 +167,7 @@ class Validation {
                          (missed ? ", " + std::to_string(missed) + " targets not met yet" : std::string());
     metrics_["seconds"] = seconds;
     Write();
+    WriteFileAtomic(out_ / "summary.txt", Summary());
   }
 
   const json& metrics() const { return metrics_; }
