@@ -101,12 +101,13 @@ Input FromDataset(const std::filesystem::path& manifest, const std::string& unit
     in.truth = scenes::UnitFromJson(uj, manifest.string() + " (units)");
     in.width = in.truth->rig.camera.width, in.height = in.truth->rig.camera.height;
   }
-  calib::CheckerboardDetectOptions o = detect;
+  calib::CheckerboardDetectOptions dopt = detect;
   if (m.contains("boards") && !m["boards"].empty() && m["boards"][0].value("type", "") == "checker") {
     const auto& b = m["boards"][0];
-    o.board.cols = b.at("inner_corners")[0], o.board.rows = b.at("inner_corners")[1], o.board.square = b.at("square");
+    dopt.board.cols = b.at("inner_corners")[0], dopt.board.rows = b.at("inner_corners")[1];
+    dopt.board.square = b.at("square");
   } else {
-    HOVS_REQUIRE(o.board.square > 0 && !truth_corners, manifest.string(),
+    HOVS_REQUIRE(dopt.board.square > 0 && !truth_corners, manifest.string(),
                  "the manifest describes no checkerboard; give --board");
   }
   std::mt19937_64 rng(seed);
@@ -123,7 +124,7 @@ Input FromDataset(const std::filesystem::path& manifest, const std::string& unit
           for (const auto& c : side["boards"][0]["corners"])
             if (c["status"] == "visible") gt.emplace_back(c["pixel"][0].get<double>(), c["pixel"][1].get<double>());
         }
-        DetectInto(dir / v["image"].get<std::string>(), v["image"], o, v.contains("ground_truth") ? &gt : nullptr,
+        DetectInto(dir / v["image"].get<std::string>(), v["image"], dopt, v.contains("ground_truth") ? &gt : nullptr,
                    &in, &in.width, &in.height);
         continue;
       }
@@ -141,7 +142,8 @@ Input FromDataset(const std::filesystem::path& manifest, const std::string& unit
     }
   in.description = {{"dataset", manifest.string()}, {"unit", uj["name"]}};
   if (truth_corners) in.description.update({{"corners", "ground truth"}, {"corner_noise_px", noise}, {"seed", seed}});
-  else in.description.update({{"corners", "hovs checkerboard detector"}, {"board", {o.board.cols, o.board.rows, o.board.square}}});
+  else in.description.update({{"corners", "hovs checkerboard detector"},
+                              {"board", {dopt.board.cols, dopt.board.rows, dopt.board.square}}});
   return in;
 }
 
@@ -226,17 +228,7 @@ Runner SetupCalibrate(CLI::App* sub, const GlobalOptions* global) {
       in = FromDataset(o->dataset, o->unit, o->truth_corners, o->noise, o->seed, detect);
     } else {
       HOVS_REQUIRE(!o->board.empty(), "--images", "a folder of images needs --board");
-      HOVS_REQUIRE(std::filesystem::is_directory(o->images), o->images, "not a folder");
-      std::vector<std::filesystem::path> files;
-      for (const auto& e : std::filesystem::directory_iterator(o->images)) {
-        std::string ext = e.path().extension().string();
-        std::transform(ext.begin(), ext.end(), ext.begin(), ::tolower);
-        if (ext == ".png" || ext == ".jpg" || ext == ".jpeg" || ext == ".tif" || ext == ".tiff" || ext == ".exr" ||
-            ext == ".bmp" || ext == ".pgm")
-          files.push_back(e.path());
-      }
-      std::sort(files.begin(), files.end());
-      HOVS_REQUIRE(!files.empty(), o->images, "no images (png, jpg, tif, exr, bmp, pgm) in the folder");
+      const auto files = ListImageFiles(o->images);
       for (const auto& f : files) DetectInto(f, f.filename().string(), detect, nullptr, &in, &in.width, &in.height);
       in.description = {{"images", o->images}, {"corners", "hovs checkerboard detector"},
                         {"board", {detect.board.cols, detect.board.rows, detect.board.square}}};

@@ -165,10 +165,10 @@ Runner SetupStereoCalibrate(CLI::App* sub, const GlobalOptions* global) {
           }
           Vec3d bl, br;
           if (!left.MirrorFromImg(p.pixel, &bl) || !right.MirrorFromImg(r->second, &br)) continue;
-          const auto t = depth::Triangulate(rig, bl, br, 1e-4);
-          if (!t.ok) continue;
+          const auto tri = depth::Triangulate(rig, bl, br, 1e-4);
+          if (!tri.ok) continue;
           const double true_range = (left_from_board * b->second).norm();
-          const double rel = (t.range_left - true_range) / true_range;
+          const double rel = (tri.range_left - true_range) / true_range;
           for (auto& band : bands)
             if (true_range >= band.lo && true_range < band.hi) band.rel.push_back(std::abs(rel));
           worst = std::max(worst, std::abs(rel)), ss += rel * rel, ++n;

@@ -34,33 +34,6 @@ bool EndsWith(const std::string& s, const std::string& e) {
   return s.size() >= e.size() && s.compare(s.size() - e.size(), e.size(), e) == 0;
 }
 
-// The model named on the command line; `unit` selects a unit of a scene or manifest.
-AnyModel LoadModel(const std::string& spec, const std::string& unit, double scene_distance) {
-  const fs::path path(spec);
-  HOVS_REQUIRE(fs::exists(path), "--model " + spec, "file not found");
-  const auto pick = [&](size_t n, const auto& name_of) {
-    if (unit.empty()) return size_t(0);
-    for (size_t i = 0; i < n; ++i)
-      if (name_of(i) == unit) return i;
-    throw Error("--unit " + unit, "no such unit in " + spec);
-  };
-  if (EndsWith(spec, ".yaml") || EndsWith(spec, ".yml")) {
-    const auto cfg = scenes::LoadSceneConfig(path);
-    const auto& units = cfg.description.units;
-    const size_t i = pick(units.size(), [&](size_t k) { return units[k].name; });
-    return AnyModel::Exact(units[i].rig, scene_distance);
-  }
-  if (EndsWith(spec, ".txt")) return AnyModel::Polynomial(LoadPolynomialModelFile(path));
-  const auto j = nlohmann::json::parse(ReadFile(path), nullptr, false);
-  HOVS_REQUIRE(!j.is_discarded(), path.string(), "not JSON, YAML or calib_results.txt");
-  if (j.value("format", "") == "hovs-dataset") {
-    const auto& units = j.at("units");
-    const size_t i = pick(units.size(), [&](size_t k) { return units[k]["name"].get<std::string>(); });
-    return AnyModel::Exact(scenes::UnitFromJson(units[i], spec + " (units)").rig, scene_distance);
-  }
-  return LoadCalibratedModel(path, "auto", scene_distance);
-}
-
 struct Frame {
   std::string name;
   fs::path image;
@@ -71,14 +44,7 @@ std::vector<Frame> ListInputs(const std::string& input, const std::string& unit)
   HOVS_REQUIRE(fs::exists(p), "--input " + input, "not found");
   std::vector<Frame> frames;
   if (fs::is_directory(p)) {
-    for (const auto& e : fs::directory_iterator(p)) {
-      std::string ext = e.path().extension().string();
-      std::transform(ext.begin(), ext.end(), ext.begin(), ::tolower);
-      if (ext == ".png" || ext == ".jpg" || ext == ".jpeg" || ext == ".tif" || ext == ".tiff" || ext == ".bmp")
-        frames.push_back({e.path().stem().string(), e.path()});
-    }
-    std::sort(frames.begin(), frames.end(), [](const Frame& a, const Frame& b) { return a.name < b.name; });
-    HOVS_REQUIRE(!frames.empty(), "--input " + input, "the folder holds no images (png, jpg, tif, bmp)");
+    for (const auto& f : ListImageFiles(p)) frames.push_back({f.stem().string(), f});
     return frames;
   }
   if (EndsWith(input, ".json")) {
@@ -152,7 +118,7 @@ Runner SetupUnwrap(CLI::App* sub, const GlobalOptions* global) {
     if (o->interactive) {
       HOVS_REQUIRE(!o->model.empty() && !o->input.empty(), "hovs unwrap --interactive",
                    "needs --model (views are rebuilt as you move them) and --input");
-      const AnyModel model = LoadModel(o->model, o->unit, o->scene_distance);
+      const AnyModel model = LoadModelSpec(o->model, o->unit, o->scene_distance);
       const auto frame = ListInputs(o->input, o->unit).front();
       const unwrap::Image8 im = LoadImage8(frame.image);
       RunUnwrapViewer(model, unwrap::ResolveLayout(o->layout),
@@ -168,7 +134,7 @@ Runner SetupUnwrap(CLI::App* sub, const GlobalOptions* global) {
       table = unwrap::LoadRemapTable(o->map);
       source = "loaded " + o->map;
     } else {
-      const AnyModel model = LoadModel(o->model, o->unit, o->scene_distance);
+      const AnyModel model = LoadModelSpec(o->model, o->unit, o->scene_distance);
       unwrap::RemapOptions ro;
       ro.tile = o->tile;
       const nlohmann::json versions = design::DesignVersions();

@@ -41,5 +41,6 @@ Runner SetupDepth(CLI::App* sub, const GlobalOptions* global);
 Runner SetupStereoCalibrate(CLI::App* sub, const GlobalOptions* global);
 Runner SetupValidate(CLI::App* sub, const GlobalOptions* global);
 Runner SetupCapture(CLI::App* sub, const GlobalOptions* global);
+Runner SetupLive(CLI::App* sub, const GlobalOptions* global);
 
 }  // namespace hovs::apps

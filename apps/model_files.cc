@@ -9,6 +9,7 @@
 #include "core/io.h"
 #include "raytrace/render.h"
 #include "scenes/ground_truth.h"
+#include "scenes/scene_config.h"
 
 namespace hovs::apps {
 
@@ -44,6 +45,40 @@ AnyModel LoadCalibratedModel(const std::filesystem::path& path, const std::strin
     HOVS_REQUIRE(prefer != "physical", path.string(), "has no physical model (calibrate with --physical)");
   }
   return AnyModel::Polynomial(LoadPolynomialModelFile(path));
+}
+
+namespace {
+bool EndsWith(const std::string& s, const std::string& e) {
+  return s.size() >= e.size() && s.compare(s.size() - e.size(), e.size(), e) == 0;
+}
+namespace fs = std::filesystem;
+}  // namespace
+
+// The model named on the command line; `unit` selects a unit of a scene or manifest.
+AnyModel LoadModelSpec(const std::string& spec, const std::string& unit, double scene_distance) {
+  const fs::path path(spec);
+  HOVS_REQUIRE(fs::exists(path), "--model " + spec, "file not found");
+  const auto pick = [&](size_t n, const auto& name_of) {
+    if (unit.empty()) return size_t(0);
+    for (size_t i = 0; i < n; ++i)
+      if (name_of(i) == unit) return i;
+    throw Error("--unit " + unit, "no such unit in " + spec);
+  };
+  if (EndsWith(spec, ".yaml") || EndsWith(spec, ".yml")) {
+    const auto cfg = scenes::LoadSceneConfig(path);
+    const auto& units = cfg.description.units;
+    const size_t i = pick(units.size(), [&](size_t k) { return units[k].name; });
+    return AnyModel::Exact(units[i].rig, scene_distance);
+  }
+  if (EndsWith(spec, ".txt")) return AnyModel::Polynomial(LoadPolynomialModelFile(path));
+  const auto j = nlohmann::json::parse(ReadFile(path), nullptr, false);
+  HOVS_REQUIRE(!j.is_discarded(), path.string(), "not JSON, YAML or calib_results.txt");
+  if (j.value("format", "") == "hovs-dataset") {
+    const auto& units = j.at("units");
+    const size_t i = pick(units.size(), [&](size_t k) { return units[k]["name"].get<std::string>(); });
+    return AnyModel::Exact(scenes::UnitFromJson(units[i], spec + " (units)").rig, scene_distance);
+  }
+  return LoadCalibratedModel(path, "auto", scene_distance);
 }
 
 nlohmann::json LoadDatasetManifest(const std::filesystem::path& path) {

@@ -20,6 +20,10 @@ PolynomialModel<double> LoadPolynomialModelFile(const std::filesystem::path& pat
 AnyModel LoadCalibratedModel(const std::filesystem::path& path, const std::string& prefer = "auto",
                              double scene_distance = 10.0);
 
+// The model named by --model: a scene YAML or a dataset manifest (the exact rig of `unit`, default the first),
+// calib_results.txt, or a hovs calibration.json (LoadCalibratedModel). Throws naming the file.
+AnyModel LoadModelSpec(const std::string& spec, const std::string& unit, double scene_distance);
+
 // A hovs dataset manifest (dataset.json), checked for its format tag. Throws hovs::Error naming the file.
 nlohmann::json LoadDatasetManifest(const std::filesystem::path& path);
 

@@ -2,7 +2,9 @@
 
 #include <unistd.h>
 
+#include <algorithm>
 #include <atomic>
+#include <cctype>
 #include <chrono>
 #include <fstream>
 #include <sstream>
@@ -51,6 +53,21 @@ std::string ReadFile(const fs::path& path) {
   std::ostringstream ss;
   ss << in.rdbuf();
   return ss.str();
+}
+
+std::vector<fs::path> ListImageFiles(const fs::path& folder) {
+  HOVS_REQUIRE(fs::is_directory(folder), folder.string(), "not a folder");
+  std::vector<fs::path> files;
+  for (const auto& e : fs::directory_iterator(folder)) {
+    if (!e.is_regular_file()) continue;
+    std::string ext = e.path().extension().string();
+    std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return std::tolower(c); });
+    for (const char* x : {".png", ".jpg", ".jpeg", ".tif", ".tiff", ".exr", ".bmp", ".pgm"})
+      if (ext == x) files.push_back(e.path());
+  }
+  std::sort(files.begin(), files.end());
+  HOVS_REQUIRE(!files.empty(), folder.string(), "the folder holds no images (png, jpg, tif, exr, bmp, pgm)");
+  return files;
 }
 
 StagedDirectory::StagedDirectory(fs::path target) : target_(std::move(target)) {

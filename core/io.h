@@ -4,6 +4,7 @@
 
 #include <filesystem>
 #include <string>
+#include <vector>
 
 namespace hovs {
 
@@ -12,6 +13,10 @@ void WriteFileAtomic(const std::filesystem::path& path, const std::string& conte
 
 // Reads a whole file. Throws hovs::Error naming the file.
 std::string ReadFile(const std::filesystem::path& path);
+
+// The image files of a folder (png, jpg, jpeg, tif, tiff, exr, bmp, pgm; any case), sorted by name. Throws
+// hovs::Error naming the folder when it is not a folder or holds no image.
+std::vector<std::filesystem::path> ListImageFiles(const std::filesystem::path& folder);
 
 // A report folder under construction. Files go into staging(); Commit() replaces `target` with the staged
 // folder in one rename (an existing target is moved aside first and removed after). If Commit() is never

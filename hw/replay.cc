@@ -76,13 +76,7 @@ std::unique_ptr<CameraSource> OpenReplay(const fs::path& src, const std::string&
                                          bool loop) {
   std::vector<ReplayItem> items;
   if (fs::is_directory(src)) {
-    for (const auto& e : fs::directory_iterator(src)) {
-      std::string ext = e.path().extension().string();
-      std::transform(ext.begin(), ext.end(), ext.begin(), ::tolower);
-      if (ext == ".png" || ext == ".jpg" || ext == ".jpeg" || ext == ".tif" || ext == ".tiff" || ext == ".pgm")
-        items.push_back({e.path(), 0});
-    }
-    std::sort(items.begin(), items.end(), [](const auto& a, const auto& b) { return a.image < b.image; });
+    for (const auto& f : ListImageFiles(src)) items.push_back({f, 0});
     for (size_t k = 0; k < items.size(); ++k) items[k].device_ns = k * 100'000'000ull;
   } else {
     const auto m = nlohmann::json::parse(ReadFile(src), nullptr, false);

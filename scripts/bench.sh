@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# Builds and runs the Google Benchmark programs; writes results/benchmarks/{bench,render,unwrap}.json.
+# Builds and runs the Google Benchmark programs; writes results/benchmarks/{bench,render,unwrap,calib}.json.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 bash scripts/build.sh
@@ -11,3 +11,5 @@ mv results/benchmarks/.render.json.tmp results/benchmarks/render.json
 build/tests/bench/hovs_unwrap_bench --benchmark_repetitions=5 --benchmark_report_aggregates_only=true \
   --benchmark_out=results/benchmarks/.unwrap.json.tmp --benchmark_out_format=json
 mv results/benchmarks/.unwrap.json.tmp results/benchmarks/unwrap.json
+build/tests/bench/hovs_calib_bench --benchmark_out=results/benchmarks/.calib.json.tmp --benchmark_out_format=json
+mv results/benchmarks/.calib.json.tmp results/benchmarks/calib.json

@@ -10,51 +10,13 @@
 #include "calib/polynomial_calibration.h"
 #include "core/error.h"
 #include "core/model_fit.h"
+#include "tests/calib/synthetic_boards.h"
 #include "tests/core/test_rigs.h"
 
 namespace hovs::calib {
 namespace {
 
 constexpr double kDeg = M_PI / 180;
-
-// The article's board (7 x 5 inner corners, 30 mm) at random poses around the reference unit, projected by the
-// core's exact model; every corner visible.
-std::vector<BoardObservation> SyntheticObservations(const CatadioptricCamera<double>& rig, int images, double noise_px,
-                                                    unsigned seed, std::vector<Rigid3d>* poses = nullptr) {
-  std::mt19937 rng(seed);
-  std::uniform_real_distribution<double> U(0, 1);
-  std::normal_distribution<double> N(0, noise_px);
-  std::vector<BoardObservation> out;
-  while (static_cast<int>(out.size()) < images) {
-    const double az = U(rng) * 2 * M_PI, el = (-50 + 38 * U(rng)) * kDeg, dist = 0.3 + 0.3 * U(rng);
-    const Vec3d c = dist * Vec3d(std::cos(el) * std::cos(az), std::cos(el) * std::sin(az), std::sin(el));
-    // Board facing the viewpoint, tilted a little, rolled.
-    const Vec3d z = -c.normalized();
-    Vec3d x = Vec3d(0, 0, 1).cross(z).normalized();
-    const Vec3d y = z.cross(x);
-    Mat3<double> R;
-    R.col(0) = x, R.col(1) = y, R.col(2) = z;
-    const Eigen::Quaterniond q = Eigen::Quaterniond(R) *
-                                 Eigen::Quaterniond(Eigen::AngleAxisd((U(rng) - 0.5) * 0.6, Vec3d(U(rng), U(rng), 0).normalized())) *
-                                 Eigen::Quaterniond(Eigen::AngleAxisd(U(rng) * 2 * M_PI, Vec3d::UnitZ()));
-    const Rigid3d mirror_from_board(q, c);
-    BoardObservation o;
-    o.image = "synthetic" + std::to_string(out.size());
-    bool ok = true;
-    for (int j = 1; j < 6 && ok; ++j)
-      for (int i = 1; i < 8 && ok; ++i) {
-        const Vec3d P((i - 4) * 0.03, (j - 3) * 0.03, 0);
-        Vec2d uv;
-        ok = rig.ImgFromMirror(mirror_from_board * P, &uv) == ProjectionStatus::kOk;
-        o.board_points.push_back(P);
-        o.pixels.push_back(uv + Vec2d(N(rng), N(rng)));
-      }
-    if (!ok) continue;
-    out.push_back(o);
-    if (poses) poses->push_back(mirror_from_board);
-  }
-  return out;
-}
 
 TEST(PolynomialCalibration, RecoversTheExactModelFromNoiseFreeCorners) {
   const auto rig = test::AlignedRig();

@@ -79,6 +79,26 @@ TEST(CaptureCli, RenderedFramesCrossTheProtocolIntoADatasetThatCalibratesAndUnwr
   ASSERT_EQ(uw.exit_code, 0) << uw.output;
   EXPECT_EQ(nlohmann::json::parse(ReadFile(dir / "views/views.json"))["frames"].size(), 5u);
 
+  // hovs live: frames over the protocol -> the six views, written every 5th frame, latency figures.
+  const auto live = test::Hovs("-q live --simulate " + (dir / "set/dataset.json").string() + " --model " +
+                               (dir / "cal/calibration.json").string() + " --frames 10 --write-every 5 --out " +
+                               (dir / "live").string());
+  ASSERT_EQ(live.exit_code, 0) << live.output;
+  const auto lj = nlohmann::json::parse(ReadFile(dir / "live/live.json"));
+  EXPECT_EQ(lj["frames_processed"], 10);
+  EXPECT_EQ(lj["views"], 6);
+  EXPECT_EQ(lj["frames_written"], 2);
+  EXPECT_GT(lj["latency"]["remap"]["median_ms"].get<double>(), 0.0);
+  for (const char* f : {"frame000000_view0.png", "frame000005_view300.png"})
+    EXPECT_TRUE(fs::exists(dir / "live" / f)) << f;
+  const auto live_replay = test::Hovs("-q live --replay " + (dir / "cap/dataset.json").string() + " --model " +
+                                      (dir / "cal/calibration.json").string() + " --frames 3");
+  EXPECT_EQ(live_replay.exit_code, 0) << live_replay.output;
+  const auto live_bad = test::Hovs("live --replay " + (dir / "cap/dataset.json").string() + " --model " +
+                                   (dir / "cal/calibration.json").string() + " --pixel-format Mono16 --frames 3");
+  EXPECT_EQ(live_bad.exit_code, 2);
+  EXPECT_NE(live_bad.output.find("Mono8 or BayerRG8"), std::string::npos) << live_bad.output;
+
   // 1 % packet loss (the simulator does not resend; at 1375 x 1100, about 1000 packets a frame, few frames
   // survive): nothing corrupt is written, incomplete frames are listed, the time limit ends the capture.
   const auto lossy = test::Hovs("-q capture --simulate " + (dir / "set/dataset.json").string() +
@@ -96,7 +116,7 @@ TEST(CaptureCli, RenderedFramesCrossTheProtocolIntoADatasetThatCalibratesAndUnwr
   }
 
   // Ctrl-C ends the capture with a valid manifest.
-  const auto intr = test::Run("timeout -s INT --preserve-status 2 " + std::string(HOVS_BINARY) +
+  const auto intr = test::Run("timeout -s INT --preserve-status 4 " + std::string(HOVS_BINARY) +
                                        " -q capture --simulate " + (dir / "set/dataset.json").string() +
                                        " --frames 100000 --out " + (dir / "intr").string());
   EXPECT_EQ(intr.exit_code, 0) << intr.output;
