@@ -6,6 +6,7 @@
 #include <cstdio>
 #include <iostream>
 #include <nlohmann/json.hpp>
+#include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 #include <random>
 
@@ -39,7 +40,14 @@ struct Input {
   std::optional<raytrace::CatadioptricUnit> truth;  // synthetic datasets only
   nlohmann::json description;
   nlohmann::json detection = nlohmann::json::array();  // per image: status, corners, error against truth
+  std::vector<std::filesystem::path> paths;              // image files of obs (detection modes)
 };
+
+// The reprojection figure of one image (the article's Fig. 19): a crop around the board, detected corners (green
+// circles), the polynomial model's reprojections (red crosses) and the residuals magnified 20 times (yellow).
+void ReprojectionFigure(const std::filesystem::path& image, const calib::BoardObservation& ob,
+                        const PolynomialModel<double>& model, const Rigid3d& cam_from_board, double rms,
+                        const std::filesystem::path& out);
 
 cv::Mat GreyImage(const std::filesystem::path& path) {
   const unwrap::Image8 im = LoadImage8(path);
@@ -72,7 +80,7 @@ void DetectInto(const std::filesystem::path& path, const std::string& name, cons
     row["max_to_truth_px"] = worst;
   }
   in->detection.push_back(row);
-  if (det.found) in->obs.push_back(calib::ToObservation(det, name));
+  if (det.found) in->obs.push_back(calib::ToObservation(det, name)), in->paths.push_back(path);
 }
 
 calib::CheckerboardSpec ParseBoard(const std::string& text) {
@@ -161,6 +169,38 @@ nlohmann::json PolyJson(const calib::PolynomialCalibration& r, const std::vector
                    {"mean_px", r.per_image_mean[i]}, {"above_5px", r.per_image_mean[i] > 5.0}});
   j["per_image"] = per;
   return j;
+}
+
+void ReprojectionFigure(const std::filesystem::path& image, const calib::BoardObservation& ob,
+                        const PolynomialModel<double>& model, const Rigid3d& cam_from_board, double rms,
+                        const std::filesystem::path& out) {
+  const cv::Mat grey = GreyImage(image);
+  double x0 = 1e9, y0 = 1e9, x1 = -1e9, y1 = -1e9;
+  for (const auto& p : ob.pixels)
+    x0 = std::min(x0, p.x()), x1 = std::max(x1, p.x()), y0 = std::min(y0, p.y()), y1 = std::max(y1, p.y());
+  const cv::Rect roi = cv::Rect(cv::Point(int(x0) - 30, int(y0) - 30), cv::Point(int(x1) + 30, int(y1) + 30)) &
+                       cv::Rect(0, 0, grey.cols, grey.rows);
+  cv::Mat crop;
+  cv::cvtColor(grey(roi), crop, cv::COLOR_GRAY2BGR);
+  const double scale = 600.0 / std::max(roi.width, roi.height);
+  cv::resize(crop, crop, cv::Size(), scale, scale, cv::INTER_CUBIC);
+  const auto at = [&](const Vec2d& p) {
+    return cv::Point2d((p.x() - roi.x + 0.5) * scale - 0.5, (p.y() - roi.y + 0.5) * scale - 0.5);
+  };
+  for (size_t k = 0; k < ob.pixels.size(); ++k) {
+    Vec2d uv;
+    cv::circle(crop, at(ob.pixels[k]), 5, cv::Scalar(0, 200, 0), 1, cv::LINE_AA);
+    if (!model.ImgFromCam(cam_from_board * ob.board_points[k], &uv)) continue;
+    cv::drawMarker(crop, at(uv), cv::Scalar(0, 0, 255), cv::MARKER_CROSS, 8, 1, cv::LINE_AA);
+    cv::line(crop, at(ob.pixels[k]), at(ob.pixels[k] + 20 * (uv - ob.pixels[k])), cv::Scalar(0, 220, 255), 1,
+             cv::LINE_AA);
+  }
+  char text[200];
+  std::snprintf(text, sizeof text, "%s: RMS %.3f px, %zu corners (residuals x20)", ob.image.c_str(), rms,
+                ob.pixels.size());
+  cv::putText(crop, text, cv::Point(8, 20), cv::FONT_HERSHEY_SIMPLEX, 0.5, cv::Scalar(255, 255, 255), 2, cv::LINE_AA);
+  cv::putText(crop, text, cv::Point(8, 20), cv::FONT_HERSHEY_SIMPLEX, 0.5, cv::Scalar(0, 0, 0), 1, cv::LINE_AA);
+  HOVS_REQUIRE(cv::imwrite(out.string(), crop), out.string(), "cannot write the figure");
 }
 
 }  // namespace
@@ -438,6 +478,16 @@ Runner SetupCalibrate(CLI::App* sub, const GlobalOptions* global) {
     for (const auto& r : orders) all.push_back(F("%.4f", r["rms_px"].get<double>()));
     rows.push_back(all);
     page.Table(header, rows);
+    if (!in.paths.empty()) {
+      std::filesystem::create_directories(stage.staging() / "figures");
+      page.Heading("Reprojection per image (polynomial model; residuals x20)");
+      for (size_t i = 0; i < in.obs.size() && i < in.paths.size(); ++i) {
+        const std::string fig = "figures/" + std::filesystem::path(in.obs[i].image).stem().string() + ".png";
+        ReprojectionFigure(in.paths[i], in.obs[i], chosen->model, chosen->cam_from_board[i], chosen->per_image_rms[i],
+                           stage.staging() / fig);
+        page.Figure(fig, in.obs[i].image + ": RMS " + F("%.3f", chosen->per_image_rms[i]) + " px", 420);
+      }
+    }
     page.Heading("Result");
     page.Preformatted(j.dump(2));
     WriteFileAtomic(stage.staging() / "index.html", page.Render());

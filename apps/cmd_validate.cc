@@ -241,6 +241,8 @@ std::string Validation::Report() const {
   if (f.contains("design")) {
     page.Heading("Design study");
     page.Preformatted(f["design"].get<std::string>());
+    fig("design/figures/feasible_region.png", "feasible (a, b) region and the optima", 420);
+    fig("design/figures/vertical_field.png", "vertical field of view over (a, b)", 420);
     page.Paragraph("Full design report: design/index.html");
   }
   if (f.contains("calibration")) {
@@ -261,6 +263,8 @@ std::string Validation::Report() const {
     page.Paragraph("The later stages use each unit's physical model (mirror at its design a, b; camera tilt and offset "
                    "calibrated; camera intrinsics held at the camera's own calibration, here its design values).");
     fig("data/mono-left/thumbs/left_0000.png", "a rendered calibration image (left unit)", 360);
+    fig("calib-left/figures/left_0000.png", "detection and reprojection, left unit (residuals x20)", 420);
+    fig("calib-right/figures/right_0000.png", "detection and reprojection, right unit (residuals x20)", 420);
     fig("data/mono-right/thumbs/right_0000.png", "a rendered calibration image (right unit, misaligned)", 360);
   }
   if (f.contains("stereo")) {
@@ -304,6 +308,7 @@ std::string Validation::Report() const {
     page.Paragraph("Checked: detection on every image, calibration residuals, the same corners through OpenCV's "
                    "omnidir. Not checkable without ground truth: ray accuracy, the detector's absolute error.");
     page.Preformatted(f["real"].dump(1));
+    fig("real/calib/figures/VMRImage0.png", "VMRImage0: detected corners and reprojection (residuals x20)", 420);
     fig("real/panorama/VMRImage0/panorama.png", "panorama of VMRImage0 with the calibrated model", 900);
   }
   page.Heading("Configuration and versions");
@@ -317,17 +322,28 @@ Runner SetupValidate(CLI::App* sub, const GlobalOptions* global) {
   struct Options {
     std::string preset = "full", out, source = ".", real = "../shared/data/vmr";
     uint64_t seed = 1;
+    int downscale = 0, mono_frames = 0, stereo_pairs = 0, samples = 0;
   };
   auto o = std::make_shared<Options>();
   sub->add_option("--preset", o->preset, "full (the report's run, about 10 min) | reduced (half resolution, CI)")
       ->capture_default_str();
   sub->add_option("-o,--out", o->out, "run folder (default results/validate-<preset>)");
   sub->add_option("--seed", o->seed, "seed of board poses and renders")->capture_default_str();
+  sub->add_option("--downscale", o->downscale, "override the preset: render at 1/N resolution (1, 2, 5, 10)");
+  sub->add_option("--mono-frames", o->mono_frames, "override the preset: calibration images per unit");
+  sub->add_option("--stereo-pairs", o->stereo_pairs, "override the preset: ArUco stereo pairs");
+  sub->add_option("--samples", o->samples, "override the preset: samples per pixel of every render");
   sub->add_option("--source", o->source, "hovs source tree (scenes/, design/)")->capture_default_str();
   sub->add_option("--real", o->real, "folder of real calibration images (7x6 corners, 30 mm); empty: skip")
       ->capture_default_str();
   return [o, global]() {
-    const Preset p = MakePreset(o->preset);
+    Preset p = MakePreset(o->preset);
+    HOVS_REQUIRE(o->downscale >= 0 && o->mono_frames >= 0 && o->stereo_pairs >= 0 && o->samples >= 0, "hovs validate",
+                 "sizes must not be negative");
+    if (o->downscale > 0) p.downscale = o->downscale;
+    if (o->mono_frames > 0) p.mono_count = o->mono_frames;
+    if (o->stereo_pairs > 0) p.stereo_count = o->stereo_pairs;
+    if (o->samples > 0) p.mono_samples = p.stereo_samples = p.street_samples = p.truth_samples = o->samples;
     const fs::path out = o->out.empty() ? fs::path("results") / ("validate-" + p.name) : fs::path(o->out);
     for (const char* f : {"scenes/reference_stereo.yaml", "scenes/street.yaml", "design/reference.yaml"})
       HOVS_REQUIRE(fs::exists(fs::path(o->source) / f), "--source", "no ", f, " under '", o->source,

@@ -128,6 +128,7 @@ TEST(CalibrateCli, CalibratesASyntheticSetAgainstGroundTruthAndRejectsBadInput) 
   ASSERT_EQ(det.exit_code, 0) << det.output;
   const auto jd = nlohmann::json::parse(ReadFile(dir / "cal-det" / "calibration.json"));
   ASSERT_EQ(jd["detection"].size(), 9u);
+  EXPECT_TRUE(fs::exists(dir / "cal-det" / "figures" / "unit0_0000.png"));  // reprojection plot per image
   for (const auto& d : jd["detection"]) EXPECT_TRUE(d["complete"].get<bool>()) << d.dump();
   std::printf("[ figure ] 1375 x 1100, 2 spp: detection RMS %.3f px from the exact corners, calibration RMS %.3f px, "
               "mean ray angle %.4f deg\n", jd["detection_rms_to_truth_px"].get<double>(),

@@ -37,6 +37,7 @@ TEST(Validate, ReducedPresetPassesEveryGateEndToEnd) {
   EXPECT_TRUE(fs::exists(out / "report.html"));
   EXPECT_TRUE(fs::exists(out / "depth" / "error_map.png"));
   EXPECT_TRUE(fs::exists(out / "calib-left" / "calib_results.txt"));
+  EXPECT_TRUE(fs::exists(out / "calib-left" / "figures" / "left_0000.png"));  // detection + reprojection plot
   fs::remove_all(out.parent_path());
 }
 
