@@ -14,6 +14,7 @@
 #include "apps/model_files.h"
 #include "calib/checkerboard_detector.h"
 #include "calib/ocam_io.h"
+#include "calib/omnidir_io.h"
 #include "calib/omnidir_reference.h"
 #include "calib/physical_calibration.h"
 #include "scenes/scene_config.h"
@@ -44,10 +45,11 @@ struct Input {
 };
 
 // The reprojection figure of one image (the article's Fig. 19): a crop around the board, detected corners (green
-// circles), the polynomial model's reprojections (red crosses) and the residuals magnified 20 times (yellow).
+// circles; rejected corners large magenta), the polynomial model's reprojections (red crosses) and the
+// residuals magnified 20 times (yellow).
 void ReprojectionFigure(const std::filesystem::path& image, const calib::BoardObservation& ob,
-                        const PolynomialModel<double>& model, const Rigid3d& cam_from_board, double rms,
-                        const std::filesystem::path& out);
+                        const std::vector<bool>& inlier, const PolynomialModel<double>& model,
+                        const Rigid3d& cam_from_board, double rms, const std::filesystem::path& out);
 
 cv::Mat GreyImage(const std::filesystem::path& path) {
   const unwrap::Image8 im = LoadImage8(path);
@@ -168,12 +170,18 @@ nlohmann::json PolyJson(const calib::PolynomialCalibration& r, const std::vector
     per.push_back({{"image", obs[i].image}, {"corners", obs[i].pixels.size()}, {"rms_px", r.per_image_rms[i]},
                    {"mean_px", r.per_image_mean[i]}, {"above_5px", r.per_image_mean[i] > 5.0}});
   j["per_image"] = per;
+  nlohmann::json outl = nlohmann::json::array();
+  for (const auto& o : r.outliers)
+    outl.push_back({{"image", o.image}, {"corner", o.corner}, {"residual_px", o.residual_px},
+                    {"residual_after_px", o.residual_after_px}});
+  j["outliers"] = outl;
+  j["outlier_threshold_px"] = r.outlier_threshold_px;
   return j;
 }
 
 void ReprojectionFigure(const std::filesystem::path& image, const calib::BoardObservation& ob,
-                        const PolynomialModel<double>& model, const Rigid3d& cam_from_board, double rms,
-                        const std::filesystem::path& out) {
+                        const std::vector<bool>& inlier, const PolynomialModel<double>& model,
+                        const Rigid3d& cam_from_board, double rms, const std::filesystem::path& out) {
   const cv::Mat grey = GreyImage(image);
   double x0 = 1e9, y0 = 1e9, x1 = -1e9, y1 = -1e9;
   for (const auto& p : ob.pixels)
@@ -189,18 +197,92 @@ void ReprojectionFigure(const std::filesystem::path& image, const calib::BoardOb
   };
   for (size_t k = 0; k < ob.pixels.size(); ++k) {
     Vec2d uv;
-    cv::circle(crop, at(ob.pixels[k]), 5, cv::Scalar(0, 200, 0), 1, cv::LINE_AA);
+    const bool in = k >= inlier.size() || inlier[k];
+    cv::circle(crop, at(ob.pixels[k]), in ? 5 : 9, in ? cv::Scalar(0, 200, 0) : cv::Scalar(255, 0, 255), in ? 1 : 2, cv::LINE_AA);
     if (!model.ImgFromCam(cam_from_board * ob.board_points[k], &uv)) continue;
     cv::drawMarker(crop, at(uv), cv::Scalar(0, 0, 255), cv::MARKER_CROSS, 8, 1, cv::LINE_AA);
     cv::line(crop, at(ob.pixels[k]), at(ob.pixels[k] + 20 * (uv - ob.pixels[k])), cv::Scalar(0, 220, 255), 1,
              cv::LINE_AA);
   }
   char text[200];
-  std::snprintf(text, sizeof text, "%s: RMS %.3f px, %zu corners (residuals x20)", ob.image.c_str(), rms,
-                ob.pixels.size());
+  const size_t rejected = std::count(inlier.begin(), inlier.end(), false);
+  std::snprintf(text, sizeof text, "%s: RMS %.3f px, %zu corners%s (residuals x20)", ob.image.c_str(), rms,
+                ob.pixels.size(), rejected ? (", " + std::to_string(rejected) + " rejected (magenta)").c_str() : "");
   cv::putText(crop, text, cv::Point(8, 20), cv::FONT_HERSHEY_SIMPLEX, 0.5, cv::Scalar(255, 255, 255), 2, cv::LINE_AA);
   cv::putText(crop, text, cv::Point(8, 20), cv::FONT_HERSHEY_SIMPLEX, 0.5, cv::Scalar(0, 0, 0), 1, cv::LINE_AA);
   HOVS_REQUIRE(cv::imwrite(out.string(), crop), out.string(), "cannot write the figure");
+}
+
+// The article's Fig. 20 (OCamCalib's error plot): every corner's reprojection error (du, dv), one colour per
+// image, rejected corners as crosses; beside it, where in the image the errors are (colour = error length).
+void ErrorMapFigure(const std::vector<calib::BoardObservation>& obs, const calib::PolynomialCalibration& cal,
+                    const std::filesystem::path& out) {
+  const int S = 520, W = 2 * S + 20;
+  cv::Mat fig(S + 40, W, CV_8UC3, cv::Scalar(255, 255, 255));
+  std::vector<std::vector<Vec2d>> res(obs.size());
+  double extent = 0, worst_in = 0;
+  for (size_t i = 0; i < obs.size(); ++i)
+    for (size_t k = 0; k < obs[i].pixels.size(); ++k) {
+      Vec2d uv(1e9, 1e9);
+      cal.model.ImgFromCam(cal.cam_from_board[i] * obs[i].board_points[k], &uv);
+      res[i].push_back(uv - obs[i].pixels[k]);
+      const bool in = cal.inlier.empty() || cal.inlier[i][k];
+      extent = std::max(extent, res[i].back().cwiseAbs().maxCoeff());
+      if (in) worst_in = std::max(worst_in, res[i].back().norm());
+    }
+  extent = std::max(1e-3, std::min(extent, 4 * worst_in + 1e-3));
+  // A round axis limit: 1, 2 or 5 times a power of ten.
+  double lim = std::pow(10, std::floor(std::log10(extent)));
+  for (double f : {1.0, 2.0, 5.0, 10.0})
+    if (f * lim >= extent) { lim *= f; break; }
+  const auto put = [&](const std::string& t, cv::Point p, double sc = 0.45) {
+    cv::putText(fig, t, p, cv::FONT_HERSHEY_SIMPLEX, sc, cv::Scalar(0, 0, 0), 1, cv::LINE_AA);
+  };
+  const cv::Rect left(40, 20, S - 40, S - 40);
+  cv::rectangle(fig, left, cv::Scalar(0, 0, 0));
+  const auto at = [&](const Vec2d& r) {
+    return cv::Point2d(left.x + (r.x() / lim + 1) * 0.5 * left.width, left.y + (r.y() / lim + 1) * 0.5 * left.height);
+  };
+  cv::line(fig, at(Vec2d(-lim, 0)), at(Vec2d(lim, 0)), cv::Scalar(200, 200, 200));
+  cv::line(fig, at(Vec2d(0, -lim)), at(Vec2d(0, lim)), cv::Scalar(200, 200, 200));
+  char buf[120];
+  std::snprintf(buf, sizeof buf, "%.3g", lim);
+  put(buf, cv::Point(left.br().x - 30, left.br().y + 15));
+  put("-" + std::string(buf), cv::Point(left.x - 10, left.br().y + 15));
+  put("du (px)", cv::Point(left.x + left.width / 2 - 20, left.br().y + 15));
+  put("dv (px), down", cv::Point(left.x, left.y - 6));
+  cv::Mat hue(1, static_cast<int>(std::max<size_t>(obs.size(), 1)), CV_8UC3);
+  for (int i = 0; i < hue.cols; ++i) hue.at<cv::Vec3b>(0, i) = cv::Vec3b(static_cast<uchar>(170 * i / std::max(1, hue.cols)), 230, 210);
+  cv::cvtColor(hue, hue, cv::COLOR_HSV2BGR);
+  for (size_t i = 0; i < obs.size(); ++i) {
+    const cv::Vec3b c = hue.at<cv::Vec3b>(0, static_cast<int>(i));
+    for (size_t k = 0; k < res[i].size(); ++k) {
+      const Vec2d r = res[i][k].cwiseMax(Vec2d(-lim, -lim)).cwiseMin(Vec2d(lim, lim));
+      if (cal.inlier.empty() || cal.inlier[i][k]) cv::circle(fig, at(r), 2, cv::Scalar(c[0], c[1], c[2]), cv::FILLED, cv::LINE_AA);
+      else cv::drawMarker(fig, at(r), cv::Scalar(c[0], c[1], c[2]), cv::MARKER_TILTED_CROSS, 9, 2, cv::LINE_AA);
+    }
+  }
+  // Right: positions in the image, colour = |error| on a 0..lim scale.
+  const double sc = (S - 40.0) / std::max(cal.model.width, cal.model.height);
+  const cv::Rect right(S + 20, 20, static_cast<int>(cal.model.width * sc), static_cast<int>(cal.model.height * sc));
+  cv::rectangle(fig, right, cv::Scalar(0, 0, 0));
+  cv::Mat ramp(1, 256, CV_8UC1);
+  for (int k = 0; k < 256; ++k) ramp.at<uchar>(0, k) = static_cast<uchar>(k);
+  cv::applyColorMap(ramp, ramp, cv::COLORMAP_TURBO);
+  for (size_t i = 0; i < obs.size(); ++i)
+    for (size_t k = 0; k < res[i].size(); ++k) {
+      const int idx = static_cast<int>(std::clamp(res[i][k].norm() / lim, 0.0, 1.0) * 255);
+      const cv::Vec3b c = ramp.at<cv::Vec3b>(0, idx);
+      cv::circle(fig, cv::Point2d(right.x + (obs[i].pixels[k].x() + 0.5) * sc, right.y + (obs[i].pixels[k].y() + 0.5) * sc), 3,
+                 cv::Scalar(c[0], c[1], c[2]), cv::FILLED, cv::LINE_AA);
+    }
+  cv::resize(ramp, ramp, cv::Size(200, 10), 0, 0, cv::INTER_NEAREST);
+  ramp.copyTo(fig(cv::Rect(right.x, S + 10, 200, 10)));
+  put("|error| 0 .. " + std::string(buf) + " px", cv::Point(right.x + 210, S + 20));
+  std::snprintf(buf, sizeof buf, "reprojection errors: %zu images, RMS %.3f px, %zu rejected", obs.size(), cal.rms,
+                cal.outliers.size());
+  put(buf, cv::Point(40, S + 20));
+  HOVS_REQUIRE(cv::imwrite(out.string(), fig), out.string(), "cannot write the figure");
 }
 
 }  // namespace
@@ -213,7 +295,7 @@ Runner SetupCalibrate(CLI::App* sub, const GlobalOptions* global) {
     int subpix = 0;
     std::vector<int> degrees = {2, 3, 4, 5, 6};
     int degree = 4;
-    double loss_scale = 1.0, noise = 0.0;
+    double loss_scale = 1.0, noise = 0.0, outlier_sigmas = 5.0;
     uint64_t seed = 1;
     bool omnidir = false;
   };
@@ -243,6 +325,9 @@ Runner SetupCalibrate(CLI::App* sub, const GlobalOptions* global) {
   sub->add_option("--loss", o->loss, "none | huber | cauchy")->capture_default_str();
   sub->add_option("--loss-scale", o->loss_scale, "robust loss scale, px")->capture_default_str();
   sub->add_flag("--compare-omnidir", o->omnidir, "also run OpenCV omnidir on the same corners");
+  sub->add_option("--outlier-sigmas", o->outlier_sigmas,
+                  "reject corners above this many robust sigmas (at least 0.5 px) after the first solve; 0: keep all")
+      ->capture_default_str();
   sub->add_option("-o,--out", o->out, "report folder (replaced atomically)")->capture_default_str();
   return [o, global]() {
     HOVS_REQUIRE(int(!o->corners.empty()) + int(!o->dataset.empty()) + int(!o->images.empty()) == 1,
@@ -282,7 +367,7 @@ Runner SetupCalibrate(CLI::App* sub, const GlobalOptions* global) {
                    " of ", in.detection.size(), " images have a usable board (at least 3 needed):", failed);
     }
     calib::PolynomialCalibrationOptions po;
-    po.loss = o->loss, po.loss_scale = o->loss_scale;
+    po.loss = o->loss, po.loss_scale = o->loss_scale, po.outlier_sigmas = o->outlier_sigmas;
     // Order selection table (the article's Tables 1-2), then the reported degree.
     nlohmann::json orders = nlohmann::json::array();
     std::optional<calib::PolynomialCalibration> chosen;
@@ -298,7 +383,9 @@ Runner SetupCalibrate(CLI::App* sub, const GlobalOptions* global) {
       po.degree = o->degree;
       chosen = calib::CalibratePolynomial(in.obs, in.width, in.height, po);
     }
-    const calib::UnifiedCalibration uni = calib::CalibrateUnified(in.obs, in.width, in.height, *chosen, o->loss, o->loss_scale);
+    // The unified and physical models and OpenCV omnidir see the corners the polynomial solve kept.
+    const std::vector<calib::BoardObservation> inliers = calib::InlierObservations(in.obs, *chosen);
+    const calib::UnifiedCalibration uni = calib::CalibrateUnified(inliers, in.width, in.height, *chosen, o->loss, o->loss_scale);
     std::optional<calib::PhysicalCalibration> phys;
     std::optional<raytrace::CatadioptricUnit> phys_unit;
     if (o->physical) {
@@ -318,7 +405,7 @@ Runner SetupCalibrate(CLI::App* sub, const GlobalOptions* global) {
       calib::PhysicalCalibrationOptions popt;
       popt.estimate_intrinsics = o->physical_intrinsics;
       popt.estimate_mirror = o->physical_mirror;
-      phys = calib::CalibratePhysical(in.obs, nominal.rig, *chosen, popt);
+      phys = calib::CalibratePhysical(inliers, nominal.rig, *chosen, popt);
       phys_unit = nominal;
       phys_unit->rig = phys->rig;
     }
@@ -353,7 +440,8 @@ Runner SetupCalibrate(CLI::App* sub, const GlobalOptions* global) {
     j["unified"] = {{"model", "unified_radtan"}, {"xi", uni.model.xi}, {"fx", uni.model.fx}, {"fy", uni.model.fy},
                     {"cx", uni.model.cx}, {"cy", uni.model.cy},
                     {"distortion", {uni.model.distortion.k1, uni.model.distortion.k2, uni.model.distortion.p1, uni.model.distortion.p2}},
-                    {"rms_px", uni.rms}, {"mean_px", uni.mean}, {"converged", uni.converged}, {"solver", uni.solver_report}};
+                    {"rms_px", uni.rms}, {"mean_px", uni.mean}, {"converged", uni.converged}, {"solver", uni.solver_report},
+                    {"stddev", uni.stddev}, {"opencv_yaml", "unified.yaml"}};
     j["order_selection"] = orders;
     if (phys) {
       const double deg = 180 / M_PI;
@@ -366,7 +454,7 @@ Runner SetupCalibrate(CLI::App* sub, const GlobalOptions* global) {
                        {"unit", scenes::UnitToJson(*phys_unit)}};
     }
     if (o->omnidir) {
-      const auto cv = calib::RunOpenCvOmnidir(in.obs, in.width, in.height);
+      const auto cv = calib::RunOpenCvOmnidir(inliers, in.width, in.height);
       j["opencv_omnidir"] = cv.ok ? nlohmann::json{{"rms_px", cv.rms}, {"opencv_reported_rms", cv.opencv_rms},
                                                    {"images_used", cv.images_used}, {"xi", cv.xi}, {"fx", cv.fx},
                                                    {"fy", cv.fy}, {"cx", cv.cx}, {"cy", cv.cy}}
@@ -440,9 +528,29 @@ Runner SetupCalibrate(CLI::App* sub, const GlobalOptions* global) {
     StagedDirectory stage(o->out);
     WriteFileAtomic(stage.staging() / "calibration.json", j.dump(2) + "\n");
     WriteFileAtomic(stage.staging() / "calib_results.txt", calib::FormatOcamCalibResults(chosen->model));
+    {
+      calib::OmnidirFile of;
+      of.model = uni.model, of.rms_px = uni.rms, of.stddev = uni.stddev;
+      // The annulus the corners covered, measured around the unified model's centre.
+      double rmin = HUGE_VAL, rmax = 0;
+      for (const auto& ob : inliers)
+        for (const auto& p : ob.pixels) {
+          const double r = (p - Vec2d(uni.model.cx, uni.model.cy)).norm();
+          rmin = std::min(rmin, r), rmax = std::max(rmax, r);
+        }
+      of.annulus_min = 0.9 * rmin, of.annulus_max = 1.05 * rmax;
+      WriteFileAtomic(stage.staging() / "unified.yaml", calib::FormatOmnidirYaml(of));
+    }
     std::string summary = "hovs calibrate: " + std::to_string(in.obs.size()) + " images\n" + detection_summary;
     summary += "  polynomial (degree " + std::to_string(chosen->model.Degree()) + "): RMS " + F("%.4f", chosen->rms) +
                " px, mean " + F("%.4f", chosen->mean) + " px (linear start " + F("%.3f", chosen->initial_rms) + " px)\n";
+    if (!chosen->outliers.empty()) {
+      summary += "  rejected " + std::to_string(chosen->outliers.size()) + " corners above " +
+                 F("%.3f", chosen->outlier_threshold_px) + " px:";
+      for (const auto& ol : chosen->outliers)
+        summary += " " + ol.image + "#" + std::to_string(ol.corner) + " (" + F("%.2f", ol.residual_px) + ")";
+      summary += "\n";
+    }
     summary += "  unified + radtan:         RMS " + F("%.4f", uni.rms) + " px\n";
     if (j.contains("opencv_omnidir") && j["opencv_omnidir"].contains("rms_px"))
       summary += "  OpenCV omnidir (same corners): RMS " + F("%.4f", j["opencv_omnidir"]["rms_px"].get<double>()) + " px\n";
@@ -483,11 +591,16 @@ Runner SetupCalibrate(CLI::App* sub, const GlobalOptions* global) {
       page.Heading("Reprojection per image (polynomial model; residuals x20)");
       for (size_t i = 0; i < in.obs.size() && i < in.paths.size(); ++i) {
         const std::string fig = "figures/" + std::filesystem::path(in.obs[i].image).stem().string() + ".png";
-        ReprojectionFigure(in.paths[i], in.obs[i], chosen->model, chosen->cam_from_board[i], chosen->per_image_rms[i],
-                           stage.staging() / fig);
+        ReprojectionFigure(in.paths[i], in.obs[i], chosen->inlier[i], chosen->model, chosen->cam_from_board[i],
+                           chosen->per_image_rms[i], stage.staging() / fig);
         page.Figure(fig, in.obs[i].image + ": RMS " + F("%.3f", chosen->per_image_rms[i]) + " px", 420);
       }
     }
+    std::filesystem::create_directories(stage.staging() / "figures");
+    ErrorMapFigure(in.obs, *chosen, stage.staging() / "figures/error_map.png");
+    page.Heading("Reprojection error map (polynomial model; the article's Fig. 20)");
+    page.Figure("figures/error_map.png", "left: (du, dv) of every corner, one colour per image, rejected corners as "
+                "crosses; right: where in the image, colour = error length", 900);
     page.Heading("Result");
     page.Preformatted(j.dump(2));
     WriteFileAtomic(stage.staging() / "index.html", page.Render());

@@ -43,7 +43,7 @@ Runner SetupDepth(CLI::App* sub, const GlobalOptions* global) {
   sub->add_option("--left", o->left, "left unit name (default: the first)");
   sub->add_option("--right", o->right, "right unit name (default: the second)");
   sub->add_option("--left-model", o->left_model, "calibrated model of the left unit (calib_results.txt or calibration.json)");
-  sub->add_option("--model-kind", o->model_kind, "with calibration.json models: auto (physical if present) | physical | polynomial")
+  sub->add_option("--model-kind", o->model_kind, "with calibration.json models: auto (physical if present) | physical | polynomial | unified")
       ->capture_default_str();
   sub->add_option("--right-model", o->right_model, "calibrated model of the right unit");
   sub->add_option("--stereo", o->stereo, "relative pose from hovs stereo-calibrate (stereo.json) instead of the manifest's");

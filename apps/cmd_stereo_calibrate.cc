@@ -52,7 +52,7 @@ Runner SetupStereoCalibrate(CLI::App* sub, const GlobalOptions* global) {
   auto o = std::make_shared<Options>();
   sub->add_option("--dataset", o->dataset, "stereo_aruco dataset manifest (two units per frame)")->required();
   sub->add_option("--left-model", o->left_model, "calibrated model of the first unit (calib_results.txt or calibration.json)");
-  sub->add_option("--model-kind", o->model_kind, "with calibration.json models: auto (physical if present) | physical | polynomial")
+  sub->add_option("--model-kind", o->model_kind, "with calibration.json models: auto (physical if present) | physical | polynomial | unified")
       ->capture_default_str();
   sub->add_option("--right-model", o->right_model, "calibrated model of the second unit");
   sub->add_option("--huber", o->huber, "robust loss scale, px")->capture_default_str();

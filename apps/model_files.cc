@@ -5,6 +5,7 @@
 #include <nlohmann/json.hpp>
 
 #include "calib/ocam_io.h"
+#include "calib/omnidir_io.h"
 #include "core/error.h"
 #include "core/io.h"
 #include "raytrace/render.h"
@@ -34,8 +35,22 @@ PolynomialModel<double> LoadPolynomialModelFile(const std::filesystem::path& pat
 }
 
 AnyModel LoadCalibratedModel(const std::filesystem::path& path, const std::string& prefer, double scene_distance) {
-  HOVS_REQUIRE(prefer == "auto" || prefer == "physical" || prefer == "polynomial", "--model-kind",
-               "expected auto, physical or polynomial (got '", prefer, "')");
+  HOVS_REQUIRE(prefer == "auto" || prefer == "physical" || prefer == "polynomial" || prefer == "unified",
+               "--model-kind", "expected auto, physical, polynomial or unified (got '", prefer, "')");
+  if (path.extension() == ".yaml" || path.extension() == ".yml") {
+    HOVS_REQUIRE(prefer == "auto" || prefer == "unified", path.string(),
+                 "an OpenCV omnidir YAML file holds the unified model only (--model-kind ", prefer, ")");
+    const auto f = calib::LoadOmnidirYaml(path);
+    return AnyModel::Unified(f.model, f.annulus_min, f.annulus_max);
+  }
+  if (prefer == "unified") {
+    // calibration.json names its OpenCV YAML file, written beside it.
+    const auto j = nlohmann::json::parse(ReadFile(path), nullptr, false);
+    HOVS_REQUIRE(!j.is_discarded() && j.contains("unified") && j["unified"].contains("opencv_yaml"), path.string(),
+                 "has no unified model (a calibration.json of hovs calibrate, or its unified.yaml)");
+    return LoadCalibratedModel(path.parent_path() / j["unified"]["opencv_yaml"].get<std::string>(), "unified",
+                               scene_distance);
+  }
   if (path.extension() != ".txt" && prefer != "polynomial") {
     const auto j = nlohmann::json::parse(ReadFile(path), nullptr, false);
     HOVS_REQUIRE(!j.is_discarded(), path.string(), "not JSON");
@@ -65,6 +80,7 @@ AnyModel LoadModelSpec(const std::string& spec, const std::string& unit, double 
     throw Error("--unit " + unit, "no such unit in " + spec);
   };
   if (EndsWith(spec, ".yaml") || EndsWith(spec, ".yml")) {
+    if (calib::LooksLikeOmnidirYaml(ReadFile(path))) return LoadCalibratedModel(path, "unified", scene_distance);
     const auto cfg = scenes::LoadSceneConfig(path);
     const auto& units = cfg.description.units;
     const size_t i = pick(units.size(), [&](size_t k) { return units[k].name; });

@@ -9,7 +9,9 @@
 #include <cstdio>
 #include <cstdlib>
 #include <fstream>
+#include <algorithm>
 #include <map>
+#include <memory>
 #include <sstream>
 
 #include "calib/solver_util.h"
@@ -140,6 +142,23 @@ void PolynomialCalibrationOptions::Check(const std::string& where) const {
                "' (known: none, huber, cauchy)");
   HOVS_REQUIRE(loss_scale > 0 && std::isfinite(loss_scale), where + ".loss_scale", "must be positive");
   HOVS_REQUIRE(max_iterations >= 1, where + ".max_iterations", "must be positive");
+  HOVS_REQUIRE(outlier_sigmas == 0 || (outlier_sigmas >= 2 && std::isfinite(outlier_sigmas)), where + ".outlier_sigmas",
+               "must be 0 (no rejection) or at least 2 (got ", outlier_sigmas, ")");
+  HOVS_REQUIRE(outlier_floor_px >= 0 && std::isfinite(outlier_floor_px), where + ".outlier_floor_px", "must be >= 0");
+}
+
+std::vector<BoardObservation> InlierObservations(const std::vector<BoardObservation>& obs,
+                                                 const PolynomialCalibration& cal) {
+  if (cal.inlier.empty()) return obs;
+  HOVS_REQUIRE(cal.inlier.size() == obs.size(), "calibration", "inlier table and observations differ in size");
+  std::vector<BoardObservation> out;
+  for (size_t i = 0; i < obs.size(); ++i) {
+    BoardObservation o{obs[i].image, {}, {}};
+    for (size_t j = 0; j < obs[i].pixels.size(); ++j)
+      if (cal.inlier[i][j]) o.board_points.push_back(obs[i].board_points[j]), o.pixels.push_back(obs[i].pixels[j]);
+    out.push_back(std::move(o));
+  }
+  return out;
 }
 
 PolynomialCalibration CalibratePolynomial(const std::vector<BoardObservation>& obs, int width, int height,
@@ -208,23 +227,26 @@ PolynomialCalibration CalibratePolynomial(const std::vector<BoardObservation>& o
     pose_params[i] = PoseToParams(Rigid3d(Eigen::Quaterniond(R), Vec3d(poses[i].t.x(), poses[i].t.y(), lin(N + i))));
   }
 
-  ceres::Problem problem;
   static const std::array<double, 3> kIdentityAffine = {1, 0, 0};
+  PolynomialCalibration out;
   const auto evaluate = [&](std::vector<double>* per_image_rms, std::vector<double>* per_image_mean, double* rms,
                             double* mean) {
     double sum2 = 0, sum = 0;
     size_t count = 0;
     for (size_t i = 0; i < obs.size(); ++i) {
       double s2 = 0, s1 = 0;
+      size_t n = 0;
       for (size_t j = 0; j < obs[i].pixels.size(); ++j) {
         const double hint = (obs[i].pixels[j] - Vec2d(centre[0], centre[1])).norm();
         ReprojectionError e(obs[i].board_points[j], obs[i].pixels[j], N, scale, hint, nullptr);
         double res[2] = {1e6, 1e6};
         e(centre, affine, poly.data(), pose_params[i].data(), pose_params[i].data() + 3, res);
         const double d2 = res[0] * res[0] + res[1] * res[1];
-        s2 += d2, s1 += std::sqrt(d2);
+        for (auto& o : out.outliers)
+          if (o.image_index == static_cast<int>(i) && o.corner == static_cast<int>(j)) o.residual_after_px = std::sqrt(d2);
+        if (!out.inlier.empty() && !out.inlier[i][j]) continue;
+        s2 += d2, s1 += std::sqrt(d2), ++n;
       }
-      const size_t n = obs[i].pixels.size();
       if (per_image_rms) per_image_rms->push_back(std::sqrt(s2 / n));
       if (per_image_mean) per_image_mean->push_back(s1 / n);
       sum2 += s2, sum += s1, count += n;
@@ -232,7 +254,6 @@ PolynomialCalibration CalibratePolynomial(const std::vector<BoardObservation>& o
     *rms = std::sqrt(sum2 / count);
     *mean = sum / count;
   };
-  PolynomialCalibration out;
   double mean0 = 0;
   evaluate(nullptr, nullptr, &out.initial_rms, &mean0);
   if (std::getenv("HOVS_CALIB_DEBUG")) {
@@ -244,20 +265,79 @@ PolynomialCalibration CalibratePolynomial(const std::vector<BoardObservation>& o
                    pose_params[i][2], pose_params[i][3], pose_params[i][4], pose_params[i][5]);
   }
 
-  for (size_t i = 0; i < obs.size(); ++i)
-    for (size_t j = 0; j < obs[i].pixels.size(); ++j) {
-      const double hint = (obs[i].pixels[j] - centre0).norm();
-      auto* cost = new ceres::DynamicAutoDiffCostFunction<ReprojectionError, 8>(new ReprojectionError(
-          obs[i].board_points[j], obs[i].pixels[j], N, scale, hint, opt.estimate_affine ? nullptr : &kIdentityAffine));
-      for (int size : {2, 3, N, 3, 3}) cost->AddParameterBlock(size);
-      cost->SetNumResiduals(2);
-      problem.AddResidualBlock(cost, MakeLoss(opt.loss, opt.loss_scale), centre, affine, poly.data(), pose_params[i].data(), pose_params[i].data() + 3);
-    }
-  if (!opt.estimate_affine) problem.SetParameterBlockConstant(affine);
+  // The joint problem over the current inlier corners (all at first).
+  out.inlier.resize(obs.size());
+  for (size_t i = 0; i < obs.size(); ++i) out.inlier[i].assign(obs[i].pixels.size(), true);
+  std::unique_ptr<ceres::Problem> problem;
   ceres::Solver::Options so = CalibrationSolverOptions(opt.max_iterations, 1e-14);
   so.num_threads = 1;
   ceres::Solver::Summary summary;
-  ceres::Solve(so, &problem, &summary);
+  const auto solve = [&] {
+    problem = std::make_unique<ceres::Problem>();
+    for (size_t i = 0; i < obs.size(); ++i)
+      for (size_t j = 0; j < obs[i].pixels.size(); ++j) {
+        if (!out.inlier[i][j]) continue;
+        const double hint = (obs[i].pixels[j] - centre0).norm();
+        auto* cost = new ceres::DynamicAutoDiffCostFunction<ReprojectionError, 8>(new ReprojectionError(
+            obs[i].board_points[j], obs[i].pixels[j], N, scale, hint, opt.estimate_affine ? nullptr : &kIdentityAffine));
+        for (int size : {2, 3, N, 3, 3}) cost->AddParameterBlock(size);
+        cost->SetNumResiduals(2);
+        problem->AddResidualBlock(cost, MakeLoss(opt.loss, opt.loss_scale), centre, affine, poly.data(),
+                                  pose_params[i].data(), pose_params[i].data() + 3);
+      }
+    if (!opt.estimate_affine) problem->SetParameterBlockConstant(affine);
+    ceres::Solve(so, problem.get(), &summary);
+  };
+  solve();
+
+  // Outliers: corners whose residual exceeds outlier_sigmas robust standard deviations (sigma per axis from the
+  // median residual length of the inliers: for Gaussian noise the length is Rayleigh distributed, median =
+  // 1.1774 sigma), never below outlier_floor_px. Rejected corners leave the problem, which is solved again; every
+  // corner is then re-tested, so a good corner that a gross error had pulled away comes back. Repeated until the
+  // set is stable (at most 6 rounds). An image keeps at least 6 corners (its worst ones above the threshold stay
+  // and show in its error).
+  const auto residual = [&](size_t i, size_t j) {
+    const double hint = (obs[i].pixels[j] - Vec2d(centre[0], centre[1])).norm();
+    ReprojectionError e(obs[i].board_points[j], obs[i].pixels[j], N, scale, hint,
+                        opt.estimate_affine ? nullptr : &kIdentityAffine);
+    double res[2] = {1e6, 1e6};
+    e(centre, affine, poly.data(), pose_params[i].data(), pose_params[i].data() + 3, res);
+    return std::hypot(res[0], res[1]);
+  };
+  std::vector<std::vector<double>> first_residual(obs.size());
+  for (int round = 0; opt.outlier_sigmas > 0 && round < 6; ++round) {
+    std::vector<std::vector<double>> dist(obs.size());
+    std::vector<double> in;
+    for (size_t i = 0; i < obs.size(); ++i)
+      for (size_t j = 0; j < obs[i].pixels.size(); ++j) {
+        dist[i].push_back(residual(i, j));
+        if (out.inlier[i][j]) in.push_back(dist[i].back());
+      }
+    if (round == 0) first_residual = dist;
+    std::nth_element(in.begin(), in.begin() + in.size() / 2, in.end());
+    const double sigma = in[in.size() / 2] / 1.1774;
+    out.outlier_threshold_px = std::max(opt.outlier_floor_px, opt.outlier_sigmas * sigma);
+    bool changed = false;
+    for (size_t i = 0; i < obs.size(); ++i) {
+      std::vector<size_t> order(obs[i].pixels.size());
+      for (size_t j = 0; j < order.size(); ++j) order[j] = j;
+      std::sort(order.begin(), order.end(), [&](size_t x, size_t y) { return dist[i][x] > dist[i][y]; });
+      std::vector<bool> keep(order.size(), true);
+      size_t kept = order.size();
+      for (size_t j : order) {
+        if (dist[i][j] <= out.outlier_threshold_px || kept <= 6) break;
+        keep[j] = false, --kept;
+      }
+      changed |= keep != out.inlier[i];
+      out.inlier[i] = keep;
+    }
+    if (!changed) break;
+    solve();
+  }
+  for (size_t i = 0; i < obs.size(); ++i)
+    for (size_t j = 0; j < obs[i].pixels.size(); ++j)
+      if (!out.inlier[i][j])
+        out.outliers.push_back({static_cast<int>(i), obs[i].image, static_cast<int>(j), first_residual[i][j], 0.0});
   out.converged = summary.IsSolutionUsable() && summary.termination_type == ceres::CONVERGENCE;
   out.solver_report = summary.BriefReport();
 
@@ -282,23 +362,14 @@ PolynomialCalibration CalibratePolynomial(const std::vector<BoardObservation>& o
   // Standard deviations of the intrinsics (when the covariance is computable).
   // With the affine terms free, a rotation about the optical axis is a gauge freedom (poses turn, d and e
   // absorb it): the covariance is the pseudo-inverse with that one null direction removed.
-  ceres::Covariance::Options co;
-  co.algorithm_type = ceres::DENSE_SVD;
-  co.null_space_rank = opt.estimate_affine ? 1 : 0;
-  ceres::Covariance cov(co);
-  std::vector<std::pair<const double*, const double*>> blocks = {{centre, centre}, {poly.data(), poly.data()}};
-  if (opt.estimate_affine) blocks.push_back({affine, affine});
-  if (cov.Compute(blocks, &problem)) {
-    double cc[4], pc[64], ac[9];
-    cov.GetCovarianceBlock(centre, centre, cc);
-    cov.GetCovarianceBlock(poly.data(), poly.data(), pc);
-    out.stddev["cx"] = std::sqrt(cc[0]), out.stddev["cy"] = std::sqrt(cc[3]);
-    out.stddev["a0"] = std::sqrt(pc[0]);
-    for (int k = 2; k <= N; ++k) out.stddev["a" + std::to_string(k)] = std::sqrt(pc[(k - 1) * N + (k - 1)]) / std::pow(scale, k);
-    if (opt.estimate_affine) {
-      cov.GetCovarianceBlock(affine, affine, ac);
-      out.stddev["c"] = std::sqrt(ac[0]), out.stddev["d"] = std::sqrt(ac[4]), out.stddev["e"] = std::sqrt(ac[8]);
-    }
+  std::vector<std::pair<double*, int>> blocks = {{centre, 2}, {poly.data(), N}};
+  if (opt.estimate_affine) blocks.push_back({affine, 3});
+  std::vector<std::vector<double>> sd;
+  if (ParameterStddevs(problem.get(), blocks, opt.estimate_affine ? 1 : 0, &sd)) {
+    out.stddev["cx"] = sd[0][0], out.stddev["cy"] = sd[0][1];
+    out.stddev["a0"] = sd[1][0];
+    for (int k = 2; k <= N; ++k) out.stddev["a" + std::to_string(k)] = sd[1][k - 1] / std::pow(scale, k);
+    if (opt.estimate_affine) out.stddev["c"] = sd[2][0], out.stddev["d"] = sd[2][1], out.stddev["e"] = sd[2][2];
   }
   return out;
 }
@@ -385,7 +456,8 @@ struct RayFit {
 }  // namespace
 
 UnifiedCalibration CalibrateUnified(const std::vector<BoardObservation>& obs, int width, int height,
-                                    const PolynomialCalibration& start, const std::string& loss, double loss_scale) {
+                                    const PolynomialCalibration& start, const std::string& loss, double loss_scale,
+                                    bool estimate_distortion) {
   HOVS_REQUIRE(start.cam_from_board.size() == obs.size(), "unified calibration", "the start has a different image count");
   const PolynomialModel<double>& poly = start.model;
   // 1. A unified model through the polynomial model's rays over the observed annulus.
@@ -422,6 +494,7 @@ UnifiedCalibration CalibrateUnified(const std::vector<BoardObservation>& obs, in
                                    new UnifiedReprojection(obs[i].board_points[j], obs[i].pixels[j])),
                                MakeLoss(loss, loss_scale), intr, dist, poses[i].data(), poses[i].data() + 3);
     }
+  if (!estimate_distortion) problem.SetParameterBlockConstant(dist);
   const ceres::Solver::Options so = CalibrationSolverOptions(300, 1e-14);
   ceres::Solver::Summary summary;
   ceres::Solve(so, &problem, &summary);
@@ -449,6 +522,14 @@ UnifiedCalibration CalibrateUnified(const std::vector<BoardObservation>& obs, in
   }
   out.rms = std::sqrt(sum2 / count);
   out.mean = sum / count;
+  // Standard deviations of the intrinsics (no gauge freedom: skew is fixed).
+  std::vector<std::vector<double>> sd;
+  std::vector<std::pair<double*, int>> blocks = {{intr, 5}};
+  if (estimate_distortion) blocks.push_back({dist, 4});
+  if (ParameterStddevs(&problem, blocks, 0, &sd)) {
+    const char* names[9] = {"xi", "fx", "fy", "cx", "cy", "k1", "k2", "p1", "p2"};
+    for (size_t k = 0; k < 5 + 4 * estimate_distortion; ++k) out.stddev[names[k]] = k < 5 ? sd[0][k] : sd[1][k - 5];
+  }
   return out;
 }
 

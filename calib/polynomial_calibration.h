@@ -30,15 +30,31 @@ struct PolynomialCalibrationOptions {
   bool estimate_affine = true;    // c, d, e
   std::optional<Vec2d> initial_centre;  // default: the image centre
   int max_iterations = 200;
+  // Outlier rejection after the first solve: corners above max(outlier_floor_px, outlier_sigmas x the robust
+  // per-axis sigma of all residuals) are removed and listed, and the problem is solved again. 0 disables it.
+  double outlier_sigmas = 5;
+  double outlier_floor_px = 0.5;
   void Check(const std::string& where) const;
+};
+
+// A corner the solve rejected: its residual after the first solve, and after the final solve (not used by it).
+struct CornerOutlier {
+  int image_index = 0;
+  std::string image;
+  int corner = 0;
+  double residual_px = 0;
+  double residual_after_px = 0;
 };
 
 struct PolynomialCalibration {
   PolynomialModel<double> model;
   std::vector<Rigid3d> cam_from_board;    // the board poses, in the model's (mirror) frame
-  std::vector<double> per_image_rms;      // px
+  std::vector<double> per_image_rms;      // px, over the image's inliers
   std::vector<double> per_image_mean;     // px, mean reprojection error (the article's figure)
-  double rms = 0, mean = 0;               // over all corners, px
+  double rms = 0, mean = 0;               // over all inlier corners, px
+  std::vector<std::vector<bool>> inlier;  // per image, per corner
+  std::vector<CornerOutlier> outliers;    // rejected corners, listed
+  double outlier_threshold_px = 0;        // 0: rejection disabled
   double initial_rms = 0;                 // after the linear initialisation
   std::map<std::string, double> stddev;   // cx, cy, c, d, e, a0, a2, ... (from the covariance)
   bool converged = false;
@@ -48,6 +64,10 @@ struct PolynomialCalibration {
 // Throws hovs::Error for fewer than three images, images with fewer than 6 corners, degenerate data.
 PolynomialCalibration CalibratePolynomial(const std::vector<BoardObservation>& observations, int width, int height,
                                           const PolynomialCalibrationOptions& options);
+
+// The observations without the corners the calibration rejected (same images, same order).
+std::vector<BoardObservation> InlierObservations(const std::vector<BoardObservation>& observations,
+                                                 const PolynomialCalibration& calibration);
 
 // Reads a corner table: image,corner,board_x_mm,board_y_mm,u_px,v_px (the format of shared/data/vmr).
 std::vector<BoardObservation> LoadCornerCsv(const std::filesystem::path& path);
@@ -63,15 +83,18 @@ struct UnifiedCalibration {
   std::vector<Rigid3d> cam_from_board;
   std::vector<double> per_image_rms;
   double rms = 0, mean = 0;
+  std::map<std::string, double> stddev;   // xi, fx, fy, cx, cy, k1, k2, p1, p2 (from the covariance)
   bool converged = false;
   std::string solver_report;
 };
 
 // The unified (Mei) model with radial-tangential distortion through the same machinery: started from a
 // polynomial calibration (its poses, and a unified model fitted to its rays), then one joint Ceres problem over
-// xi, fx, fy, cx, cy, k1, k2, p1, p2 and every pose.
+// xi, fx, fy, cx, cy, k1, k2, p1, p2 (distortion held at 0 unless estimate_distortion) and every pose.
+// With the distortion free, xi, the focal lengths and k1 trade off along a shallow valley (Mei's model is
+// nearly degenerate there): their standard deviations are large and only the centre is well determined.
 UnifiedCalibration CalibrateUnified(const std::vector<BoardObservation>& observations, int width, int height,
                                     const PolynomialCalibration& start, const std::string& loss = "none",
-                                    double loss_scale = 1.0);
+                                    double loss_scale = 1.0, bool estimate_distortion = true);
 
 }  // namespace hovs::calib
