@@ -135,6 +135,16 @@ TEST(CalibrateCli, CalibratesASyntheticSetAgainstGroundTruthAndRejectsBadInput) 
               jd["polynomial"]["rms_px"].get<double>(), jd["ground_truth"]["mean_ray_angle_deg"].get<double>());
   EXPECT_LT(jd["detection_rms_to_truth_px"].get<double>(), 0.3);
   EXPECT_LT(jd["polynomial"]["rms_px"].get<double>(), 0.3);
+  EXPECT_TRUE(fs::exists(dir / "cal-det" / "figures" / "error_map.png"));
+  EXPECT_TRUE(jd["polynomial"]["outliers"].is_array());
+  // The unified model's OpenCV YAML is a model file for the other commands: a panorama through it.
+  const std::string unified_yaml = ReadFile(dir / "cal-det" / "unified.yaml");
+  EXPECT_NE(unified_yaml.find("camera_matrix"), std::string::npos);
+  EXPECT_NE(unified_yaml.find("distortion_coefficients"), std::string::npos);
+  const auto pano = test::Hovs("-q unwrap --model " + (dir / "cal-det" / "unified.yaml").string() + " --layout panorama -i " +
+                               (dir / "half" / "images").string() + " -o " + (dir / "pano").string());
+  ASSERT_EQ(pano.exit_code, 0) << pano.output;
+  EXPECT_NE(ReadFile(dir / "pano" / "views.json").find("unified"), std::string::npos);
   // Bad input: one clear error, exit 2, no report.
   const auto rejected = [&](const std::string& args, const std::string& needle) {
     const auto r = test::Hovs("calibrate " + args + " --out " + (dir / "bad").string());
