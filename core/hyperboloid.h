@@ -55,7 +55,8 @@ struct HyperboloidMirror {
 
   // Unit normal on the reflective side at a point p of the sheet.
   Vec3<T> Normal(const Vec3<T>& p) const {
-    const Vec3<T> n(p(0) / (b * b), p(1) / (b * b), -(p(2) + c()) / (a * a));
+    const T ib2 = T(1) / (b * b);
+    const Vec3<T> n(p(0) * ib2, p(1) * ib2, -(p(2) + c()) / (a * a));
     return Normalized(n);
   }
 

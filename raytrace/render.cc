@@ -64,6 +64,10 @@ class RayMaker {
       unit_ = &scene.description().units[cam.unit];
       mirror_from_cam_ = unit_->rig.cam_from_mirror.Inverse();
       world_from_cam_ = unit_->world_from_mirror * mirror_from_cam_;
+      // Rotation matrices for the per-sample transforms (a quaternion rotation costs twice as much).
+      R_mirror_from_cam_ = mirror_from_cam_.rotation.toRotationMatrix(), t_mirror_from_cam_ = mirror_from_cam_.translation;
+      R_world_from_mirror_ = unit_->world_from_mirror.rotation.toRotationMatrix();
+      t_world_from_mirror_ = unit_->world_from_mirror.translation;
       viewpoint_ = unit_->world_from_mirror.translation;
       width_ = unit_->rig.camera.width, height_ = unit_->rig.camera.height;
     } else {
@@ -91,20 +95,26 @@ class RayMaker {
       dir_cam = (bearing * (focus_distance_ / bearing.z()) - origin_cam).normalized();
     }
     if (unit_) {
-      const Rigid3d world_from_mirror = tau == 0 ? unit_->world_from_mirror : unit_->WorldFromMirrorAt(tau);
-      const Vec3d o = mirror_from_cam_ * origin_cam, v = mirror_from_cam_.Rotate(dir_cam);
+      const Vec3d o = R_mirror_from_cam_ * origin_cam + t_mirror_from_cam_, v = R_mirror_from_cam_ * dir_cam;
       Vec3d M, d;
       // The pixel's ray from the camera, reflected by the exact mirror (RayFromImg without a second unprojection).
       if (unit_->rig.ReflectCameraRay(o, v, &M, &d)) {
         r.valid = r.via_mirror = true;
         r.from_mirror = cam_.unit;
         r.mirror_point = M;
-        r.origin = world_from_mirror * M;
-        r.direction = world_from_mirror.Rotate(d);
+        if (tau == 0) {
+          r.origin = R_world_from_mirror_ * M + t_world_from_mirror_;
+          r.direction = R_world_from_mirror_ * d;
+        } else {
+          const Rigid3d world_from_mirror = unit_->WorldFromMirrorAt(tau);
+          r.origin = world_from_mirror * M;
+          r.direction = world_from_mirror.Rotate(d);
+        }
         r.tnear = 1e-5;  // clears the float rounding of the origin on the sheet (the mirror is convex)
         return r;
       }
-      const Rigid3d world_from_cam = world_from_mirror * mirror_from_cam_;
+      const Rigid3d world_from_cam =
+          (tau == 0 ? unit_->world_from_mirror : unit_->WorldFromMirrorAt(tau)) * mirror_from_cam_;
       r.valid = true;
       r.origin = world_from_cam * origin_cam;
       r.direction = world_from_cam.Rotate(dir_cam);
@@ -122,6 +132,8 @@ class RayMaker {
   double lens_radius_ = 0, focus_distance_ = 1;
   const CatadioptricUnit* unit_ = nullptr;
   Rigid3d world_from_cam_, mirror_from_cam_;
+  Eigen::Matrix3d R_mirror_from_cam_ = Eigen::Matrix3d::Identity(), R_world_from_mirror_ = Eigen::Matrix3d::Identity();
+  Vec3d t_mirror_from_cam_ = Vec3d::Zero(), t_world_from_mirror_ = Vec3d::Zero();
   Vec3d viewpoint_ = Vec3d::Zero();
   int width_ = 0, height_ = 0;
 };
@@ -129,7 +141,7 @@ class RayMaker {
 // Collects ray requests and traces them 16 at a time.
 class Batch {
  public:
-  explicit Batch(const RayScene& scene) : scene_(scene) {}
+  explicit Batch(const RayScene& scene, bool colour = true) : scene_(scene), colour_(colour) {}
   template <class OnHit>
   void Add(const RayRequest& r, int tag, const OnHit& on_hit) {
     if (!r.valid) {
@@ -144,7 +156,7 @@ class Batch {
   template <class OnHit>
   void Flush(const OnHit& on_hit) {
     if (n_ == 0) return;
-    scene_.Trace16(n_, o_, d_, tn_, hits_, from_);
+    scene_.Trace16(n_, o_, d_, tn_, hits_, from_, colour_);
     rays_ += n_;
     for (int i = 0; i < n_; ++i) on_hit(tags_[i], reqs_[i], hits_[i]);
     n_ = 0;
@@ -153,6 +165,7 @@ class Batch {
 
  private:
   const RayScene& scene_;
+  bool colour_ = true;
   RayRequest reqs_[16];
   int tags_[16];
   Vec3d o_[16], d_[16];
@@ -173,8 +186,16 @@ Frame Render(const RayScene& scene, const ViewCamera& camera, const RenderOption
   Frame f;
   f.width = maker.width(), f.height = maker.height();
   const size_t npx = static_cast<size_t>(f.width) * f.height;
-  f.rgb.assign(npx * 3, 0.0f);
-  if (options.ground_truth) f.truth.data.assign(npx * GroundTruth::kChannels, 0.0f);
+  // Zeroed in parallel (the first touch of ~360 MB at full resolution with ground truth).
+  f.rgb.resize(npx * 3);
+  if (options.ground_truth) f.truth.data.resize(npx * GroundTruth::kChannels);
+  const auto zero = [](PixelBuffer* b) {
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, b->size(), size_t(1) << 20), [&](const tbb::blocked_range<size_t>& r) {
+      std::fill(b->begin() + static_cast<std::ptrdiff_t>(r.begin()), b->begin() + static_cast<std::ptrdiff_t>(r.end()), 0.0f);
+    });
+  };
+  zero(&f.rgb);
+  zero(&f.truth.data);
 
   const int tile = 16;
   RenderOptions::Region roi = options.region;
@@ -194,7 +215,7 @@ Frame Render(const RayScene& scene, const ViewCamera& camera, const RenderOption
   int last_percent = -1;
 
   tbb::parallel_for(tbb::blocked_range<int>(0, ntiles), [&](const tbb::blocked_range<int>& range) {
-    Batch batch(scene);
+    Batch batch(scene), truth_batch(scene, false);
     for (int ti = range.begin(); ti != range.end(); ++ti) {
       const int x0 = roi.x0 + (ti % tiles_x) * tile, y0 = roi.y0 + (ti / tiles_x) * tile;
       const int x1 = std::min(x0 + tile, roi.x1), y1 = std::min(y0 + tile, roi.y1);
@@ -248,9 +269,9 @@ Frame Render(const RayScene& scene, const ViewCamera& camera, const RenderOption
             const int px = y * f.width + x;
             const RayRequest r = maker.Make(Vec2d(x, y));
             if (!r.valid) f.truth.data[static_cast<size_t>(px) * GroundTruth::kChannels] = std::numeric_limits<float>::infinity();
-            batch.Add(r, px, record);
+            truth_batch.Add(r, px, record);
           }
-        batch.Flush(record);
+        truth_batch.Flush(record);
       }
       const int d = ++done;
       if (progress) {
@@ -262,7 +283,7 @@ Frame Render(const RayScene& scene, const ViewCamera& camera, const RenderOption
         }
       }
     }
-    rays += batch.rays();
+    rays += batch.rays() + truth_batch.rays();
   });
   f.rays = rays;
   f.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
@@ -333,6 +354,8 @@ void WriteImage(const std::filesystem::path& path, int width, int height, int ch
   HOVS_REQUIRE(out != nullptr, path.string(), "no image writer for this extension: ", OIIO::geterror());
   OIIO::ImageSpec spec(width, height, channels, bit_depth == 16 ? OIIO::TypeDesc::UINT16 : OIIO::TypeDesc::UINT8);
   spec.attribute("Software", "hovs");
+  // zlib level 3 instead of libpng's 6: half the time for a 3 % larger file (BM_WritePng).
+  spec.attribute("png:compressionLevel", 3);
   const bool ok = out->open(tmp.string(), spec) && out->write_image(OIIO::TypeDesc::FLOAT, values.data()) && out->close();
   if (!ok) {
     std::error_code ec;
@@ -351,7 +374,9 @@ void WriteGroundTruthExr(const std::filesystem::path& path, const Frame& frame,
   HOVS_REQUIRE(out != nullptr, path.string(), "no OpenEXR writer: ", OIIO::geterror());
   OIIO::ImageSpec spec(frame.width, frame.height, GroundTruth::kChannels, OIIO::TypeDesc::FLOAT);
   spec.channelnames.assign(GroundTruth::kNames, GroundTruth::kNames + GroundTruth::kChannels);
-  spec.attribute("compression", "zip");
+  // PIZ: lossless like zip, 17 % smaller and 25 % faster on these channels (BM_WriteGroundTruthExr); every
+  // channel stays 32-bit float (half normals and ids were no smaller after compression, and slower to write).
+  spec.attribute("compression", "piz");
   spec.attribute("Software", "hovs");
   for (const auto& [k, v] : metadata) spec.attribute("hovs:" + k, v);
   const bool ok = out->open(tmp.string(), spec) && out->write_image(OIIO::TypeDesc::FLOAT, frame.truth.data.data()) &&

@@ -7,6 +7,8 @@
 #include <filesystem>
 #include <map>
 #include <string>
+#include <memory>
+#include <utility>
 #include <vector>
 
 #include "raytrace/scene.h"
@@ -63,15 +65,37 @@ struct ViewCamera {
 //   id      object id (0 sky, 1 mirror mount, 2 camera body, 3 mirror back, 4.. scene objects in order)
 //   mask    1 where the pixel's ray is reflected by the mirror (inside the rim) and does not see the camera
 //   M.X/Y/Z the mirror reflection point in the unit's mirror frame (0 where mask is 0 and the rim is missed)
+// A float buffer whose resize() leaves new elements uninitialised (the renderer fills frames in parallel
+// instead of zeroing hundreds of megabytes on one thread). Otherwise a std::vector<float>.
+template <class T>
+struct UninitialisedAllocator : std::allocator<T> {
+  template <class U>
+  struct rebind {
+    using other = UninitialisedAllocator<U>;
+  };
+  UninitialisedAllocator() = default;
+  template <class U>
+  UninitialisedAllocator(const UninitialisedAllocator<U>&) noexcept {}
+  template <class U>
+  void construct(U* p) noexcept {
+    ::new (static_cast<void*>(p)) U;
+  }
+  template <class U, class... Args>
+  void construct(U* p, Args&&... args) {
+    ::new (static_cast<void*>(p)) U(std::forward<Args>(args)...);
+  }
+};
+using PixelBuffer = std::vector<float, UninitialisedAllocator<float>>;
+
 struct GroundTruth {
   static constexpr int kChannels = 12;
   static const char* const kNames[kChannels];
-  std::vector<float> data;  // interleaved, kChannels per pixel
+  PixelBuffer data;  // interleaved, kChannels per pixel
 };
 
 struct Frame {
   int width = 0, height = 0;
-  std::vector<float> rgb;   // linear radiance, 3 per pixel, before the sensor model
+  PixelBuffer rgb;   // linear radiance, 3 per pixel, before the sensor model
   GroundTruth truth;        // empty if not requested
   uint64_t rays = 0;        // rays traced through Embree
   double seconds = 0;

@@ -264,7 +264,7 @@ RayScene::~RayScene() {
   if (device_) rtcReleaseDevice(device_);
 }
 
-void RayScene::Shade(const Vec3d& o, const Vec3d& d, unsigned geom_id, unsigned prim_id, Hit* h) const {
+void RayScene::Shade(const Vec3d& o, const Vec3d& d, unsigned geom_id, unsigned prim_id, Hit* h, bool colour) const {
   if (geom_id == rect_geom_) {
     const Rect& r = desc_.rects[prim_id];
     const Vec3d n = r.world_from_rect.Rotate(Vec3d(0, 0, 1));
@@ -280,7 +280,7 @@ void RayScene::Shade(const Vec3d& o, const Vec3d& d, unsigned geom_id, unsigned 
     h->t = t;
     h->point = X;
     h->normal = front ? n : Vec3d(-n);
-    h->colour = front || r.double_sided ? r.front.Eval(local.x(), local.y()) : r.back;
+    if (colour) h->colour = front || r.double_sided ? r.front.Eval(local.x(), local.y()) : r.back;
     return;
   }
   if (geom_id >= geom_to_user_.size() || geom_to_user_[geom_id] < 0) return;
@@ -330,17 +330,17 @@ void IntersectPacket(RTCScene scene, int count, const Vec3d* o, const Vec3d* d, 
 }  // namespace
 
 void RayScene::Trace16(int count, const Vec3d* o, const Vec3d* d, const double* tnear, Hit* hits,
-                       const int* from_mirror) const {
+                       const int* from_mirror, bool colour) const {
   alignas(64) RTCRayHit16 rh;
   IntersectPacket(scene_, count, o, d, tnear, from_mirror, &rh);
   for (int i = 0; i < count; ++i) {
     Hit& h = hits[i];
     h = Hit();
     if (rh.hit.geomID[i] == RTC_INVALID_GEOMETRY_ID) {
-      h.colour = desc_.sky.Eval(d[i]);
+      if (colour) h.colour = desc_.sky.Eval(d[i]);
       continue;
     }
-    Shade(o[i], d[i], rh.hit.geomID[i], rh.hit.primID[i], &h);
+    Shade(o[i], d[i], rh.hit.geomID[i], rh.hit.primID[i], &h, colour);
   }
 }
 

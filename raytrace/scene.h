@@ -97,8 +97,9 @@ class RayScene {
   // Traces up to 16 rays as one packet (rtcIntersect16). Directions must be unit vectors. Hits are
   // recomputed in double on the analytic surface that Embree found, then shaded. from_mirror (optional): per
   // ray, the unit whose mirror it leaves (-1: none), which it cannot hit again (the mirror is convex).
+  // colour = false: geometry only (point, normal, id; no texture lookup), for ground-truth rays.
   void Trace16(int count, const Vec3d* origins, const Vec3d* directions, const double* tnear, Hit* hits,
-               const int* from_mirror = nullptr) const;
+               const int* from_mirror = nullptr, bool colour = true) const;
   Hit Trace(const Vec3d& origin, const Vec3d& direction, double tnear = 0, int from_mirror = -1) const;
   // True if anything blocks the open segment from a to b (rtcOccluded1).
   bool Occluded(const Vec3d& a, const Vec3d& b, double eps = 1e-7) const;
@@ -110,7 +111,7 @@ class RayScene {
   struct UserGeometry;  // mirror, annulus (mount, lens face): analytic shapes, defined in scene.cc
 
  private:
-  void Shade(const Vec3d& o, const Vec3d& d, unsigned geom_id, unsigned prim_id, Hit* hit) const;
+  void Shade(const Vec3d& o, const Vec3d& d, unsigned geom_id, unsigned prim_id, Hit* hit, bool colour) const;
 
   SceneDescription desc_;
   RTCDevice device_ = nullptr;

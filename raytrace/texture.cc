@@ -65,7 +65,7 @@ double ValueNoise(double x, double y, uint32_t seed) {
   const int32_t ix = static_cast<int32_t>(fx), iy = static_cast<int32_t>(fy);
   const double tx = x - fx, ty = y - fy;
   const double sx = tx * tx * (3 - 2 * tx), sy = ty * ty * (3 - 2 * ty);
-  const auto v = [&](int32_t a, int32_t b) { return Hash(a, b, seed) / 4294967295.0; };
+  const auto v = [&](int32_t a, int32_t b) { return Hash(a, b, seed) * (1.0 / 4294967295.0); };
   return (1 - sy) * ((1 - sx) * v(ix, iy) + sx * v(ix + 1, iy)) + sy * ((1 - sx) * v(ix, iy + 1) + sx * v(ix + 1, iy + 1));
 }
 

@@ -2,6 +2,7 @@
 
 #include <cmath>
 #include <cstdio>
+#include <future>
 #include <random>
 
 #include "core/error.h"
@@ -63,7 +64,17 @@ ViewRecord RenderView(const SceneConfig& cfg, const raytrace::RayScene& scene, i
   const std::vector<float> img = raytrace::ApplySensor(frame, ro.sensor, ro.seed ^ std::hash<std::string>{}(stem), &channels);
   const std::string unit = scene.description().units[u].name;
   ViewRecord v{unit, "images/" + stem + ".png", "", ""};
-  raytrace::WriteImage(dir / v.image, frame.width, frame.height, channels, img, ro.sensor.bit_depth);
+  // The image is compressed on its own thread while the ground truth is written (both are single-file,
+  // atomic writes; an error in either is rethrown here).
+  auto image_written = std::async(std::launch::async, [&] {
+    raytrace::WriteImage(dir / v.image, frame.width, frame.height, channels, img, ro.sensor.bit_depth);
+  });
+  struct Join {
+    std::future<void>& f;
+    ~Join() {
+      if (f.valid()) f.wait();
+    }
+  } join{image_written};
   if (ro.ground_truth) {
     v.exr = "truth/" + stem + ".exr";
     v.sidecar = "truth/" + stem + ".json";
@@ -76,6 +87,7 @@ ViewRecord RenderView(const SceneConfig& cfg, const raytrace::RayScene& scene, i
                       {"full_well", ro.sensor.full_well}, {"read_noise", ro.sensor.read_noise}};
     WriteFileAtomic(dir / v.sidecar, side.dump(1) + "\n");
   }
+  image_written.get();
   if (stats) {
     (*stats)["rays"] = frame.rays;
     (*stats)["seconds"] = frame.seconds;
@@ -90,7 +102,24 @@ std::string Thumbnail(const fs::path& dir, const std::string& image, int size) {
   const auto& spec = src.spec();
   const double scale = static_cast<double>(size) / std::max(spec.width, spec.height);
   const int w = std::max(1, static_cast<int>(spec.width * scale)), h = std::max(1, static_cast<int>(spec.height * scale));
-  OIIO::ImageBuf dst = OIIO::ImageBufAlgo::resize(src, "", 0, OIIO::ROI(0, w, 0, h, 0, 1, 0, spec.nchannels));
+  // Box filter over the source pixels of each thumbnail pixel (fast, no aliasing at this reduction).
+  OIIO::ImageBuf dst(OIIO::ImageSpec(w, h, spec.nchannels, OIIO::TypeDesc::FLOAT));
+  std::vector<float> in(static_cast<size_t>(spec.width) * spec.height * spec.nchannels);
+  HOVS_REQUIRE(src.get_pixels(OIIO::ROI::All(), OIIO::TypeDesc::FLOAT, in.data()), image, "cannot read for the thumbnail");
+  std::vector<float> out(static_cast<size_t>(w) * h * spec.nchannels, 0.0f);
+  const double sx = static_cast<double>(spec.width) / w, sy = static_cast<double>(spec.height) / h;
+  for (int y = 0; y < h; ++y) {
+    const int y0 = static_cast<int>(y * sy), y1 = std::max(y0 + 1, std::min(spec.height, static_cast<int>((y + 1) * sy)));
+    for (int x = 0; x < w; ++x) {
+      const int x0 = static_cast<int>(x * sx), x1 = std::max(x0 + 1, std::min(spec.width, static_cast<int>((x + 1) * sx)));
+      float* o = &out[(static_cast<size_t>(y) * w + x) * spec.nchannels];
+      for (int yy = y0; yy < y1; ++yy)
+        for (int xx = x0; xx < x1; ++xx)
+          for (int c = 0; c < spec.nchannels; ++c) o[c] += in[(static_cast<size_t>(yy) * spec.width + xx) * spec.nchannels + c];
+      for (int c = 0; c < spec.nchannels; ++c) o[c] /= static_cast<float>((y1 - y0) * (x1 - x0));
+    }
+  }
+  dst.set_pixels(OIIO::ROI::All(), OIIO::TypeDesc::FLOAT, out.data());
   const std::string rel = "thumbs/" + fs::path(image).filename().string();
   fs::create_directories(dir / "thumbs");
   const fs::path tmp = dir / "thumbs" / (".tmp-" + fs::path(image).filename().string());

@@ -89,7 +89,7 @@ Comparison CompareWithPinhole(const SceneConfig& cfg, const AnyModel& model, con
     raytrace::WriteImage(std::string(std::getenv("HOVS_DUMP_UNWRAP")) + "_unwrap.png", u.width, u.height, 3,
                          [&] { std::vector<float> f(u.data.size()); for (size_t k = 0; k < f.size(); ++k) f[k] = u.data[k] / 255.f; return f; }(), 8);
     raytrace::WriteImage(std::string(std::getenv("HOVS_DUMP_UNWRAP")) + "_pinhole.png", pin.width, pin.height, 3,
-                         pin.rgb, 8);
+                         std::vector<float>(pin.rgb.begin(), pin.rgb.end()), 8);
   }
 
   Comparison c;
