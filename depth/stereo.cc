@@ -138,7 +138,118 @@ void DenseOptions::Check(const std::string& where) const {
   HOVS_REQUIRE(block_size >= 1 && block_size % 2 == 1 && block_size <= 21, where, "block_size must be odd, 1..21");
   HOVS_REQUIRE(sigma_disparity_px > 0 && max_relative_sigma > 0 && min_theta_deg >= 0 && min_theta_deg < 90, where,
                "bad sigma or theta limits");
+  HOVS_REQUIRE(refine_radius >= 2 && refine_radius <= 16, where, "refine_radius must be in 2..16 (got ", refine_radius, ")");
 }
+
+namespace {
+
+// SGBM 3-way disparity (CV_16S, 16 x columns) of a grey pair. SGBM gives no disparity to the first
+// num_disparities columns (their match would lie left of the image): both images are padded on the left
+// (replicated border) and the result cropped; near theta_max the true disparity is small, so real matches stay
+// inside the real image.
+cv::Mat MatchSgbm(const cv::Mat& gl, const cv::Mat& gr, int num_disparities, int bs, int speckle_window = 100) {
+  auto sgbm = cv::StereoSGBM::create(0, num_disparities, bs, 8 * bs * bs, 32 * bs * bs, 1, 31, 10, speckle_window, 2,
+                                     cv::StereoSGBM::MODE_SGBM_3WAY);
+  cv::Mat pl, pr, disp_padded;
+  const int pad = num_disparities;
+  cv::copyMakeBorder(gl, pl, 0, 0, pad, 0, cv::BORDER_REPLICATE);
+  cv::copyMakeBorder(gr, pr, 0, 0, pad, 0, cv::BORDER_REPLICATE);
+  sgbm->compute(pl, pr, disp_padded);
+  return disp_padded.colRange(pad, pad + gl.cols).clone();
+}
+
+// Disparity in columns (float; <= 0: none) by SGBM at half resolution and a block search at full resolution
+// around it (DenseOptions::coarse_to_fine).
+cv::Mat MatchCoarseToFine(const cv::Mat& gl, const cv::Mat& gr, const DenseOptions& o) {
+  const int W = gl.cols, H = gl.rows, R = o.refine_radius, half_bs = o.block_size / 2;
+  cv::Mat hl, hr;
+  cv::pyrDown(gl, hl);
+  cv::pyrDown(gr, hr);
+  const int nd_half = std::max(16, ((o.num_disparities / 2 + 15) / 16) * 16);
+  const cv::Mat coarse = MatchSgbm(hl, hr, nd_half, o.block_size, 25);   // speckle window: 100 full-res pixels
+  // The coarse disparity at full resolution (bilinear between the half-resolution samples where all four have
+  // one, else the nearest), rounded to whole columns (-1: none). Half-resolution pixel (x, y) covers full
+  // resolution (2x + 0.5, 2y + 0.5).
+  cv::Mat d0(H, W, CV_32S), d0f(H, W, CV_32F);
+  tbb::parallel_for(0, H, [&](int v) {
+    const double y = std::clamp((v - 0.5) / 2.0, 0.0, coarse.rows - 1.0);
+    const int y0 = std::min(static_cast<int>(y), coarse.rows - 1), y1 = std::min(y0 + 1, coarse.rows - 1);
+    const double fy = y - y0;
+    int* out = d0.ptr<int>(v);
+    for (int u = 0; u < W; ++u) {
+      const double x = std::clamp((u - 0.5) / 2.0, 0.0, coarse.cols - 1.0);
+      const int x0 = std::min(static_cast<int>(x), coarse.cols - 1), x1 = std::min(x0 + 1, coarse.cols - 1);
+      const double fx = x - x0;
+      const short a = coarse.at<short>(y0, x0), b = coarse.at<short>(y0, x1), c = coarse.at<short>(y1, x0),
+                  e = coarse.at<short>(y1, x1);
+      double raw;
+      if (a > 0 && b > 0 && c > 0 && e > 0) {
+        raw = (1 - fy) * ((1 - fx) * a + fx * b) + fy * ((1 - fx) * c + fx * e);
+      } else {
+        raw = coarse.at<short>(fy < 0.5 ? y0 : y1, fx < 0.5 ? x0 : x1);
+      }
+      out[u] = raw > 0 ? static_cast<int>(std::lround(2.0 * raw / 16.0)) : -1;
+      d0f.at<float>(v, u) = static_cast<float>(2.0 * raw / 16.0);
+    }
+  });
+
+  // Matching cost per pixel and offset: |dI| + |d(dI/du)| / 2 (the gradient term tolerates a gain or offset
+  // between the units), summed over the block by a box filter. Offsets that leave the image cost the maximum.
+  cv::Mat gxl, gxr;
+  cv::Sobel(gl, gxl, CV_16S, 1, 0, 3);
+  cv::Sobel(gr, gxr, CV_16S, 1, 0, 3);
+  const int n = 2 * R + 1;
+  std::vector<cv::Mat> cost(n);
+  constexpr float kMax = 255.f * 3;
+  tbb::parallel_for(0, n, [&](int k) {
+    const int off = k - R;
+    cv::Mat a(H, W, CV_32F);
+    for (int v = 0; v < H; ++v) {
+      const uint8_t* il = gl.ptr<uint8_t>(v);
+      const uint8_t* ir = gr.ptr<uint8_t>(v);
+      const short* sl = gxl.ptr<short>(v);
+      const short* sr = gxr.ptr<short>(v);
+      const int* dd = d0.ptr<int>(v);
+      float* out = a.ptr<float>(v);
+      for (int u = 0; u < W; ++u) {
+        const int ur = u - dd[u] - off;
+        out[u] = dd[u] < 0 || ur < 0 || ur >= W
+                     ? kMax
+                     : std::abs(int(il[u]) - int(ir[ur])) + 0.5f * std::abs(int(sl[u]) - int(sr[ur])) / 4.f;
+      }
+    }
+    cv::boxFilter(a, cost[k], CV_32F, cv::Size(2 * half_bs + 1, 2 * half_bs + 1), cv::Point(-1, -1), false,
+                  cv::BORDER_REPLICATE);
+  });
+  cv::Mat disp(H, W, CV_32F, cv::Scalar(-1));
+  tbb::parallel_for(0, H, [&](int v) {
+    const int* dd = d0.ptr<int>(v);
+    float* out = disp.ptr<float>(v);
+    for (int u = 0; u < W; ++u) {
+      if (dd[u] < 0) continue;
+      int best = 0;
+      float bc = cost[0].ptr<float>(v)[u];
+      for (int k = 1; k < n; ++k) {
+        const float c = cost[k].ptr<float>(v)[u];
+        if (c < bc) bc = c, best = k;
+      }
+      if (best == 0 || best == n - 1 || bc >= kMax) {
+        // The block search disagrees with SGBM by more than its radius (a slanted or weakly textured patch,
+        // where SGBM's smoothness is the better judge): keep the coarse disparity.
+        out[u] = d0f.at<float>(v, u);
+        continue;
+      }
+      const float cm = cost[best - 1].ptr<float>(v)[u], cp = cost[best + 1].ptr<float>(v)[u];
+      const float den = cm - 2 * bc + cp;
+      const float sub = den > 0 ? 0.5f * (cm - cp) / den : 0.f;
+      const float d = static_cast<float>(dd[u] + best - R) + sub;
+      if (d > 0) out[u] = d;
+    }
+  });
+  return disp;
+}
+
+}  // namespace
 
 double RangeFromDisparity(double baseline, double theta_left, double delta) {
   return baseline * std::sin(theta_left + delta) / std::sin(delta);
@@ -165,19 +276,13 @@ DenseDepth ComputeDenseDepth(const Rectification& r, const unwrap::Image8& left_
     return g;
   };
   const cv::Mat gl = to_grey(left_rect), gr = to_grey(right_rect);
-  const int bs = o.block_size;
-  auto sgbm = cv::StereoSGBM::create(0, o.num_disparities, bs, 8 * bs * bs, 32 * bs * bs, 1, 31, 10, 100, 2,
-                                     cv::StereoSGBM::MODE_SGBM_3WAY);
-  // SGBM gives no disparity to the first num_disparities columns (their match would lie left of the image).
-  // Pad both images on the left (replicated border) and crop the result: near theta_max the true disparity is
-  // small, so real matches stay inside the real image.
-  cv::Mat pl, pr, disp_padded;
-  const int pad = o.num_disparities;
-  cv::copyMakeBorder(gl, pl, 0, 0, pad, 0, cv::BORDER_REPLICATE);
-  cv::copyMakeBorder(gr, pr, 0, 0, pad, 0, cv::BORDER_REPLICATE);
   const auto m0 = std::chrono::steady_clock::now();
-  sgbm->compute(pl, pr, disp_padded);
-  const cv::Mat disp16 = disp_padded.colRange(pad, pad + W);
+  cv::Mat disp;   // columns, float; <= 0: no match (OpenCV marks those negative) or infinitely far
+  if (o.coarse_to_fine) {
+    disp = MatchCoarseToFine(gl, gr, o);
+  } else {
+    MatchSgbm(gl, gr, o.num_disparities, o.block_size).convertTo(disp, CV_32F, 1.0 / 16);
+  }
   DenseDepth d;
   d.match_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - m0).count();
   d.width = W, d.height = H;
@@ -189,9 +294,8 @@ DenseDepth ComputeDenseDepth(const Rectification& r, const unwrap::Image8& left_
   tbb::parallel_for(0, H, [&](int v) {
     for (int u = 0; u < W; ++u) {
       const size_t k = size_t(v) * W + u;
-      const short raw = disp16.at<short>(v, u);
-      if (raw <= 0) continue;   // no match (OpenCV marks those negative) or zero disparity (infinitely far)
-      const double dcol = raw / 16.0;
+      const double dcol = disp.at<float>(v, u);
+      if (!(dcol > 0)) continue;
       d.disparity[k] = static_cast<float>(dcol);
       const double theta_l = r.ThetaAt(u), delta = dcol * r.dtheta;
       const double theta_r = theta_l + delta;

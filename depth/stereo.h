@@ -79,6 +79,13 @@ struct DenseOptions {
   double sigma_disparity_px = 0.5;    // matching noise assumed for sigma
   double min_theta_deg = 12;          // mask rays closer than this to the baseline direction
   double max_relative_sigma = 0.05;   // mask where sigma_r / r exceeds this
+  // Coarse to fine: SGBM on both images at half resolution (half the disparities: an eighth of the full cost),
+  // then each pixel refined at full resolution by a block search (SAD of the block_size window on intensity
+  // and horizontal gradient) over refine_radius columns around twice its coarse disparity, with a parabola
+  // through the best cost and its neighbours; where the best cost lies at the edge of the search, the coarse
+  // disparity is kept.
+  bool coarse_to_fine = true;
+  int refine_radius = 3;
   void Check(const std::string& where) const;
 };
 

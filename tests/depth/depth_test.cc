@@ -169,43 +169,46 @@ TEST(Dense, StreetSceneAgainstTheRangeChannel) {
   std::vector<unwrap::Image8> left, right;
   ml.Run({l8.data(), fl.width, fl.height, size_t(fl.width) * 3, unwrap::PixelFormat::kRgb8}, unwrap::Interpolation::kBilinear, &left);
   mr.Run({r8.data(), fr.width, fr.height, size_t(fr.width) * 3, unwrap::PixelFormat::kRgb8}, unwrap::Interpolation::kBilinear, &right);
-  DenseOptions dop;
-  const DenseDepth d = ComputeDenseDepth(rect, left[0], right[0], dop);
-
   // Ground truth: the range channel (Z) of the left render at each rectified pixel's source pixel.
   std::vector<float> mx, my;
   rect.left.DecodeView(0, &mx, &my);
-  struct Band { double lo, hi; std::vector<double> rel; int pixels = 0; };
-  std::vector<Band> bands = {{1, 2, {}}, {2, 4, {}}, {4, 8, {}}, {8, 16, {}}};
-  for (size_t k = 0; k < mx.size(); ++k) {
-    if (mx[k] < 0) continue;
-    const int sx = int(std::lround(mx[k])), sy = int(std::lround(my[k]));
-    const float* gt = &fl.truth.data[(size_t(sy) * fl.width + sx) * raytrace::GroundTruth::kChannels];
-    const double z = gt[0];
-    if (!std::isfinite(z)) continue;
-    for (auto& b : bands) {
-      if (z < b.lo || z >= b.hi) continue;
-      ++b.pixels;
-      if (d.valid[k]) b.rel.push_back(std::abs(d.range[k] - z) / z);
+  for (const bool c2f : {false, true}) {
+    DenseOptions dop;
+    dop.coarse_to_fine = c2f;
+    const DenseDepth d = ComputeDenseDepth(rect, left[0], right[0], dop);
+    struct Band { double lo, hi; std::vector<double> rel; int pixels = 0; };
+    std::vector<Band> bands = {{1, 2, {}}, {2, 4, {}}, {4, 8, {}}, {8, 16, {}}};
+    for (size_t k = 0; k < mx.size(); ++k) {
+      if (mx[k] < 0) continue;
+      const int sx = int(std::lround(mx[k])), sy = int(std::lround(my[k]));
+      const float* gt = &fl.truth.data[(size_t(sy) * fl.width + sx) * raytrace::GroundTruth::kChannels];
+      const double z = gt[0];
+      if (!std::isfinite(z)) continue;
+      for (auto& b : bands) {
+        if (z < b.lo || z >= b.hi) continue;
+        ++b.pixels;
+        if (d.valid[k]) b.rel.push_back(std::abs(d.range[k] - z) / z);
+      }
     }
-  }
-  std::printf("[ figure ] dense depth, street scene, 2048 x 512, SGBM 3-way, %d disparities: %.0f ms (matching %.0f ms)\n",
-              dop.num_disparities, d.total_ms, d.match_ms);
-  std::printf("[ figure ]   band (m)   pixels  valid   median rel. error   within 5 %% (of all pixels)\n");
-  for (auto& b : bands) {
-    std::sort(b.rel.begin(), b.rel.end());
-    const double median = b.rel.empty() ? NAN : b.rel[b.rel.size() / 2];
-    const double within = double(std::count_if(b.rel.begin(), b.rel.end(), [](double e) { return e <= 0.05; }));
-    std::printf("[ figure ]   %4.0f-%-4.0f %8d %6.1f %%   %8.2f %%            %6.1f %%\n", b.lo, b.hi, b.pixels,
-                100.0 * b.rel.size() / std::max(1, b.pixels), 100 * median, 100 * within / std::max(1, b.pixels));
-  }
-  // Thresholds on the bands that carry most of the scene (road, kerbs, cars): median error and the fraction of
-  // all pixels of the band with a range within 5 %.
-  for (int i = 0; i < 3; ++i) {
-    ASSERT_GT(bands[i].rel.size(), 1000u) << bands[i].lo << "-" << bands[i].hi << " m";
-    EXPECT_LT(bands[i].rel[bands[i].rel.size() / 2], 0.02) << bands[i].lo << "-" << bands[i].hi << " m";
-    const double within = double(std::count_if(bands[i].rel.begin(), bands[i].rel.end(), [](double e) { return e <= 0.05; }));
-    EXPECT_GT(within / bands[i].pixels, 0.7) << bands[i].lo << "-" << bands[i].hi << " m";
+    std::printf("[ figure ] dense depth, street scene, 2048 x 512, %s, %d disparities: %.0f ms (matching %.0f ms)\n",
+                c2f ? "coarse to fine (SGBM at half resolution + block search)" : "SGBM 3-way", dop.num_disparities,
+                d.total_ms, d.match_ms);
+    std::printf("[ figure ]   band (m)   pixels  valid   median rel. error   within 5 %% (of all pixels)\n");
+    for (auto& b : bands) {
+      std::sort(b.rel.begin(), b.rel.end());
+      const double median = b.rel.empty() ? NAN : b.rel[b.rel.size() / 2];
+      const double within = double(std::count_if(b.rel.begin(), b.rel.end(), [](double e) { return e <= 0.05; }));
+      std::printf("[ figure ]   %4.0f-%-4.0f %8d %6.1f %%   %8.2f %%            %6.1f %%\n", b.lo, b.hi, b.pixels,
+                  100.0 * b.rel.size() / std::max(1, b.pixels), 100 * median, 100 * within / std::max(1, b.pixels));
+    }
+    // Thresholds on the bands that carry most of the scene (road, kerbs, cars): median error and the fraction of
+    // all pixels of the band with a range within 5 %.
+    for (int i = 0; i < 3; ++i) {
+      ASSERT_GT(bands[i].rel.size(), 1000u) << bands[i].lo << "-" << bands[i].hi << " m";
+      EXPECT_LT(bands[i].rel[bands[i].rel.size() / 2], 0.02) << bands[i].lo << "-" << bands[i].hi << " m";
+      const double within = double(std::count_if(bands[i].rel.begin(), bands[i].rel.end(), [](double e) { return e <= 0.05; }));
+      EXPECT_GT(within / bands[i].pixels, 0.7) << bands[i].lo << "-" << bands[i].hi << " m";
+    }
   }
 }
 
