@@ -82,7 +82,23 @@ void MarkerDetectOptions::Check(const std::string& where) const {
 
 void StereoCalibrationOptions::Check(const std::string& where) const {
   HOVS_REQUIRE(huber_px > 0 && min_common_markers >= 1 && max_iterations >= 1, where, "bad options");
+  HOVS_REQUIRE(residual == "reprojection" || residual == "3d", where + ".residual", "unknown residual '", residual,
+               "' (known: reprojection, 3d)");
 }
+
+namespace {
+// The article's residual: a corner in the right unit's frame predicted from the left unit's frame.
+struct Residual3d {
+  Vec3d pl, pr;
+  template <class T>
+  bool operator()(const T* q, const T* t, T* r) const {
+    const Eigen::Quaternion<T> Q(q[3], q[0], q[1], q[2]);
+    const Vec3<T> x = Q * pl.cast<T>() + Vec3<T>(t[0], t[1], t[2]) - pr.cast<T>();
+    for (int i = 0; i < 3; ++i) r[i] = x(i);
+    return true;
+  }
+};
+}  // namespace
 
 MarkerDetector::MarkerDetector(const AnyModel& model, const MarkerDetectOptions& o) : model_(model), options_(o) {
   o.Check("marker detection");
@@ -260,6 +276,52 @@ StereoCalibration CalibrateStereo(const AnyModel& left, const AnyModel& right,
         pairs[usable[best].index].left.size() + pairs[usable[best].index].right.size())
       best = k;
   PoseParams rl = PoseParams::From(usable[best].right_from_board * usable[best].left_from_board.Inverse());
+  if (o.residual == "3d") {
+    ceres::Problem p3;
+    int n3 = 0;
+    for (const auto& u : usable) {
+      std::set<int> in_right;
+      for (const auto& c : pairs[u.index].right) in_right.insert(c.id);
+      for (const auto& c : pairs[u.index].left) {
+        const auto it = board.find(c.id);
+        if (it == board.end() || !in_right.count(c.id)) continue;
+        p3.AddResidualBlock(new ceres::AutoDiffCostFunction<Residual3d, 3, 4, 3>(
+                                new Residual3d{u.left_from_board * it->second, u.right_from_board * it->second}),
+                            nullptr, rl.q, rl.t);
+        ++n3;
+      }
+    }
+    HOVS_REQUIRE(n3 >= 3, "stereo calibration (3d)", "fewer than 3 corners seen by both units");
+    p3.SetManifold(rl.q, new ceres::EigenQuaternionManifold);
+    ceres::Solver::Options so;
+    so.max_num_iterations = o.max_iterations;
+    so.function_tolerance = 1e-14, so.parameter_tolerance = 1e-14, so.gradient_tolerance = 1e-14;
+    ceres::Solver::Summary s3;
+    ceres::Solve(so, &p3, &s3);
+    StereoCalibration out;
+    out.residual = "3d";
+    out.converged = s3.termination_type == ceres::CONVERGENCE;
+    out.solver_report = s3.BriefReport();
+    out.right_from_left = ToPose(rl.q, rl.t);
+    out.baseline = Vec3d(rl.t[0], rl.t[1], rl.t[2]).norm();
+    out.rms_3d_m = std::sqrt(2 * s3.final_cost / n3);
+    double s2 = 0;
+    int n = 0;
+    for (const auto& u : usable) {
+      const auto& pr = pairs[u.index];
+      out.left_from_board.push_back(u.left_from_board);
+      out.pair_names.push_back(pr.name);
+      const double el = Rms(left, u.left_from_board, pr.left, board),
+                   er = Rms(right, out.right_from_left * u.left_from_board, pr.right, board);
+      out.pair_rms_left_px.push_back(el), out.pair_rms_right_px.push_back(er);
+      out.pair_corners_left.push_back(static_cast<int>(pr.left.size()));
+      out.pair_corners_right.push_back(static_cast<int>(pr.right.size()));
+      s2 += el * el * pr.left.size() + er * er * pr.right.size();
+      n += static_cast<int>(pr.left.size() + pr.right.size());
+    }
+    out.rms_px = std::sqrt(s2 / std::max(1, n));
+    return out;
+  }
   std::vector<PoseParams> lb(usable.size());
   std::vector<StereoPairObservation> obs;
   for (size_t k = 0; k < usable.size(); ++k) {

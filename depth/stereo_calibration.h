@@ -64,6 +64,10 @@ struct StereoCalibrationOptions {
   int min_common_markers = 1;      // pairs need at least this many markers seen by both units
   int max_iterations = 200;
   double outlier_px = 3.0;         // corners with a larger residual after the first solve are dropped (0: keep all)
+  // "reprojection" (default): the joint problem above. "3d": the article's method for comparison: each unit's
+  // board pose on its own (BoardPose), then right_from_left alone from the 3-D residual
+  // right_from_left * P_left - P_right (metres) of every corner both units saw; no reprojection, no outlier pass.
+  std::string residual = "reprojection";
   void Check(const std::string& where) const;
 };
 
@@ -85,6 +89,8 @@ struct StereoCalibration {
   std::vector<int> pair_corners_left, pair_corners_right;
   std::vector<Rigid3d> left_from_board;
   std::vector<StereoOutlier> outliers;   // dropped after the first solve, listed
+  std::string residual = "reprojection";
+  double rms_3d_m = 0;                   // "3d": RMS of the 3-D residual
   bool converged = false;
   std::string solver_report;
 };
