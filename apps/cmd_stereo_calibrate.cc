@@ -48,7 +48,7 @@ scenes::BoardSpec BoardFromJson(const nlohmann::json& b, const std::string& wher
 Runner SetupStereoCalibrate(CLI::App* sub, const GlobalOptions* global) {
   struct Options {
     std::string dataset, out = "results/stereo-calibration", left_model, right_model, model_kind = "auto";
-    double huber = 1.0;
+    double huber = 1.0, marker_check_px = 2.0;
   };
   auto o = std::make_shared<Options>();
   sub->add_option("--dataset", o->dataset, "stereo_aruco dataset manifest (two units per frame)")->required();
@@ -57,6 +57,9 @@ Runner SetupStereoCalibrate(CLI::App* sub, const GlobalOptions* global) {
       ->capture_default_str();
   sub->add_option("--right-model", o->right_model, "calibrated model of the second unit");
   sub->add_option("--huber", o->huber, "robust loss scale, px")->capture_default_str();
+  sub->add_option("--marker-check", o->marker_check_px,
+                  "drop markers with a corner this far (px) from the board pose of the other corners; 0: keep all")
+      ->capture_default_str();
   sub->add_option("-o,--out", o->out, "output folder (replaced atomically)")->capture_default_str();
   return [o, global]() {
     const fs::path manifest(o->dataset);
@@ -88,7 +91,14 @@ Runner SetupStereoCalibrate(CLI::App* sub, const GlobalOptions* global) {
         if (v.at("unit") == ur.name) p.right = dr.Detect(LoadImage8(img)), have_r = true;
       }
       HOVS_REQUIRE(have_l && have_r, o->dataset, p.name, " lacks an image of both units");
-      detections.push_back({{"pair", p.name}, {"left_corners", p.left.size()}, {"right_corners", p.right.size()}});
+      // Markers whose corners disagree with the unit's board pose (partly hidden, still decoded) are dropped.
+      std::vector<int> bad_l, bad_r;
+      if (o->marker_check_px > 0) {
+        bad_l = depth::RejectInconsistentMarkers(left, &p.left, board, o->marker_check_px);
+        bad_r = depth::RejectInconsistentMarkers(right, &p.right, board, o->marker_check_px);
+      }
+      detections.push_back({{"pair", p.name}, {"left_corners", p.left.size()}, {"right_corners", p.right.size()},
+                            {"inconsistent_markers_left", bad_l}, {"inconsistent_markers_right", bad_r}});
       if (!global->quiet)
         std::fprintf(stderr, "  %s: %zu corners left, %zu right\n", p.name.c_str(), p.left.size(), p.right.size());
       pairs.push_back(std::move(p));

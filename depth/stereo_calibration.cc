@@ -6,6 +6,7 @@
 #include <opencv2/calib3d.hpp>
 #include <opencv2/imgproc.hpp>
 #include <memory>
+#include <algorithm>
 #include <set>
 
 #include "calib/aruco_dictionary.h"
@@ -433,6 +434,33 @@ StereoCalibration CalibrateStereo(const AnyModel& left, const AnyModel& right,
     out.sigma_baseline = std::sqrt(std::max(0.0, var * scale));
   }
   return out;
+}
+
+std::vector<int> RejectInconsistentMarkers(const AnyModel& model, std::vector<CornerObservation>* corners,
+                                           const std::map<int, Vec3d>& board, double max_px) {
+  std::vector<int> removed;
+  for (;;) {
+    std::set<int> markers;
+    for (const auto& c : *corners) markers.insert(c.id / 4);
+    if (markers.size() < 3) return removed;
+    Rigid3d pose;
+    double rms = 0;
+    if (!BoardPose(model, *corners, board, &pose, &rms)) return removed;
+    std::map<int, double> worst;
+    for (const auto& c : *corners) {
+      const auto it = board.find(c.id);
+      Vec2d uv;
+      const double e = it != board.end() && model.ImgFromMirror(pose * it->second, &uv) ? (uv - c.pixel).norm() : HUGE_VAL;
+      worst[c.id / 4] = std::max(worst[c.id / 4], e);
+    }
+    const auto w = std::max_element(worst.begin(), worst.end(),
+                                     [](const auto& a, const auto& b) { return a.second < b.second; });
+    if (w->second <= max_px) return removed;
+    removed.push_back(w->first);
+    corners->erase(std::remove_if(corners->begin(), corners->end(),
+                                  [&](const CornerObservation& c) { return c.id / 4 == w->first; }),
+                   corners->end());
+  }
 }
 
 }  // namespace hovs::depth

@@ -106,4 +106,11 @@ StereoCalibration CalibrateStereo(const AnyModel& left, const AnyModel& right,
 bool BoardPose(const AnyModel& model, const std::vector<CornerObservation>& corners, const std::map<int, Vec3d>& board,
                Rigid3d* mirror_from_board, double* rms_px);
 
+// Per-marker consistency against the board: the board pose from all corners, then, worst first, every marker
+// with a corner further than max_px from the pose's reprojection is removed from `corners` and the pose solved
+// again (a marker partly hidden by the other unit can still decode, with corners at hidden positions). Returns
+// the removed marker ids. Nothing is removed when fewer than 3 markers (or no pose) remain.
+std::vector<int> RejectInconsistentMarkers(const AnyModel& model, std::vector<CornerObservation>* corners,
+                                           const std::map<int, Vec3d>& board, double max_px = 2.0);
+
 }  // namespace hovs::depth

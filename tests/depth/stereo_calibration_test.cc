@@ -165,29 +165,47 @@ TEST(MarkerDetection, FindsTheMarkersOfARenderAtTheirTruePixels) {
   img.width = f.width, img.height = f.height, img.channels = 3;
   img.data.resize(f.rgb.size());
   for (size_t k = 0; k < f.rgb.size(); ++k) img.data[k] = uint8_t(std::lround(std::clamp(f.rgb[k], 0.f, 1.f) * 255));
-  const MarkerDetector detector(AnyModel::Exact(unit.rig), {});
-  const auto found = detector.Detect(img);
+  const AnyModel model = AnyModel::Exact(unit.rig);
+  const MarkerDetector detector(model, {});
+  auto found = detector.Detect(img);
   std::map<int, Vec2d> truth_by_id;
   for (const auto& c : truth) truth_by_id[c.id] = c.pixel;
-  double s2 = 0, worst = 0;
-  int matched = 0, false_corners = 0;
-  for (const auto& c : found) {
-    const auto it = truth_by_id.find(c.id);
-    if (it == truth_by_id.end()) {   // a marker partly hidden by the other unit can still decode
-      ++false_corners;
-      continue;
+  struct Score {
+    double rms = 0, worst = 0;
+    int matched = 0, false_corners = 0;
+  };
+  const auto score = [&](const std::vector<CornerObservation>& cs) {
+    Score s;
+    double s2 = 0;
+    for (const auto& c : cs) {
+      const auto it = truth_by_id.find(c.id);
+      if (it == truth_by_id.end()) {   // a marker partly hidden by the other unit can still decode
+        ++s.false_corners;
+        continue;
+      }
+      const double e = (c.pixel - it->second).norm();
+      s2 += e * e, s.worst = std::max(s.worst, e);
+      ++s.matched;
     }
-    const double e = (c.pixel - it->second).norm();
-    if (std::getenv("HOVS_VERBOSE")) std::printf("corner %d err %.3f d %.3f %.3f at %.0f %.0f\n", c.id, e, c.pixel.x() - it->second.x(), c.pixel.y() - it->second.y(), c.pixel.x(), c.pixel.y());
-    s2 += e * e, worst = std::max(worst, e);
-    ++matched;
-  }
-  const double rms = std::sqrt(s2 / std::max(1, matched));
+    s.rms = std::sqrt(s2 / std::max(1, s.matched));
+    return s;
+  };
+  const Score before = score(found);
   std::printf("[ figure ] ArUco in unwrapped views: %d of %zu visible corners found (%d hidden, %d detected at hidden "
-              "corners), RMS %.3f px, worst %.3f px\n", matched, truth.size(), hidden, false_corners, rms, worst);
-  EXPECT_LE(false_corners, 4);
-  EXPECT_GE(matched, int(0.8 * truth.size()));
-  EXPECT_LE(rms, 0.3);
+              "corners), RMS %.3f px, worst %.3f px\n", before.matched, truth.size(), hidden, before.false_corners,
+              before.rms, before.worst);
+  EXPECT_LE(before.false_corners, 4);
+  EXPECT_GE(before.matched, int(0.8 * truth.size()));
+  EXPECT_LE(before.rms, 0.3);
+  // The per-marker check against the board pose removes markers with corners at hidden positions.
+  const std::vector<int> removed = RejectInconsistentMarkers(model, &found, board, 2.0);
+  const Score after = score(found);
+  std::printf("[ figure ] after the per-marker consistency check: %zu markers removed, %d corners, %d at hidden "
+              "corners, RMS %.3f px, worst %.3f px\n", removed.size(), after.matched, after.false_corners, after.rms,
+              after.worst);
+  EXPECT_EQ(after.false_corners, 0);
+  EXPECT_LE(after.worst, 2.0);
+  EXPECT_GE(after.matched, before.matched - 8) << "at most two markers removed";
 }
 
 }  // namespace
