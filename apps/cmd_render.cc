@@ -39,6 +39,7 @@ Runner SetupDataset(CLI::App* sub, const GlobalOptions* global) {
     std::string scene = "scenes/reference_calibration.yaml";
     std::string out = "results/dataset";
     std::string kind = "mono_calibration";
+    double step = 0.5, heading = 0, yaw_step = 0;
     int count = 0;
     uint64_t seed = 1;
     int samples = 0;
@@ -49,7 +50,12 @@ Runner SetupDataset(CLI::App* sub, const GlobalOptions* global) {
   auto o = std::make_shared<Options>();
   sub->add_option("-s,--scene", o->scene, "base scene: units, background (its boards are replaced)")->capture_default_str();
   sub->add_option("-o,--out", o->out, "output folder (replaced atomically)")->capture_default_str();
-  sub->add_option("--kind", o->kind, "mono_calibration | stereo_aruco")->capture_default_str();
+  sub->add_option("--kind", o->kind, "mono_calibration | stereo_aruco | depth_sequence")->capture_default_str();
+  sub->add_option("--step", o->step, "depth_sequence: rig motion per frame, m")->capture_default_str();
+  sub->add_option("--heading", o->heading, "depth_sequence: direction of motion, degrees from world +x towards +y")
+      ->capture_default_str();
+  sub->add_option("--yaw-step", o->yaw_step, "depth_sequence: rig turn per frame about the vertical, degrees")
+      ->capture_default_str();
   sub->add_option("-n,--count", o->count, "frames (default: 9 mono, 12 stereo)");
   sub->add_option("--seed", o->seed, "seed of the board poses")->capture_default_str();
   sub->add_option("--samples", o->samples, "samples per pixel (overrides the scene)");
@@ -68,7 +74,9 @@ Runner SetupDataset(CLI::App* sub, const GlobalOptions* global) {
     if (!o->elevation.empty()) d.min_elevation_deg = o->elevation[0], d.max_elevation_deg = o->elevation[1];
     d.seed = o->seed;
     d.progress = !global->quiet;
-    scenes::WriteCalibrationDataset(cfg, d, o->out, design::DesignVersions());
+    d.step_m = o->step, d.heading_deg = o->heading, d.yaw_step_deg = o->yaw_step;
+    if (d.kind == "depth_sequence") scenes::WriteDepthSequence(cfg, d, o->out, design::DesignVersions());
+    else scenes::WriteCalibrationDataset(cfg, d, o->out, design::DesignVersions());
     if (!global->quiet) std::cout << "hovs dataset: " << d.count << " frames (" << d.kind << ") -> " << o->out << "/dataset.json\n";
     return 0;
   };

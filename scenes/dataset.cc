@@ -33,12 +33,16 @@ DatasetOptions DatasetOptions::ForKind(const std::string& kind) {
     o.max_tilt_deg = 30;
     o.min_visible_fraction = 0.6;
   }
+  if (kind == "depth_sequence") o.count = 5;
   return o;
 }
 
 void DatasetOptions::Check(const std::string& where) const {
-  HOVS_REQUIRE(kind == "mono_calibration" || kind == "stereo_aruco", where + ".kind", "unknown dataset kind '", kind,
-               "' (known: mono_calibration, stereo_aruco)");
+  HOVS_REQUIRE(kind == "mono_calibration" || kind == "stereo_aruco" || kind == "depth_sequence", where + ".kind",
+               "unknown dataset kind '", kind, "' (known: mono_calibration, stereo_aruco, depth_sequence)");
+  HOVS_REQUIRE(std::isfinite(step_m) && std::abs(step_m) <= 100 && std::isfinite(heading_deg) &&
+                   std::isfinite(yaw_step_deg) && std::abs(yaw_step_deg) <= 90,
+               where + ".motion", "step must be a finite distance up to 100 m, yaw step up to 90 degrees");
   HOVS_REQUIRE(min_visible_fraction > 0 && min_visible_fraction <= 1, where + ".min_visible_fraction", "must be in (0, 1]");
   HOVS_REQUIRE(count >= 1 && count <= 10000, where + ".count", "must be in 1..10000");
   HOVS_REQUIRE(min_distance > 0 && max_distance >= min_distance, where + ".distance", "needs 0 < min <= max");
@@ -241,6 +245,7 @@ std::vector<Rigid3d> DrawBoardPoses(const SceneConfig& base, const DatasetOption
 
 void WriteCalibrationDataset(const SceneConfig& base, const DatasetOptions& o, const fs::path& out,
                              const std::map<std::string, std::string>& versions) {
+  HOVS_REQUIRE(o.kind != "depth_sequence", "dataset", "depth_sequence datasets are written by WriteDepthSequence");
   const std::vector<Rigid3d> poses = DrawBoardPoses(base, o);
   StagedDirectory stage(out);
   nlohmann::json m = ManifestHead(base, o.kind, o.seed, versions);
@@ -316,6 +321,63 @@ void WriteCalibrationDataset(const SceneConfig& base, const DatasetOptions& o, c
   page.Heading("Manifest");
   page.Paragraph("dataset.json lists frames, images, ground truth and the rig; real captures use the same "
                  "manifest without ground truth.");
+  WriteFileAtomic(stage.staging() / "index.html", page.Render());
+  stage.Commit();
+}
+
+Rigid3d WorldFromRigAt(const SceneConfig& base, const DatasetOptions& o, int frame) {
+  Vec3d centroid = Vec3d::Zero();
+  for (const auto& u : base.description.units) centroid += u.world_from_mirror.translation;
+  centroid /= std::max<size_t>(1, base.description.units.size());
+  const double h = o.heading_deg * kDeg, yaw = frame * o.yaw_step_deg * kDeg;
+  const Vec3d move = frame * o.step_m * Vec3d(std::cos(h), std::sin(h), 0);
+  const Rigid3d turn(Eigen::Quaterniond(Eigen::AngleAxisd(yaw, Vec3d::UnitZ())), Vec3d::Zero());
+  return Rigid3d::Translation(centroid + move) * turn * Rigid3d::Translation(-centroid);
+}
+
+void WriteDepthSequence(const SceneConfig& base, const DatasetOptions& o, const fs::path& out,
+                        const std::map<std::string, std::string>& versions) {
+  o.Check("dataset");
+  HOVS_REQUIRE(o.kind == "depth_sequence", "dataset", "WriteDepthSequence needs kind depth_sequence");
+  HOVS_REQUIRE(!base.description.units.empty(), base.source, "the scene has no catadioptric unit");
+  StagedDirectory stage(out);
+  nlohmann::json m = ManifestHead(base, o.kind, o.seed, versions);
+  m["generator"] = {{"count", o.count}, {"step_m", o.step_m}, {"heading_deg", o.heading_deg},
+                    {"yaw_step_deg", o.yaw_step_deg},
+                    {"note", "units in 'units' are at frame 0; frame k's units are world_from_rig(k) * them"}};
+  nlohmann::json boards = nlohmann::json::array();
+  for (const auto& b : base.boards) boards.push_back(BoardToJson(b));
+  m["boards"] = boards;
+  nlohmann::json frames = nlohmann::json::array();
+  results::HtmlPage page("hovs dataset: " + base.name + " (depth_sequence)");
+  page.Paragraph(std::to_string(o.count) + " frames, the rig moving " + std::to_string(o.step_m) +
+                 " m per frame (heading " + std::to_string(o.heading_deg) + " deg, yaw step " +
+                 std::to_string(o.yaw_step_deg) + " deg); every unit rendered per frame with ground truth "
+                 "(truth/*.exr: Z, P, N, id, mask, M; truth/*.json: the rig of that frame).");
+  for (int i = 0; i < o.count; ++i) {
+    SceneConfig cfg = base;
+    const Rigid3d world_from_rig = WorldFromRigAt(base, o, i);
+    for (auto& u : cfg.description.units) u.world_from_mirror = world_from_rig * u.world_from_mirror;
+    const raytrace::RayScene scene(cfg.description);
+    if (o.progress) std::fprintf(stderr, "frame %d/%d\n", i + 1, o.count);
+    nlohmann::json views = nlohmann::json::array();
+    double seconds = 0;
+    for (size_t u = 0; u < cfg.description.units.size(); ++u) {
+      char stem[96];
+      std::snprintf(stem, sizeof stem, "%s_%04d", cfg.description.units[u].name.c_str(), i);
+      nlohmann::json stats;
+      views.push_back(ViewJson(RenderView(cfg, scene, static_cast<int>(u), stage.staging(), stem, o.progress, &stats)));
+      seconds += stats["seconds"].get<double>();
+    }
+    for (const auto& view : views) {
+      const std::string thumb = Thumbnail(stage.staging(), view["image"].get<std::string>(), 320);
+      page.Figure(thumb, "frame " + std::to_string(i) + ", " + view["unit"].get<std::string>(), 320);
+    }
+    frames.push_back({{"id", i}, {"views", views}, {"world_from_rig", PoseToJson(world_from_rig)},
+                      {"render_seconds", seconds}});
+  }
+  m["frames"] = frames;
+  WriteFileAtomic(stage.staging() / "dataset.json", m.dump(2) + "\n");
   WriteFileAtomic(stage.staging() / "index.html", page.Render());
   stage.Commit();
 }

@@ -20,7 +20,10 @@ namespace hovs::scenes {
 
 struct DatasetOptions {
   // mono_calibration: a checkerboard seen whole by unit 0 (the article's 9 images of 7 x 5 corners);
-  // stereo_aruco: a 1.2 m ArUco marker board seen by every unit at once (the article's 12 pairs).
+  // stereo_aruco: a 1.2 m ArUco marker board seen by every unit at once (the article's 12 pairs);
+  // depth_sequence: the scene as it is (street, room), every unit rendered per frame while the rig moves
+  // step_m per frame along heading_deg (world, from +x towards +y) and turns yaw_step_deg per frame about the
+  // vertical through the units' centroid (a vehicle driving through the scene).
   std::string kind = "mono_calibration";
   int count = 9;                          // frames
   uint64_t seed = 1;                      // board poses (the render seed comes from the scene's render options)
@@ -30,6 +33,7 @@ struct DatasetOptions {
   double max_tilt_deg = 35;                        // board tilt away from facing the viewpoint
   double edge_margin_px = 8;                       // corners at least this far inside the valid annulus
   double min_visible_fraction = 1.0;               // of the board's corners, in every unit that must see it
+  double step_m = 0.5, heading_deg = 0, yaw_step_deg = 0;   // depth_sequence
   bool progress = false;
   void Check(const std::string& where) const;
   // Defaults for a kind (board, count, distances, visibility).
@@ -44,6 +48,14 @@ void RenderSceneFolder(const SceneConfig& scene, const std::filesystem::path& ou
 // kind asks, every unit that must see it rendered per frame, with ground truth.
 void WriteCalibrationDataset(const SceneConfig& base, const DatasetOptions& options, const std::filesystem::path& out,
                              const std::map<std::string, std::string>& versions);
+
+// A depth_sequence dataset: per frame every unit moved by world_from_rig(frame) (recorded in the frame entry as
+// "world_from_rig"; the manifest's units are frame 0's), rendered with ground truth; the scene's own objects
+// and boards stay where they are.
+void WriteDepthSequence(const SceneConfig& base, const DatasetOptions& options, const std::filesystem::path& out,
+                        const std::map<std::string, std::string>& versions);
+// The rig motion of frame `frame` of a depth_sequence (exposed for tests).
+Rigid3d WorldFromRigAt(const SceneConfig& base, const DatasetOptions& options, int frame);
 
 // Board poses for a dataset (exposed for tests): each keeps at least min_visible_fraction of the corners
 // visible (inside the valid annulus by edge_margin_px) in unit 0 (mono) or in every unit (stereo).

@@ -35,6 +35,50 @@ TEST(Dataset, BoardPosesAreSeededAndKeepEveryCornerVisible) {
   EXPECT_GT((a[0].translation - c[0].translation).norm(), 1e-6);
 }
 
+TEST(Dataset, DepthSequenceMovesTheRigAndItsGroundTruth) {
+  // The street's two-unit rig at a tenth of the resolution, 3 frames, 0.7 m per frame along +y, turning.
+  auto cfg = scenes::LoadSceneConfig(std::string(HOVS_SOURCE_DIR) + "/scenes/street.yaml");
+  scenes::DownscaleCameras(&cfg, 10);
+  cfg.render.samples = 1;
+  auto o = scenes::DatasetOptions::ForKind("depth_sequence");
+  o.count = 3, o.step_m = 0.7, o.heading_deg = 90, o.yaw_step_deg = 5;
+  const fs::path out = test::Scratch("dataset", "depth-seq");
+  scenes::WriteDepthSequence(cfg, o, out, {{"hovs", "test"}});
+  const auto m = nlohmann::json::parse(ReadFile(out / "dataset.json"));
+  EXPECT_EQ(m["kind"], "depth_sequence");
+  ASSERT_EQ(m["frames"].size(), 3u);
+  const size_t n_units = cfg.description.units.size();
+  ASSERT_EQ(n_units, 2u);
+  for (int k = 0; k < 3; ++k) {
+    const auto& fr = m["frames"][k];
+    ASSERT_EQ(fr["views"].size(), n_units);
+    const Rigid3d world_from_rig = scenes::WorldFromRigAt(cfg, o, k);
+    // The rig's centroid moves by k x 0.7 m along +y (it turns about itself).
+    Vec3d c0 = Vec3d::Zero(), ck = Vec3d::Zero();
+    for (const auto& u : cfg.description.units) c0 += u.world_from_mirror.translation, ck += world_from_rig * u.world_from_mirror.translation;
+    EXPECT_NEAR(((ck - c0) / 2.0 - Vec3d(0, 0.7 * k, 0)).norm(), 0.0, 1e-9);
+    for (size_t u = 0; u < n_units; ++u) {
+      const auto& v = fr["views"][u];
+      // Ground truth of that frame: every world point P in the range channel lies at range Z from the moved
+      // viewpoint, so the truth follows the rig.
+      const Vec3d viewpoint = world_from_rig * cfg.description.units[u].world_from_mirror.translation;
+      const auto exr = raytrace::ReadExr(out / v["ground_truth"]["exr"].get<std::string>());
+      const auto &Z = exr.at("Z"), &X = exr.at("P.X"), &Y = exr.at("P.Y"), &W = exr.at("P.Z"), &mask = exr.at("mask");
+      int checked = 0;
+      double worst = 0;
+      for (size_t i = 0; i < Z.size(); i += 7) {
+        if (mask[i] < 0.5 || !std::isfinite(Z[i])) continue;
+        const double r = (Vec3d(X[i], Y[i], W[i]) - viewpoint).norm();
+        worst = std::max(worst, std::abs(r - Z[i]) / Z[i]);
+        ++checked;
+      }
+      EXPECT_GT(checked, 500);
+      EXPECT_LT(worst, 1e-5) << "frame " << k << " unit " << u;
+    }
+  }
+  fs::remove_all(out.parent_path());
+}
+
 TEST(Dataset, CalibrationSetHasManifestImagesAndGroundTruth) {
   const auto cfg = SmallCalibrationScene();
   scenes::DatasetOptions o;
