@@ -25,7 +25,8 @@ Runner SetupCapture(CLI::App* sub, const GlobalOptions* global) {
   struct Options {
     SourceOptions source;
     std::string out = "results/capture";
-    int frames = 10;
+    int frames = 10, write_queue = 16;
+    std::string image_format = "png";
     double seconds = 0, timeout = 3, pair_ms = 2;
   };
   auto o = std::make_shared<Options>();
@@ -34,6 +35,11 @@ Runner SetupCapture(CLI::App* sub, const GlobalOptions* global) {
   sub->add_option("--seconds", o->seconds, "stop after this long (0: no limit)")->capture_default_str();
   sub->add_option("--timeout", o->timeout, "seconds to wait for a frame")->capture_default_str();
   sub->add_option("--pair-tolerance-ms", o->pair_ms, "two cameras: timestamps of a pair differ by at most this")
+      ->capture_default_str();
+  sub->add_option("--write-queue", o->write_queue, "frames (pairs) grabbed but not yet written, at most")
+      ->capture_default_str();
+  sub->add_option("--image-format", o->image_format,
+                  "png (compressed) | pgm (uncompressed, written at disk speed for full frame rates)")
       ->capture_default_str();
   sub->add_option("-o,--out", o->out, "dataset folder (must not exist or be empty)")->capture_default_str();
   return [o, global]() {
@@ -50,6 +56,7 @@ Runner SetupCapture(CLI::App* sub, const GlobalOptions* global) {
     hw::CaptureOptions co;
     co.frames = o->frames, co.max_seconds = o->seconds, co.grab_timeout_s = o->timeout;
     co.pair_tolerance_ns = static_cast<uint64_t>(o->pair_ms * 1e6);
+    co.write_queue = o->write_queue, co.image_format = o->image_format;
     // The simulators run at 25 fps on their own clocks: a pair is at most a period apart.
     if (!src.simulators.empty() && src.sources.size() == 2)
       co.pair_tolerance_ns = std::max<uint64_t>(co.pair_tolerance_ns, 20'000'000);
@@ -60,9 +67,9 @@ Runner SetupCapture(CLI::App* sub, const GlobalOptions* global) {
     if (global->json) {
       std::cout << r.manifest.dump(1) << "\n";
     } else if (!global->quiet) {
-      std::printf("hovs capture: %d frames written, %d incomplete (not written), %llu unpaired%s -> %s/dataset.json\n",
-                  r.written, r.incomplete, static_cast<unsigned long long>(r.unpaired),
-                  r.interrupted ? ", interrupted" : "", o->out.c_str());
+      std::printf("hovs capture: %d frames written, %d incomplete (not written), %llu unpaired%s, writer queue up to "
+                  "%d -> %s/dataset.json\n", r.written, r.incomplete, static_cast<unsigned long long>(r.unpaired),
+                  r.interrupted ? ", interrupted" : "", r.max_queue_depth, o->out.c_str());
     }
     return 0;
   };

@@ -1,7 +1,13 @@
 #include "hw/capture.h"
 
 #include <chrono>
+#include <condition_variable>
 #include <cstdio>
+#include <cstring>
+#include <deque>
+#include <exception>
+#include <mutex>
+#include <thread>
 
 #include "core/error.h"
 #include "core/io.h"
@@ -15,12 +21,31 @@ void CaptureOptions::Check(size_t sources, const std::string& where) const {
   HOVS_REQUIRE(frames >= 1, where, "frames must be at least 1 (got ", frames, ")");
   HOVS_REQUIRE(max_seconds >= 0 && grab_timeout_s > 0, where, "durations must be positive");
   HOVS_REQUIRE(unit_names.empty() || unit_names.size() == sources, where, "one unit name per camera");
+  HOVS_REQUIRE(write_queue >= 1 && write_queue <= 4096, where, "write_queue must be in 1..4096 (got ", write_queue, ")");
+  HOVS_REQUIRE(image_format == "png" || image_format == "pgm", where + ".image_format", "expected png or pgm (got '",
+               image_format, "')");
 }
 
 namespace {
 
+// A binary PGM (P5): 8-bit, or 16-bit big-endian for Mono16 (the format's byte order); written atomically.
+void WriteFramePgm(const fs::path& path, const Frame& f) {
+  const bool wide = f.pixel_format == "Mono16";
+  const size_t n = size_t(f.width) * f.height;
+  std::string text = "P5\n" + std::to_string(f.width) + " " + std::to_string(f.height) + "\n" + (wide ? "65535" : "255") + "\n";
+  const size_t head = text.size();
+  text.resize(head + n * (wide ? 2 : 1));
+  if (wide) {
+    for (size_t k = 0; k < n; ++k) text[head + 2 * k] = char(f.data[2 * k + 1]), text[head + 2 * k + 1] = char(f.data[2 * k]);
+  } else {
+    std::memcpy(&text[head], f.data.data(), n);
+  }
+  WriteFileAtomic(path, text);
+}
+
 // An 8-bit one-channel PNG (Mono8 or a raw BayerRG8 mosaic), or 16-bit for Mono16; written atomically.
 void WriteFrameImage(const fs::path& path, const Frame& f) {
+  if (path.extension() == ".pgm") return WriteFramePgm(path, f);
   std::vector<float> v(size_t(f.width) * f.height);
   if (f.pixel_format == "Mono16") {
     for (size_t k = 0; k < v.size(); ++k) v[k] = float(f.data[2 * k] | (f.data[2 * k + 1] << 8)) / 65535.f;
@@ -50,14 +75,26 @@ CaptureResult CaptureDataset(const std::vector<CameraSource*>& sources, const Ca
        {"generator", "hovs capture"}, {"versions", versions}, {"units", units}, {"frames", nlohmann::json::array()},
        {"incomplete_frames", nlohmann::json::array()}, {"status", "capturing"},
        {"note", "real capture: no ground truth; images are raw sensor data (Mono8, BayerRG8 mosaic or Mono16)"}};
-  auto write_manifest = [&]() {
-    nlohmann::json stats = nlohmann::json::object();
-    for (size_t k = 0; k < sources.size(); ++k) stats[names[k]] = sources[k]->Stats().ToJson();
+  // m, the statistics snapshot and r.written are shared by the grab loop and the writer thread: guarded by mu.
+  std::mutex mu;
+  nlohmann::json stats = nlohmann::json::object();
+  auto snapshot_stats = [&]() {
+    nlohmann::json st = nlohmann::json::object();
+    for (size_t k = 0; k < sources.size(); ++k) st[names[k]] = sources[k]->Stats().ToJson();
+    std::lock_guard<std::mutex> lock(mu);
+    stats = st;
+  };
+  auto write_manifest_locked = [&]() {
     m["statistics"] = stats;
     m["unpaired_frames"] = r.unpaired;
+    m["writer"] = {{"queue_capacity", o.write_queue}, {"max_queue_depth", r.max_queue_depth}};
     WriteFileAtomic(out / "dataset.json", m.dump(1) + "\n");
   };
-  write_manifest();
+  snapshot_stats();
+  {
+    std::lock_guard<std::mutex> lock(mu);
+    write_manifest_locked();
+  }
   for (auto* s : sources) s->Start();
   const auto t0 = std::chrono::steady_clock::now();
   FramePairer pairer;
@@ -71,8 +108,63 @@ CaptureResult CaptureDataset(const std::vector<CameraSource*>& sources, const Ca
     if (info.contains("gain")) v["gain"] = info["gain"];
     return v;
   };
+  // The writer: takes sets in order, writes their images, then lists them in the manifest.
+  struct Pending {
+    int id;
+    std::vector<Frame> frames;
+    std::vector<nlohmann::json> views;
+  };
+  std::deque<Pending> queue;
+  std::condition_variable not_empty, not_full;
+  bool closing = false;
+  std::exception_ptr writer_error;
+  std::thread writer([&] {
+    for (;;) {
+      Pending p;
+      {
+        std::unique_lock<std::mutex> lock(mu);
+        not_empty.wait(lock, [&] { return !queue.empty() || closing; });
+        if (queue.empty()) return;
+        p = std::move(queue.front());
+        queue.pop_front();
+      }
+      not_full.notify_one();
+      try {
+        nlohmann::json frame = {{"id", p.id}, {"views", nlohmann::json::array()}};
+        for (size_t k = 0; k < p.frames.size(); ++k) {
+          WriteFrameImage(out / p.views[k]["image"].get<std::string>(), p.frames[k]);
+          frame["views"].push_back(p.views[k]);
+        }
+        std::lock_guard<std::mutex> lock(mu);
+        m["frames"].push_back(frame);
+        ++r.written;
+        write_manifest_locked();
+        if (o.progress) std::fprintf(stderr, "\rcapture: %d / %d frames", r.written, o.frames);
+      } catch (...) {
+        std::lock_guard<std::mutex> lock(mu);
+        writer_error = std::current_exception();
+        closing = true;
+        queue.clear();
+        not_full.notify_all();
+        return;
+      }
+    }
+  });
+  auto finish_writer = [&]() {
+    {
+      std::lock_guard<std::mutex> lock(mu);
+      closing = true;
+    }
+    not_empty.notify_all();
+    if (writer.joinable()) writer.join();
+  };
+  int queued = 0;
   try {
-    while (r.written < o.frames) {
+    while (queued < o.frames) {
+      {
+        std::lock_guard<std::mutex> lock(mu);
+        if (writer_error) break;
+      }
       if (stop && stop->load()) {
         r.interrupted = true;
         break;
@@ -90,6 +182,7 @@ CaptureResult CaptureDataset(const std::vector<CameraSource*>& sources, const Ca
         if (!f) break;
         if (!f->complete) {
           ++r.incomplete;
+          std::lock_guard<std::mutex> lock(mu);
           m["incomplete_frames"].push_back({{"unit", names[k]}, {"frame_id", f->frame_id}, {"status", f->status},
                                             {"device_ns", f->device_ns}});
           std::fprintf(stderr, "capture: %s frame %llu incomplete (%s), not written\n", names[k].c_str(),
@@ -98,6 +191,7 @@ CaptureResult CaptureDataset(const std::vector<CameraSource*>& sources, const Ca
         }
         got[k].push_back(std::move(*f));
       }
+      snapshot_stats();
       std::vector<std::vector<Frame>> sets;
       if (sources.size() == 1) {
         for (auto& f : got[0]) sets.push_back({std::move(f)});
@@ -105,36 +199,47 @@ CaptureResult CaptureDataset(const std::vector<CameraSource*>& sources, const Ca
         for (int k = 0; k < 2; ++k)
           for (auto& f : got[k])
             for (auto& pr : pairer.Add(k, std::move(f))) sets.push_back({std::move(pr.first), std::move(pr.second)});
+        std::lock_guard<std::mutex> lock(mu);
         r.unpaired = pairer.dropped;
       }
       for (auto& set : sets) {
-        if (r.written >= o.frames) break;
-        nlohmann::json frame = {{"id", r.written}, {"views", nlohmann::json::array()}};
+        if (queued >= o.frames) break;
+        Pending p{queued, {}, {}};
         for (size_t k = 0; k < set.size(); ++k) {
           char rel[96];
-          std::snprintf(rel, sizeof rel, "images/%s_%04d.png", names[k].c_str(), r.written);
-          WriteFrameImage(out / rel, set[k]);
-          frame["views"].push_back(view_json(k, set[k], rel));
+          std::snprintf(rel, sizeof rel, "images/%s_%04d.%s", names[k].c_str(), queued, o.image_format.c_str());
+          p.views.push_back(view_json(k, set[k], rel));
         }
-        m["frames"].push_back(frame);
-        ++r.written;
-        write_manifest();
-        if (o.progress) std::fprintf(stderr, "\rcapture: %d / %d frames", r.written, o.frames);
+        p.frames = std::move(set);
+        std::unique_lock<std::mutex> lock(mu);
+        not_full.wait(lock, [&] { return static_cast<int>(queue.size()) < o.write_queue || writer_error; });
+        if (writer_error) break;
+        queue.push_back(std::move(p));
+        r.max_queue_depth = std::max(r.max_queue_depth, static_cast<int>(queue.size()));
+        ++queued;
+        lock.unlock();
+        not_empty.notify_one();
       }
     }
+    finish_writer();
+    if (writer_error) std::rethrow_exception(writer_error);
   } catch (...) {
+    finish_writer();
     for (auto* s : sources) s->Stop();
+    std::lock_guard<std::mutex> lock(mu);
     m["status"] = "stopped by an error after " + std::to_string(r.written) + " frames";
     try {
-      write_manifest();
+      write_manifest_locked();
     } catch (...) {
     }
     throw;
   }
   if (o.progress) std::fprintf(stderr, "\n");
   for (auto* s : sources) s->Stop();
+  snapshot_stats();
+  std::lock_guard<std::mutex> lock(mu);
   m["status"] = r.interrupted ? "interrupted after " + std::to_string(r.written) + " frames" : "complete";
-  write_manifest();
+  write_manifest_locked();
   return r;
 }
 

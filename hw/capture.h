@@ -1,8 +1,9 @@
 // Capture to a dataset: the same manifest the renderer writes (dataset.json, format hovs-dataset), without
 // ground truth, with per-frame metadata (device and host timestamps, frame ids, exposure, gain, serial numbers)
 // and the stream statistics. Only complete frames are written; incomplete ones are counted and listed. Images
-// and the manifest are written atomically (temporary file + rename) and the manifest is rewritten after every
-// frame, so an interrupted capture (Ctrl-C, a full disk) leaves a valid dataset of the frames written so far.
+// and the manifest are written atomically (temporary file + rename) by a writer thread, and the manifest is
+// rewritten after every frame it wrote, so an interrupted capture (Ctrl-C, a full disk) leaves a valid dataset
+// of the frames written so far.
 #pragma once
 
 #include <atomic>
@@ -23,6 +24,13 @@ struct CaptureOptions {
   uint64_t pair_tolerance_ns = 2'000'000;
   bool software_trigger = false;      // trigger every camera before each frame
   std::vector<std::string> unit_names;  // one per source (default unit0, unit1)
+  // Frames (pairs) grabbed but not yet written: a writer thread compresses and writes them while the grab loop
+  // keeps draining the cameras' buffers; when it is full the grab loop waits (the cameras' buffer pools then
+  // absorb the burst, and underruns show in the statistics).
+  int write_queue = 16;
+  // "png" (zlib-compressed, 8 or 16 bit) or "pgm" (binary PGM, uncompressed: written at disk speed, for full
+  // frame rates; every hovs command reads both).
+  std::string image_format = "png";
   bool progress = false;
   void Check(size_t sources, const std::string& where) const;
 };
@@ -32,6 +40,7 @@ struct CaptureResult {
   int incomplete = 0;     // frames the stream delivered incomplete (not written)
   uint64_t unpaired = 0;  // two cameras: frames without a partner within the tolerance
   bool interrupted = false;
+  int max_queue_depth = 0;   // the writer queue's high-water mark
   nlohmann::json manifest;
 };
 

@@ -66,6 +66,23 @@ TEST(CaptureCli, RenderedFramesCrossTheProtocolIntoADatasetThatCalibratesAndUnwr
     for (int i = 0; i < 8; ++i) sent[i] = static_cast<uint8_t>(k >> (8 * i));
     EXPECT_TRUE(got == sent) << "captured frame " << fr["id"] << " differs from served frame " << k;
   }
+  // Uncompressed PGM (for full frame rates): the same bytes, read by the same loaders.
+  const auto pgm = test::Hovs("-q capture --simulate " + (dir / "set/dataset.json").string() +
+                              " --frames 3 --image-format pgm --out " + (dir / "cap-pgm").string());
+  ASSERT_EQ(pgm.exit_code, 0) << pgm.output;
+  const auto mp = nlohmann::json::parse(ReadFile(dir / "cap-pgm/dataset.json"));
+  ASSERT_EQ(mp["frames"].size(), 3u);
+  for (const auto& fr : mp["frames"]) {
+    const auto& v = fr["views"][0];
+    EXPECT_EQ(fs::path(v["image"].get<std::string>()).extension(), ".pgm");
+    int w = 0, h = 0, ws = 0, hs = 0;
+    auto got = Grey8(dir / "cap-pgm" / v["image"].get<std::string>(), &w, &h);
+    const uint64_t k = Stamp(got);
+    auto sent = Grey8(dir / "set" / src["frames"][k % 5]["views"][0]["image"].get<std::string>(), &ws, &hs);
+    ASSERT_EQ(w, ws);
+    for (int i = 0; i < 8; ++i) sent[i] = static_cast<uint8_t>(k >> (8 * i));
+    EXPECT_TRUE(got == sent) << "PGM frame " << fr["id"] << " differs from served frame " << k;
+  }
   // The same calibration and expansion code as for synthetic data.
   const auto cal = test::Hovs("-q calibrate --dataset " + (dir / "cap/dataset.json").string() +
                               " --board 7x5x0.03 --out " + (dir / "cal").string());
