@@ -17,6 +17,7 @@ const std::vector<Command>& Commands() {
       {"stereo-calibrate", "Relative pose of two units from ArUco board pairs (detection in unwrapped views, joint solve)", SetupStereoCalibrate},
       {"depth", "Dense and sparse binocular depth of a two-unit dataset (rectification, SGBM, point clouds)", SetupDepth},
       {"capture", "Capture frames from GigE Vision cameras (Aravis), a replay or the GigE Vision simulator into a dataset", SetupCapture},
+      {"position", "Visual positioning: the camera's offset from the mirror design, from the rim in one image", SetupPosition},
       {"live", "Live expansion: camera (or simulator, replay) frames into views, raw Bayer to RGB, with latency figures", SetupLive},
       {"validate", "End to end against ground truth: design, renders, detection, calibration, stereo, views, depth; report", SetupValidate},
       {"version", "Print the versions of hovs and its libraries", SetupVersion},

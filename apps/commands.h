@@ -42,5 +42,6 @@ Runner SetupStereoCalibrate(CLI::App* sub, const GlobalOptions* global);
 Runner SetupValidate(CLI::App* sub, const GlobalOptions* global);
 Runner SetupCapture(CLI::App* sub, const GlobalOptions* global);
 Runner SetupLive(CLI::App* sub, const GlobalOptions* global);
+Runner SetupPosition(CLI::App* sub, const GlobalOptions* global);
 
 }  // namespace hovs::apps

@@ -189,6 +189,18 @@ TEST(CalibrateCli, CalibratesASyntheticSetAgainstGroundTruthAndRejectsBadInput) 
                                (dir / "half" / "images").string() + " -o " + (dir / "pano").string());
   ASSERT_EQ(pano.exit_code, 0) << pano.output;
   EXPECT_NE(ReadFile(dir / "pano" / "views.json").find("unified"), std::string::npos);
+  // Visual positioning on one of the images: the unit is aligned, so the camera sits at the design's focus.
+  const auto first_image = (dir / "half" / jd["detection"][0]["image"].get<std::string>()).string();
+  const auto pos = test::Hovs("-q position -i " + first_image + " --design " + (dir / "half" / "dataset.json").string() +
+                              " -o " + (dir / "pos").string());
+  ASSERT_EQ(pos.exit_code, 0) << pos.output;
+  const auto jp = nlohmann::json::parse(ReadFile(dir / "pos" / "position.json"));
+  for (int k = 0; k < 3; ++k) EXPECT_LT(std::abs(jp["camera_offset_mm"][k].get<double>()), 0.02) << jp.dump();
+  const auto pos_bad = test::Hovs("position -i " + first_image + " --design " + (dir / "set" / "dataset.json").string() +
+                                  " -o " + (dir / "pos-bad").string());
+  EXPECT_EQ(pos_bad.exit_code, 2);
+  EXPECT_NE(pos_bad.output.find("but the design's camera is 688x550"), std::string::npos) << pos_bad.output;
+  EXPECT_FALSE(fs::exists(dir / "pos-bad"));
   // Bad input: one clear error, exit 2, no report.
   const auto rejected = [&](const std::string& args, const std::string& needle) {
     const auto r = test::Hovs("calibrate " + args + " --out " + (dir / "bad").string());
