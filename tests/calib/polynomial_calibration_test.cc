@@ -109,6 +109,17 @@ TEST(PhysicalCalibration, RecoversTheTiltOfAMisalignedRig) {
   EXPECT_LT(phys.rms, poly.rms);
   EXPECT_LT((phys.offset - offset).norm(), 1e-4) << "m";
   EXPECT_NEAR(phys.rig.mirror.b / phys.rig.mirror.a, 44.0 / 48.0, 1e-4);
+  // The mirror itself, from a start 1 % off in a and b (a manufacturing tolerance): the true a and b come
+  // back (the board's metric size fixes the scale).
+  auto off_design = test::AlignedRig();
+  off_design.mirror.a = 0.0485, off_design.mirror.b = 0.0436;
+  off_design.cam_from_mirror = CamFromMirrorMisaligned<double>(off_design.mirror, Vec3d::Zero(), Vec3d::Zero());
+  const PhysicalCalibration pm = CalibratePhysical(obs, off_design, poly);
+  std::printf("[ figure ] misaligned rig, mirror started 1 %% off: a %.5f mm, b %.5f mm, tilt error %.5f deg, RMS %.6f px\n",
+              pm.rig.mirror.a * 1e3, pm.rig.mirror.b * 1e3, (pm.tilt - tilt).norm() / kDeg, pm.rms);
+  EXPECT_NEAR(pm.rig.mirror.a, 0.048, 1e-6) << "m";
+  EXPECT_NEAR(pm.rig.mirror.b, 0.044, 1e-6) << "m";
+  EXPECT_LT((pm.tilt - tilt).norm() / kDeg, 0.05);
   // With 0.3 px corner noise the tilt trades off against the principal point; with the camera calibrated on
   // its own (intrinsics fixed) and the mirror known from its manufacture, it is measured to hundredths of a degree.
   const auto noisy = SyntheticObservations(truth, 12, 0.3, 22);
