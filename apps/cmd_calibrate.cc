@@ -17,6 +17,7 @@
 #include "calib/omnidir_io.h"
 #include "calib/omnidir_reference.h"
 #include "calib/physical_calibration.h"
+#include "calib/rim_positioning.h"
 #include "scenes/scene_config.h"
 #include "calib/polynomial_calibration.h"
 #include "core/error.h"
@@ -290,7 +291,7 @@ void ErrorMapFigure(const std::vector<calib::BoardObservation>& obs, const calib
 Runner SetupCalibrate(CLI::App* sub, const GlobalOptions* global) {
   struct Options {
     std::string corners, size, dataset, unit, images, board, out = "results/calibration", loss = "none";
-    bool truth_corners = false, physical = false, physical_intrinsics = false, physical_mirror = false;
+    bool truth_corners = false, physical = false, physical_intrinsics = false, physical_mirror = false, rim = true;
     std::string nominal;
     int subpix = 0;
     std::vector<int> degrees = {2, 3, 4, 5, 6};
@@ -315,6 +316,9 @@ Runner SetupCalibrate(CLI::App* sub, const GlobalOptions* global) {
   sub->add_flag("--physical-mirror", o->physical_mirror,
                 "--physical: also estimate the mirror's a and b (default: held at the design; their common scale is "
                 "weakly observable and drifts with corner noise)");
+  sub->add_flag("!--no-rim", o->rim,
+                "--physical: do not fit the rim of the mirror image (by default it is found in every image and fixes "
+                "the camera's height and lateral place)");
   sub->add_flag("--truth-corners", o->truth_corners, "use a synthetic manifest's exact corners instead of detecting");
   sub->add_option("--subpix-window", o->subpix, "cornerSubPix half window, px (0: 0.35 x the local square)")
       ->capture_default_str();
@@ -388,6 +392,7 @@ Runner SetupCalibrate(CLI::App* sub, const GlobalOptions* global) {
     const calib::UnifiedCalibration uni = calib::CalibrateUnified(inliers, in.width, in.height, *chosen, o->loss, o->loss_scale);
     std::optional<calib::PhysicalCalibration> phys;
     std::optional<raytrace::CatadioptricUnit> phys_unit;
+    size_t phys_rim_points = 0;
     if (o->physical) {
       raytrace::CatadioptricUnit nominal;
       if (!o->nominal.empty()) {
@@ -405,7 +410,23 @@ Runner SetupCalibrate(CLI::App* sub, const GlobalOptions* global) {
       calib::PhysicalCalibrationOptions popt;
       popt.estimate_intrinsics = o->physical_intrinsics;
       popt.estimate_mirror = o->physical_mirror;
+      if (o->rim && !in.paths.empty()) {   // a corner table has no images: corners only
+        for (const auto& path : in.paths) {
+          const cv::Mat g = GreyImage(path);
+          calib::RimEdge edge;
+          try {
+            calib::LocateMirror(g.data, g.cols, g.rows, nominal.rig, {}, &edge);
+          } catch (const Error& e) {
+            if (!global->quiet) std::fprintf(stderr, "hovs calibrate: no rim in %s: %s\n", path.string().c_str(), e.what());
+            continue;
+          }
+          popt.rim_points.insert(popt.rim_points.end(), edge.points.begin(), edge.points.end());
+        }
+        HOVS_REQUIRE(popt.rim_points.size() >= 20, "--physical", "the rim of the mirror image was not found in the "
+                     "images (--no-rim calibrates without it)");
+      }
       phys = calib::CalibratePhysical(inliers, nominal.rig, *chosen, popt);
+      phys_rim_points = popt.rim_points.size();
       phys_unit = nominal;
       phys_unit->rig = phys->rig;
     }
@@ -451,6 +472,7 @@ Runner SetupCalibrate(CLI::App* sub, const GlobalOptions* global) {
                        {"offset_m", {phys->offset.x(), phys->offset.y(), phys->offset.z()}},
                        {"intrinsics_estimated", o->physical_intrinsics}, {"mirror_estimated", o->physical_mirror},
                        {"rms_px", phys->rms}, {"converged", phys->converged}, {"solver", phys->solver_report},
+                       {"rim_points", static_cast<int>(phys_rim_points)}, {"rim_rms_px", phys->rim_rms},
                        {"unit", scenes::UnitToJson(*phys_unit)}};
     }
     if (o->omnidir) {
@@ -563,7 +585,8 @@ Runner SetupCalibrate(CLI::App* sub, const GlobalOptions* global) {
       summary += "  physical model: RMS " + F("%.4f", phys->rms) + " px, a " + F("%.5f", phys->rig.mirror.a) + " m, b " +
                  F("%.5f", phys->rig.mirror.b) + " m, tilt (" + F("%.3f", phys->tilt.x() * 180 / M_PI) + ", " +
                  F("%.3f", phys->tilt.y() * 180 / M_PI) + ") deg, offset (" + F("%.2f", phys->offset.x() * 1e3) + ", " +
-                 F("%.2f", phys->offset.y() * 1e3) + ", " + F("%.2f", phys->offset.z() * 1e3) + ") mm\n";
+                 F("%.2f", phys->offset.y() * 1e3) + ", " + F("%.2f", phys->offset.z() * 1e3) + ") mm" +
+                 (phys_rim_points ? ", rim " + std::to_string(phys_rim_points) + " points (RMS " + F("%.3f", phys->rim_rms) + " px)" : "") + "\n";
       if (j.contains("physical") && j["physical"].contains("ground_truth"))
         summary += "  physical model vs ground truth: mean ray angle " +
                    F("%.5f", j["physical"]["ground_truth"]["mean_ray_angle_deg"].get<double>()) + " deg\n";

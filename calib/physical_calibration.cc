@@ -45,6 +45,33 @@ struct PhysicalReprojection {
   const CatadioptricCamera<double>* nominal_;
 };
 
+// A rim edge pixel: its camera ray must meet the rim plane (z = RimZ, mirror frame) at the rim radius.
+// Same blocks as PhysicalReprojection but the board pose; residual in pixels (radial miss x f / depth).
+struct RimRayResidual {
+  RimRayResidual(const Vec2d& px, const CatadioptricCamera<double>* nominal) : px_(px), nominal_(nominal) {}
+  template <class T>
+  bool operator()(const T* mirror, const T* intr, const T* dist, const T* mis, T* residual) const {
+    CatadioptricCamera<T> rig = nominal_->Cast<T>();
+    rig.mirror.a = mirror[0], rig.mirror.b = mirror[1];
+    rig.camera.fx = intr[0], rig.camera.fy = intr[1], rig.camera.cx = intr[2], rig.camera.cy = intr[3];
+    rig.camera.distortion = {dist[0], dist[1], dist[2], dist[3]};
+    rig.cam_from_mirror = CamFromMirrorMisaligned<T>(rig.mirror, Vec3<T>(mis[0], mis[1], mis[2]), Vec3<T>(mis[3], mis[4], mis[5]));
+    Vec3<T> ray;
+    if (!rig.camera.CamFromImg(Vec2<T>(T(px_.x()), T(px_.y())), &ray)) return false;
+    const Rigid3<T> mirror_from_cam = rig.cam_from_mirror.Inverse();
+    const Vec3<T> C = mirror_from_cam.translation, d = mirror_from_cam.rotation * ray;
+    const T z = rig.mirror.RimZ();
+    if (!(ScalarPart(d(2)) > 1e-9)) return false;
+    const T t = (z - C(2)) / d(2);
+    const Vec3<T> X = C + t * d;
+    using std::sqrt;
+    residual[0] = (sqrt(X(0) * X(0) + X(1) * X(1)) - rig.mirror.RimRadius()) * rig.camera.fx / (z - C(2));
+    return true;
+  }
+  Vec2d px_;
+  const CatadioptricCamera<double>* nominal_;
+};
+
 }  // namespace
 
 PhysicalCalibration CalibratePhysical(const std::vector<BoardObservation>& obs, const CatadioptricCamera<double>& nominal,
@@ -65,6 +92,9 @@ PhysicalCalibration CalibratePhysical(const std::vector<BoardObservation>& obs, 
       problem.AddResidualBlock(new ceres::AutoDiffCostFunction<PhysicalReprojection, 2, 2, 4, 4, 6, 6>(
                                    new PhysicalReprojection(obs[i].board_points[j], obs[i].pixels[j], &nominal)),
                                nullptr, mirror, intr, dist, mis, poses[i].data());
+  for (const Vec2d& p : opt.rim_points)
+    problem.AddResidualBlock(new ceres::AutoDiffCostFunction<RimRayResidual, 1, 2, 4, 4, 6>(new RimRayResidual(p, &nominal)),
+                             new ceres::HuberLoss(1.0), mirror, intr, dist, mis);
   if (!opt.estimate_distortion) problem.SetParameterBlockConstant(dist);
   if (!opt.estimate_intrinsics) problem.SetParameterBlockConstant(intr);
   // The mirror is symmetric about its axis: turning the camera about that axis is absorbed by the board poses.
@@ -102,6 +132,16 @@ PhysicalCalibration CalibratePhysical(const std::vector<BoardObservation>& obs, 
     }
   }
   out.rms = std::sqrt(sum2 / n);
+  if (!opt.rim_points.empty()) {
+    double r2 = 0;
+    for (const Vec2d& p : opt.rim_points) {
+      double r = 0;
+      const double m[2] = {mirror[0], mirror[1]};
+      RimRayResidual(p, &nominal)(m, intr, dist, mis, &r);
+      r2 += r * r;
+    }
+    out.rim_rms = std::sqrt(r2 / opt.rim_points.size());
+  }
   return out;
 }
 

@@ -20,6 +20,10 @@ struct PhysicalCalibrationOptions {
   bool estimate_distortion = false;
   bool estimate_mirror = true;     // a and b; their common scale is weakly observable (only off the focus)
   int max_iterations = 200;
+  // Points on the rim of the mirror image (calib/rim_positioning.h, DetectRimEdge), seen directly by the camera:
+  // each adds a residual (px) for its camera ray missing the rim circle. The rim fixes the camera's height and
+  // lateral place, which the boards' corners (seen through the mirror) constrain only weakly.
+  std::vector<Vec2d> rim_points;
 };
 
 struct PhysicalCalibration {
@@ -28,6 +32,7 @@ struct PhysicalCalibration {
   Vec3d offset = Vec3d::Zero();    // camera centre minus F2, mirror frame, m
   std::vector<Rigid3d> mirror_from_board;
   double rms = 0;
+  double rim_rms = 0;              // px, over rim_points (0 without)
   bool converged = false;
   std::string solver_report;
 };
