@@ -141,6 +141,20 @@ TEST(CaptureCli, RenderedFramesCrossTheProtocolIntoADatasetThatCalibratesAndUnwr
   EXPECT_NE(mi["status"].get<std::string>().find("interrupted"), std::string::npos) << mi["status"];
   for (const auto& fr : mi["frames"]) EXPECT_TRUE(fs::exists(dir / "intr" / fr["views"][0]["image"].get<std::string>()));
 
+  // A full disk (simulated by a file-size limit: a write beyond it fails with EFBIG instead of killing the
+  // process): one clear error, exit 2, the manifest valid and listing no frame, no partial image left behind.
+  const auto full = test::Run("bash -c 'ulimit -f 1000; trap \"\" XFSZ; exec " + std::string(HOVS_BINARY) +
+                              " -q capture --simulate " + (dir / "set/dataset.json").string() +
+                              " --frames 3 --image-format pgm --out " + (dir / "full").string() + "'");
+  EXPECT_EQ(full.exit_code, 2) << full.output;
+  EXPECT_NE(full.output.find("write failed (disk full?)"), std::string::npos) << full.output;
+  const auto mf = nlohmann::json::parse(ReadFile(dir / "full/dataset.json"));
+  EXPECT_NE(mf["status"].get<std::string>().find("stopped by an error"), std::string::npos) << mf["status"];
+  EXPECT_EQ(mf["frames"].size(), 0u);
+  int leftovers = 0;
+  for (const auto& e : fs::directory_iterator(dir / "full/images")) leftovers += e.is_regular_file();
+  EXPECT_EQ(leftovers, 0) << "no partial image may remain";
+
   // Bad input: one clear error, exit 2.
   const auto rejected = [&](const std::string& args, const std::string& needle) {
     const auto r = test::Hovs("capture " + args);
