@@ -184,6 +184,12 @@ Runner SetupStereoCalibrate(CLI::App* sub, const GlobalOptions* global) {
       double worst = 0, ss = 0;
       int n = 0, excluded = 0;
       std::vector<double> all_rel;
+      // The worst corners, for diagnosis: where they are (range, angle to the baseline), the predicted range
+      // sigma for 0.1 px of corner noise, and the rays' gap.
+      struct Worst { double rel, range, theta_deg, sigma_rel, gap_mm; std::string pair; int corner; };
+      std::vector<Worst> worst_list;
+      const double px_rad = 0.1 * (M_PI / 2) / std::max(1, ul.rig.camera.width / 2);   // ~0.1 px at the rim
+      const Vec3d base_dir = c.right_from_left.Inverse().translation.normalized();
       std::set<std::tuple<std::string, std::string, int>> outlier_set;
       for (const auto& x : c.outliers) outlier_set.insert({x.pair, x.unit, x.corner});
       for (const auto& fr : m.at("frames")) {
@@ -208,10 +214,14 @@ Runner SetupStereoCalibrate(CLI::App* sub, const GlobalOptions* global) {
           }
           Vec3d bl, br;
           if (!left.MirrorFromImg(p.pixel, &bl) || !right.MirrorFromImg(r->second, &br)) continue;
-          const auto tri = depth::Triangulate(rig, bl, br, 1e-4);
+          const auto tri = depth::Triangulate(rig, bl, br, px_rad);
           if (!tri.ok) continue;
           const double true_range = (left_from_board * b->second).norm();
           const double rel = (tri.range_left - true_range) / true_range;
+          const Vec3d X = left_from_board * b->second;
+          worst_list.push_back({std::abs(rel), true_range,
+                                std::acos(std::clamp(X.normalized().dot(base_dir), -1.0, 1.0)) * 180 / M_PI,
+                                tri.sigma_range / true_range, 1e3 * tri.gap, name, p.id});
           for (auto& band : bands)
             if (true_range >= band.lo && true_range < band.hi) band.rel.push_back(std::abs(rel));
           worst = std::max(worst, std::abs(rel)), ss += rel * rel, ++n;
@@ -231,6 +241,31 @@ Runner SetupStereoCalibrate(CLI::App* sub, const GlobalOptions* global) {
                              {"median_rel_error", all_rel[all_rel.size() / 2]},
                              {"p95_rel_error", all_rel[std::min(all_rel.size() - 1, all_rel.size() * 95 / 100)]},
                              {"excluded_outlier_corners", excluded}, {"bands", tab}};
+        std::sort(worst_list.begin(), worst_list.end(), [](const Worst& a, const Worst& b) { return a.rel > b.rel; });
+        nlohmann::json wl = nlohmann::json::array();
+        for (size_t k = 0; k < std::min<size_t>(10, worst_list.size()); ++k) {
+          const auto& w = worst_list[k];
+          wl.push_back({{"pair", w.pair}, {"corner", w.corner}, {"rel_error", w.rel}, {"range_m", w.range},
+                        {"angle_to_baseline_deg", w.theta_deg}, {"predicted_sigma_rel_0.1px", w.sigma_rel},
+                        {"ray_gap_mm", w.gap_mm}});
+        }
+        j["sparse_depth"]["worst_points"] = wl;
+        // Away from the baseline direction (where a pixel of disparity is a large fraction of the range and the
+        // dense depth masks too): the figures the geometry allows.
+        constexpr double kMinAngle = 15;
+        std::vector<double> cond;
+        for (const auto& w : worst_list)
+          if (w.theta_deg >= kMinAngle && w.theta_deg <= 180 - kMinAngle) cond.push_back(w.rel);
+        if (!cond.empty()) {
+          std::sort(cond.begin(), cond.end());
+          j["sparse_depth"]["conditioned"] = {
+              {"min_angle_to_baseline_deg", kMinAngle}, {"points", cond.size()},
+              {"median_rel_error", cond[cond.size() / 2]},
+              {"p95_rel_error", cond[std::min(cond.size() - 1, cond.size() * 95 / 100)]}, {"max_rel_error", cond.back()}};
+          std::snprintf(line, sizeof line, "  of them %zu at least %.0f deg from the baseline: worst %.3f %%\n",
+                        cond.size(), kMinAngle, 100 * cond.back());
+          summary += line;
+        }
         std::snprintf(line, sizeof line, "  sparse depth of %d marker corners: RMS %.3f %%, worst %.3f %%\n", n,
                       100 * std::sqrt(ss / n), 100 * worst);
         summary += line;
