@@ -157,6 +157,33 @@ void WalkTile(const ViewTable& vt, const Tile& t, int T, int u0, int v0, int nu,
   }
 }
 
+// Asks the caches for the source region an interp tile will sample (the bounding box of its nodes): the
+// remap's source accesses follow curves the hardware prefetchers do not predict (article's six RGB views:
+// 15.2 -> 12.1 ms in one run of the benchmark).
+void PrefetchTile(const ImageView& src, const std::vector<Image8>& pyramid, const Tile& t) {
+  if (t.kind != TileKind::kInterp || !t.inside) return;
+  const uint8_t* data = src.data;
+  size_t stride = src.stride;
+  int bpp = src.format == PixelFormat::kRgb8 ? 3 : 1;
+  if (t.level > 0) {
+    const Image8& lv = pyramid[t.level - 1];
+    data = lv.data.data(), stride = size_t(lv.width) * lv.channels, bpp = lv.channels;
+  }
+  float x0 = t.x[0], x1 = t.x[0], y0 = t.y[0], y1 = t.y[0];
+  for (int k = 1; k < 9; ++k) {
+    x0 = std::min(x0, t.x[k]), x1 = std::max(x1, t.x[k]);
+    y0 = std::min(y0, t.y[k]), y1 = std::max(y1, t.y[k]);
+  }
+  // inside: every tap lies at least 2 px inside the image, so the box plus one pixel is inside too.
+  const int h = t.level > 0 ? pyramid[t.level - 1].height : src.height;
+  const int r0 = std::max(0, int(y0) - 1), r1 = std::min(h - 1, int(y1) + 2);
+  const size_t c0 = size_t(std::max(0, int(x0) - 1)) * bpp, c1 = std::min(size_t(int(x1) + 2) * bpp, stride - 1);
+  for (int r = r0; r <= r1; ++r) {
+    const uint8_t* row = data + size_t(r) * stride;
+    for (size_t c = c0 & ~size_t(63); c <= c1; c += 64) __builtin_prefetch(row + c);
+  }
+}
+
 void BuildLevel(const Image8& in, PixelFormat in_format, Image8* out) {
   const int W = (in.width + 1) / 2, H = (in.height + 1) / 2;
   const bool bayer = in_format == PixelFormat::kBayerRggb8;
@@ -241,6 +268,7 @@ void Remapper::RemapRows(const ImageView& src, Interpolation interp, int view, i
   const int OC = out->channels;
   for (int tx = 0; tx < vt.tiles_x; ++tx) {
     const Tile& t = vt.tiles[tile_row * vt.tiles_x + tx];
+    if (tx + 1 < vt.tiles_x) PrefetchTile(src, pyramid_, vt.tiles[tile_row * vt.tiles_x + tx + 1]);
     const int u0 = tx * T, nu = std::min(T, vt.view.width - u0);
     if (t.kind == TileKind::kEmpty) {
       for (int j = 0; j < nv; ++j)

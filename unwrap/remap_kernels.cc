@@ -11,13 +11,17 @@ constexpr int32_t kHalf = 1 << 9;   // half of a 1/64 px step: rounds positions 
 
 inline int Lerp6(int a, int b, int f) { return a * (64 - f) + b * f; }
 
-// One colour grid of an RGGB mosaic (element (i, j) at mosaic (2i + ox, 2j + oy)): the vertical-and-horizontal
-// sum before the final shift (weights total 4096).
-inline int GridSum(const uint8_t* src, ptrdiff_t stride, int32_t x, int32_t y, int ox, int oy) {
+// The vertical step of the RGB and Bayer kernels in 16-bit arithmetic: t + round((b - t) * fy / 64), exactly as
+// _mm256_mulhrs_epi16(b - t, fy << 9) rounds it (t, b: horizontal sums, at most 64 * 255).
+inline int VerticalStep(int t, int b, int fy) { return t + (((b - t) * (fy << 9) + (1 << 14)) >> 15); }
+
+// One colour grid of an RGGB mosaic (element (i, j) at mosaic (2i + ox, 2j + oy)) bilinearly at mosaic position
+// (x, y), scaled by 64 (horizontal Lerp6, then VerticalStep: the AVX2 kernel's arithmetic).
+inline int BayerGridValue(const uint8_t* src, ptrdiff_t stride, int32_t x, int32_t y, int ox, int oy) {
   const int32_t px = ((x - ox * 65536) >> 1) + kHalf, py = ((y - oy * 65536) >> 1) + kHalf;
   const int fx = (px >> 10) & 63, fy = (py >> 10) & 63;
   const uint8_t* p = src + (2 * (py >> 16) + oy) * stride + 2 * (px >> 16) + ox;
-  return Lerp6(p[0], p[2], fx) * (64 - fy) + Lerp6(p[2 * stride], p[2 * stride + 2], fx) * fy;
+  return VerticalStep(Lerp6(p[0], p[2], fx), Lerp6(p[2 * stride], p[2 * stride + 2], fx), fy);
 }
 
 }  // namespace
@@ -36,7 +40,7 @@ void BilinearRgbRowScalar(const uint8_t* src, ptrdiff_t stride, const RowCoords&
     const uint8_t* q = src + (y >> 16) * stride + (x >> 16) * 3;
     for (int ch = 0; ch < 3; ++ch) {
       const int t = Lerp6(q[ch], q[ch + 3], fx), b = Lerp6(q[ch + stride], q[ch + stride + 3], fx);
-      o[3 * i + ch] = static_cast<uint8_t>((t * (64 - fy) + b * fy + 2048) >> 12);
+      o[3 * i + ch] = static_cast<uint8_t>((VerticalStep(t, b, fy) + 32) >> 6);
     }
   }
 }
@@ -56,10 +60,11 @@ void BayerRgbRowScalar(const uint8_t* src, ptrdiff_t stride, const RowCoords& c,
                        uint8_t* o) {
   for (int i = 0; i < n; ++i) {
     const int32_t x = c.X(i0 + i), y = c.Y(i0 + i);
-    o[3 * i] = static_cast<uint8_t>((GridSum(src, stride, x, y, 0, 0) + 2048) >> 12);
-    o[3 * i + 1] =
-        static_cast<uint8_t>((GridSum(src, stride, x, y, 1, 0) + GridSum(src, stride, x, y, 0, 1) + 4096) >> 13);
-    o[3 * i + 2] = static_cast<uint8_t>((GridSum(src, stride, x, y, 1, 1) + 2048) >> 12);
+    const int r = BayerGridValue(src, stride, x, y, 0, 0), g1 = BayerGridValue(src, stride, x, y, 1, 0);
+    const int g2 = BayerGridValue(src, stride, x, y, 0, 1), b = BayerGridValue(src, stride, x, y, 1, 1);
+    o[3 * i] = static_cast<uint8_t>((r + 32) >> 6);
+    o[3 * i + 1] = static_cast<uint8_t>((g1 + g2 + 64) >> 7);
+    o[3 * i + 2] = static_cast<uint8_t>((b + 32) >> 6);
   }
 }
 
@@ -102,7 +107,7 @@ __attribute__((target("avx2"))) void BilinearRgbRowAvx2(const uint8_t* data, ptr
                                                          int i0, int n, uint8_t* o) {
   const __m256i half = _mm256_set1_epi32(kHalf), m63 = _mm256_set1_epi32(63), c64 = _mm256_set1_epi32(64);
   const __m256i vstride = _mm256_set1_epi32(static_cast<int>(stride));
-  const __m256i round = _mm256_set1_epi32(1 << 11);
+  const __m256i round = _mm256_set1_epi16(32);
   // (left, right) byte pairs of R, G, B for the two pixels of each 128-bit lane.
   const __m256i pairs = _mm256_setr_epi8(0, 3, 1, 4, 2, 5, -1, -1, 8, 11, 9, 12, 10, 13, -1, -1,
                                          0, 3, 1, 4, 2, 5, -1, -1, 8, 11, 9, 12, 10, 13, -1, -1);
@@ -132,25 +137,24 @@ __attribute__((target("avx2"))) void BilinearRgbRowAvx2(const uint8_t* data, ptr
     const __m256i bA = _mm256_setr_epi64x(load(d2 + off[0]), load(d2 + off[1]), load(d2 + off[2]), load(d2 + off[3]));
     const __m256i bB = _mm256_setr_epi64x(load(d2 + off[4]), load(d2 + off[5]), load(d2 + off[6]), load(d2 + off[7]));
     const __m256i wxd = _mm256_or_si256(_mm256_slli_epi32(fx, 8), _mm256_sub_epi32(c64, fx));
-    const __m256i wyd = _mm256_or_si256(_mm256_slli_epi32(fy, 16), _mm256_sub_epi32(c64, fy));
-    const __m256i wxA = _mm256_shuffle_epi8(_mm256_permutevar8x32_epi32(wxd, _mm256_setr_epi32(0, 1, 0, 0, 2, 3, 0, 0)), rep);
-    const __m256i wxB = _mm256_shuffle_epi8(_mm256_permutevar8x32_epi32(wxd, _mm256_setr_epi32(4, 5, 0, 0, 6, 7, 0, 0)), rep);
+    const __m256i wyd = _mm256_slli_epi32(fy, 9);   // fy << 9 in the low 16 bits
+    const __m256i selA = _mm256_setr_epi32(0, 1, 0, 0, 2, 3, 0, 0), selB = _mm256_setr_epi32(4, 5, 0, 0, 6, 7, 0, 0);
+    const __m256i wxA = _mm256_shuffle_epi8(_mm256_permutevar8x32_epi32(wxd, selA), rep);
+    const __m256i wxB = _mm256_shuffle_epi8(_mm256_permutevar8x32_epi32(wxd, selB), rep);
+    const __m256i wyA = _mm256_shuffle_epi8(_mm256_permutevar8x32_epi32(wyd, selA), rep);
+    const __m256i wyB = _mm256_shuffle_epi8(_mm256_permutevar8x32_epi32(wyd, selB), rep);
     // Horizontal: R G B 0 per pixel (16-bit).
     const __m256i htA = _mm256_maddubs_epi16(_mm256_shuffle_epi8(tA, pairs), wxA);
     const __m256i htB = _mm256_maddubs_epi16(_mm256_shuffle_epi8(tB, pairs), wxB);
     const __m256i hbA = _mm256_maddubs_epi16(_mm256_shuffle_epi8(bA, pairs), wxA);
     const __m256i hbB = _mm256_maddubs_epi16(_mm256_shuffle_epi8(bB, pairs), wxB);
-    // Vertical: (top, bottom) pairs times (64 - fy, fy), 32-bit.
-    __m256i r0 = _mm256_madd_epi16(_mm256_unpacklo_epi16(htA, hbA), _mm256_permutevar8x32_epi32(wyd, _mm256_setr_epi32(0, 0, 0, 0, 2, 2, 2, 2)));
-    __m256i r1 = _mm256_madd_epi16(_mm256_unpackhi_epi16(htA, hbA), _mm256_permutevar8x32_epi32(wyd, _mm256_setr_epi32(1, 1, 1, 1, 3, 3, 3, 3)));
-    __m256i r2 = _mm256_madd_epi16(_mm256_unpacklo_epi16(htB, hbB), _mm256_permutevar8x32_epi32(wyd, _mm256_setr_epi32(4, 4, 4, 4, 6, 6, 6, 6)));
-    __m256i r3 = _mm256_madd_epi16(_mm256_unpackhi_epi16(htB, hbB), _mm256_permutevar8x32_epi32(wyd, _mm256_setr_epi32(5, 5, 5, 5, 7, 7, 7, 7)));
-    r0 = _mm256_srli_epi32(_mm256_add_epi32(r0, round), 12);
-    r1 = _mm256_srli_epi32(_mm256_add_epi32(r1, round), 12);
-    r2 = _mm256_srli_epi32(_mm256_add_epi32(r2, round), 12);
-    r3 = _mm256_srli_epi32(_mm256_add_epi32(r3, round), 12);
+    // Vertical (VerticalStep), then (v + 32) >> 6.
+    __m256i vA = _mm256_add_epi16(htA, _mm256_mulhrs_epi16(_mm256_sub_epi16(hbA, htA), wyA));
+    __m256i vB = _mm256_add_epi16(htB, _mm256_mulhrs_epi16(_mm256_sub_epi16(hbB, htB), wyB));
+    vA = _mm256_srli_epi16(_mm256_add_epi16(vA, round), 6);
+    vB = _mm256_srli_epi16(_mm256_add_epi16(vB, round), 6);
     // Packed dwords come out as pixels 0 1 4 5 | 2 3 6 7.
-    __m256i p = _mm256_packus_epi16(_mm256_packus_epi32(r0, r1), _mm256_packus_epi32(r2, r3));
+    __m256i p = _mm256_packus_epi16(vA, vB);
     p = _mm256_permutevar8x32_epi32(p, _mm256_setr_epi32(0, 1, 4, 5, 2, 3, 6, 7));
     StoreRgb8(p, o + 3 * i);
   }
@@ -188,41 +192,92 @@ __attribute__((target("avx2"))) void BilinearGrayRowAvx2(const uint8_t* data, pt
   BilinearGrayRowScalar(data, stride, c, i0 + i, n - i, o + i);
 }
 
-// One colour grid for 8 pixels: the weighted sum (weights total 4096), 32-bit.
-__attribute__((target("avx2"))) inline __m256i GridSum8(const uint8_t* data, ptrdiff_t stride, __m256i x, __m256i y,
-                                                        int ox, int oy) {
-  const __m256i half = _mm256_set1_epi32(kHalf), m63 = _mm256_set1_epi32(63), c64 = _mm256_set1_epi32(64);
-  const __m256i pairs = _mm256_set1_epi32(0x00FF00FF);
-  const __m256i px = _mm256_add_epi32(_mm256_srai_epi32(_mm256_sub_epi32(x, _mm256_set1_epi32(ox * 65536)), 1), half);
-  const __m256i py = _mm256_add_epi32(_mm256_srai_epi32(_mm256_sub_epi32(y, _mm256_set1_epi32(oy * 65536)), 1), half);
-  const __m256i fx = _mm256_and_si256(_mm256_srai_epi32(px, 10), m63);
-  const __m256i fy = _mm256_and_si256(_mm256_srai_epi32(py, 10), m63);
-  const __m256i row = _mm256_slli_epi32(_mm256_srai_epi32(py, 16), 1);
-  const __m256i col = _mm256_slli_epi32(_mm256_srai_epi32(px, 16), 1);
-  const __m256i off = _mm256_add_epi32(_mm256_mullo_epi32(row, _mm256_set1_epi32(static_cast<int>(stride))), col);
-  const int* b0 = reinterpret_cast<const int*>(data + oy * stride + ox);
-  const int* b1 = reinterpret_cast<const int*>(data + (oy + 2) * stride + ox);
-  const __m256i t = _mm256_and_si256(_mm256_i32gather_epi32(b0, off, 1), pairs);   // p0, p2 as 16-bit
-  const __m256i b = _mm256_and_si256(_mm256_i32gather_epi32(b1, off, 1), pairs);
-  const __m256i wx = _mm256_or_si256(_mm256_slli_epi32(fx, 16), _mm256_sub_epi32(c64, fx));
-  const __m256i ht = _mm256_madd_epi16(t, wx), hb = _mm256_madd_epi16(b, wx);
-  const __m256i wy = _mm256_or_si256(_mm256_slli_epi32(fy, 16), _mm256_sub_epi32(c64, fy));
-  return _mm256_madd_epi16(_mm256_or_si256(ht, _mm256_slli_epi32(hb, 16)), wy);
+// Eight pixels' 64-bit words at data + off[k] + d, each shuffled by its pixel's indices; packed order
+// 0 1 4 5 | 2 3 6 7 (see BayerRgbRowAvx2).
+__attribute__((target("avx2"))) inline __m256i BayerWord(const uint8_t* data, const int32_t* off, ptrdiff_t d,
+                                                         __m256i idxA, __m256i idxB) {
+  const auto load = [](const uint8_t* p) {
+    long long v;
+    std::memcpy(&v, p, 8);
+    return v;
+  };
+  const __m256i a = _mm256_shuffle_epi8(
+      _mm256_setr_epi64x(load(data + off[0] + d), load(data + off[1] + d), load(data + off[2] + d), load(data + off[3] + d)), idxA);
+  const __m256i b = _mm256_shuffle_epi8(
+      _mm256_setr_epi64x(load(data + off[4] + d), load(data + off[5] + d), load(data + off[6] + d), load(data + off[7] + d)), idxB);
+  return _mm256_unpacklo_epi64(a, b);
 }
 
+// RGGB mosaic, 8 pixels per step, without gathers. For a pixel at mosaic column X (integer part) every tap of
+// the four colour grids lies in the 8 bytes from column B = (X & ~1) - 2 (even, so R/G2 taps sit at even and
+// G1/B taps at odd offsets 1..6 from it), and in four rows: two of the even-row grids (R, G1) and two of the
+// odd-row grids (G2, B). So each pixel reads four 64-bit words; one byte shuffle per word picks the
+// (left, right) taps of its two grids, the horizontal and vertical steps run on 16-bit pairs (R, G1) and
+// (G2, B). Groups whose 8-byte read would pass the end of a row use the scalar kernel.
 __attribute__((target("avx2"))) void BayerRgbRowAvx2(const uint8_t* data, ptrdiff_t stride, const RowCoords& c, int i0, int n, uint8_t* o) {
-  const __m256i r12 = _mm256_set1_epi32(1 << 11), r13 = _mm256_set1_epi32(1 << 12);
-  // Lane order for StoreRgb8: pixels 0-3 in the low lane, 4-7 in the high lane: already the natural order.
+  const __m256i half = _mm256_set1_epi32(kHalf), m63 = _mm256_set1_epi32(63), c64 = _mm256_set1_epi32(64);
+  const __m256i one = _mm256_set1_epi32(65536), lowmask = _mm256_set1_epi32(0xFFFF);
+  const __m256i vstride = _mm256_set1_epi32(static_cast<int>(stride));
+  const __m256i last_base = _mm256_set1_epi32(static_cast<int>(stride) - 8);
+  const __m256i order = _mm256_setr_epi32(0, 1, 4, 5, 2, 3, 6, 7);     // natural -> the packed order 0 1 4 5 | 2 3 6 7
+  const __m256i natural = _mm256_setr_epi32(0, 1, 4, 5, 2, 3, 6, 7);   // the packed order -> natural (self-inverse)
+  // Per pixel, the shuffle dword (ce, ce + 2, co, co + 2) for its own 8-byte word: pixel k of a lane's pair
+  // reads bytes 8k..8k+7, so its indices get + 8k; the upper two dwords of each lane are zeroed.
+  const __m256i pair_add = _mm256_setr_epi32(0, 0x08080808, 0, 0, 0, 0x08080808, 0, 0);
+  alignas(32) int32_t offe[8], offo[8];
   int i = 0;
   for (; i + 8 <= n; i += 8) {
     __m256i x, y;
     Coords8(c, i0 + i, &x, &y);
-    const __m256i R = _mm256_srli_epi32(_mm256_add_epi32(GridSum8(data, stride, x, y, 0, 0), r12), 12);
+    const __m256i base = _mm256_sub_epi32(_mm256_andnot_si256(_mm256_set1_epi32(1), _mm256_srai_epi32(x, 16)),
+                                          _mm256_set1_epi32(2));
+    if (_mm256_movemask_ps(_mm256_castsi256_ps(_mm256_cmpgt_epi32(base, last_base))) != 0) {
+      BayerRgbRowScalar(data, stride, c, i0 + i, 8, o + 3 * i);
+      continue;
+    }
+    // Grid coordinates (as BayerGridValue): even grids (ox or oy = 0) and odd grids (= 1).
+    const __m256i pxe = _mm256_add_epi32(_mm256_srai_epi32(x, 1), half);
+    const __m256i pxo = _mm256_add_epi32(_mm256_srai_epi32(_mm256_sub_epi32(x, one), 1), half);
+    const __m256i pye = _mm256_add_epi32(_mm256_srai_epi32(y, 1), half);
+    const __m256i pyo = _mm256_add_epi32(_mm256_srai_epi32(_mm256_sub_epi32(y, one), 1), half);
+    const __m256i fxe = _mm256_and_si256(_mm256_srai_epi32(pxe, 10), m63);
+    const __m256i fxo = _mm256_and_si256(_mm256_srai_epi32(pxo, 10), m63);
+    const __m256i fye = _mm256_and_si256(_mm256_srai_epi32(pye, 10), m63);
+    const __m256i fyo = _mm256_and_si256(_mm256_srai_epi32(pyo, 10), m63);
+    const __m256i ce = _mm256_sub_epi32(_mm256_slli_epi32(_mm256_srai_epi32(pxe, 16), 1), base);
+    const __m256i co = _mm256_sub_epi32(_mm256_add_epi32(_mm256_slli_epi32(_mm256_srai_epi32(pxo, 16), 1), _mm256_set1_epi32(1)), base);
+    const __m256i rowe = _mm256_slli_epi32(_mm256_srai_epi32(pye, 16), 1);
+    const __m256i rowo = _mm256_add_epi32(_mm256_slli_epi32(_mm256_srai_epi32(pyo, 16), 1), _mm256_set1_epi32(1));
+    _mm256_store_si256(reinterpret_cast<__m256i*>(offe), _mm256_add_epi32(_mm256_mullo_epi32(rowe, vstride), base));
+    _mm256_store_si256(reinterpret_cast<__m256i*>(offo), _mm256_add_epi32(_mm256_mullo_epi32(rowo, vstride), base));
+    // Byte indices (ce, ce + 2, co, co + 2) per pixel, moved to the packed order (pixels 0 1 | 2 3 in A's lanes,
+    // 4 5 | 6 7 in B's): A takes packed dwords 0, 1 and 4, 5 (pixels 0, 1, 2, 3), B dwords 2, 3 and 6, 7.
+    const __m256i idx = _mm256_or_si256(_mm256_or_si256(ce, _mm256_slli_epi32(_mm256_add_epi32(ce, _mm256_set1_epi32(2)), 8)),
+                                        _mm256_or_si256(_mm256_slli_epi32(co, 16), _mm256_slli_epi32(_mm256_add_epi32(co, _mm256_set1_epi32(2)), 24)));
+    const __m256i zero_hi = _mm256_setr_epi32(0, 0, -1, -1, 0, 0, -1, -1);   // 0x80 bytes: pshufb writes zero
+    const __m256i idxA = _mm256_or_si256(_mm256_add_epi8(_mm256_permutevar8x32_epi32(idx, _mm256_setr_epi32(0, 1, 0, 0, 2, 3, 0, 0)), pair_add),
+                                         _mm256_and_si256(zero_hi, _mm256_set1_epi8(char(0x80))));
+    const __m256i idxB = _mm256_or_si256(_mm256_add_epi8(_mm256_permutevar8x32_epi32(idx, _mm256_setr_epi32(4, 5, 0, 0, 6, 7, 0, 0)), pair_add),
+                                         _mm256_and_si256(zero_hi, _mm256_set1_epi8(char(0x80))));
+    const __m256i et = BayerWord(data, offe, 0, idxA, idxB), eb = BayerWord(data, offe, 2 * stride, idxA, idxB);
+    const __m256i ot = BayerWord(data, offo, 0, idxA, idxB), ob = BayerWord(data, offo, 2 * stride, idxA, idxB);
+    // Horizontal weights (64 - fxe, fxe, 64 - fxo, fxo) and vertical (fy << 9 in both words), packed order.
+    const __m256i wx = _mm256_permutevar8x32_epi32(
+        _mm256_or_si256(_mm256_or_si256(_mm256_sub_epi32(c64, fxe), _mm256_slli_epi32(fxe, 8)),
+                        _mm256_or_si256(_mm256_slli_epi32(_mm256_sub_epi32(c64, fxo), 16), _mm256_slli_epi32(fxo, 24))),
+        order);
+    const __m256i wye = _mm256_permutevar8x32_epi32(_mm256_mullo_epi32(_mm256_slli_epi32(fye, 9), _mm256_set1_epi32(0x10001)), order);
+    const __m256i wyo = _mm256_permutevar8x32_epi32(_mm256_mullo_epi32(_mm256_slli_epi32(fyo, 9), _mm256_set1_epi32(0x10001)), order);
+    const __m256i het = _mm256_maddubs_epi16(et, wx), heb = _mm256_maddubs_epi16(eb, wx);   // (R, G1)
+    const __m256i hot = _mm256_maddubs_epi16(ot, wx), hob = _mm256_maddubs_epi16(ob, wx);   // (G2, B)
+    const __m256i ve = _mm256_add_epi16(het, _mm256_mulhrs_epi16(_mm256_sub_epi16(heb, het), wye));
+    const __m256i vo = _mm256_add_epi16(hot, _mm256_mulhrs_epi16(_mm256_sub_epi16(hob, hot), wyo));
+    const __m256i R = _mm256_srli_epi32(_mm256_add_epi32(_mm256_and_si256(ve, lowmask), _mm256_set1_epi32(32)), 6);
     const __m256i G = _mm256_srli_epi32(
-        _mm256_add_epi32(_mm256_add_epi32(GridSum8(data, stride, x, y, 1, 0), GridSum8(data, stride, x, y, 0, 1)), r13),
-        13);
-    const __m256i B = _mm256_srli_epi32(_mm256_add_epi32(GridSum8(data, stride, x, y, 1, 1), r12), 12);
-    StoreRgb8(_mm256_or_si256(_mm256_or_si256(R, _mm256_slli_epi32(G, 8)), _mm256_slli_epi32(B, 16)), o + 3 * i);
+        _mm256_add_epi32(_mm256_add_epi32(_mm256_srli_epi32(ve, 16), _mm256_and_si256(vo, lowmask)), _mm256_set1_epi32(64)), 7);
+    const __m256i B = _mm256_srli_epi32(_mm256_add_epi32(_mm256_srli_epi32(vo, 16), _mm256_set1_epi32(32)), 6);
+    const __m256i p = _mm256_or_si256(_mm256_or_si256(R, _mm256_slli_epi32(G, 8)), _mm256_slli_epi32(B, 16));
+    StoreRgb8(_mm256_permutevar8x32_epi32(p, natural), o + 3 * i);
   }
   BayerRgbRowScalar(data, stride, c, i0 + i, n - i, o + 3 * i);
 }
