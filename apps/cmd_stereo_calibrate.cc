@@ -49,6 +49,7 @@ Runner SetupStereoCalibrate(CLI::App* sub, const GlobalOptions* global) {
   struct Options {
     std::string dataset, out = "results/stereo-calibration", left_model, right_model, model_kind = "auto";
     double huber = 1.0, marker_check_px = 2.0;
+    std::string corner_refinement = "edges";
   };
   auto o = std::make_shared<Options>();
   sub->add_option("--dataset", o->dataset, "stereo_aruco dataset manifest (two units per frame)")->required();
@@ -59,6 +60,11 @@ Runner SetupStereoCalibrate(CLI::App* sub, const GlobalOptions* global) {
   sub->add_option("--huber", o->huber, "robust loss scale, px")->capture_default_str();
   sub->add_option("--marker-check", o->marker_check_px,
                   "drop markers with a corner this far (px) from the board pose of the other corners; 0: keep all")
+      ->capture_default_str();
+  sub->add_option("--corner-refinement", o->corner_refinement,
+                  "marker corners: edges (where the marker's two sides, measured along their length, meet) | "
+                  "subpix (cornerSubPix only)")
+      ->check(CLI::IsMember({"edges", "subpix"}))
       ->capture_default_str();
   sub->add_option("-o,--out", o->out, "output folder (replaced atomically)")->capture_default_str();
   return [o, global]() {
@@ -77,6 +83,7 @@ Runner SetupStereoCalibrate(CLI::App* sub, const GlobalOptions* global) {
     const AnyModel right = o->right_model.empty() ? AnyModel::Exact(ur.rig) : LoadCalibratedModel(o->right_model, o->model_kind);
     depth::MarkerDetectOptions dop;
     dop.dictionary = spec.dictionary;
+    dop.corner_refinement = o->corner_refinement;
     const depth::MarkerDetector dl(left, dop), dr(right, dop);
 
     std::vector<depth::StereoPairObservation> pairs;
@@ -138,6 +145,7 @@ Runner SetupStereoCalibrate(CLI::App* sub, const GlobalOptions* global) {
     for (const auto& x : c.outliers)
       outl.push_back({{"pair", x.pair}, {"unit", x.unit}, {"corner", x.corner}, {"residual_px", x.residual_px}});
     j["outliers"] = {{"threshold_px", so.outlier_px}, {"dropped", outl}};
+    j["corner_refinement"] = o->corner_refinement;
     if (c3) {
       const auto& q3 = c3->right_from_left.rotation;
       const Vec3d& t3 = c3->right_from_left.translation;
@@ -186,7 +194,9 @@ Runner SetupStereoCalibrate(CLI::App* sub, const GlobalOptions* global) {
       std::vector<double> all_rel;
       // The worst corners, for diagnosis: where they are (range, angle to the baseline), the predicted range
       // sigma for 0.1 px of corner noise, and the rays' gap.
-      struct Worst { double rel, range, theta_deg, sigma_rel, gap_mm; std::string pair; int corner; };
+      // Also each unit's corner error against the board's true pose projected through the unit's model (the
+      // exact ground truth with the exact models).
+      struct Worst { double rel, range, theta_deg, sigma_rel, gap_mm; std::string pair; int corner; double err_l, err_r; };
       std::vector<Worst> worst_list;
       const double px_rad = 0.1 * (M_PI / 2) / std::max(1, ul.rig.camera.width / 2);   // ~0.1 px at the rim
       const Vec3d base_dir = c.right_from_left.Inverse().translation.normalized();
@@ -201,6 +211,7 @@ Runner SetupStereoCalibrate(CLI::App* sub, const GlobalOptions* global) {
         const Rigid3d world_from_board(Eigen::Quaterniond(wb["q"][0], wb["q"][1], wb["q"][2], wb["q"][3]),
                                        Vec3d(wb["t"][0], wb["t"][1], wb["t"][2]));
         const Rigid3d left_from_board = ul.world_from_mirror.Inverse() * world_from_board;
+        const Rigid3d right_from_board = ur.world_from_mirror.Inverse() * world_from_board;
         std::map<int, Vec2d> rpx;
         for (const auto& p : it->right) rpx[p.id] = p.pixel;
         for (const auto& p : it->left) {
@@ -219,9 +230,12 @@ Runner SetupStereoCalibrate(CLI::App* sub, const GlobalOptions* global) {
           const double true_range = (left_from_board * b->second).norm();
           const double rel = (tri.range_left - true_range) / true_range;
           const Vec3d X = left_from_board * b->second;
+          Vec2d tl, tr;
+          const double el = left.ImgFromMirror(X, &tl) ? (tl - p.pixel).norm() : -1;
+          const double er = right.ImgFromMirror(right_from_board * b->second, &tr) ? (tr - r->second).norm() : -1;
           worst_list.push_back({std::abs(rel), true_range,
                                 std::acos(std::clamp(X.normalized().dot(base_dir), -1.0, 1.0)) * 180 / M_PI,
-                                tri.sigma_range / true_range, 1e3 * tri.gap, name, p.id});
+                                tri.sigma_range / true_range, 1e3 * tri.gap, name, p.id, el, er});
           for (auto& band : bands)
             if (true_range >= band.lo && true_range < band.hi) band.rel.push_back(std::abs(rel));
           worst = std::max(worst, std::abs(rel)), ss += rel * rel, ++n;
@@ -242,26 +256,34 @@ Runner SetupStereoCalibrate(CLI::App* sub, const GlobalOptions* global) {
                              {"p95_rel_error", all_rel[std::min(all_rel.size() - 1, all_rel.size() * 95 / 100)]},
                              {"excluded_outlier_corners", excluded}, {"bands", tab}};
         std::sort(worst_list.begin(), worst_list.end(), [](const Worst& a, const Worst& b) { return a.rel > b.rel; });
-        nlohmann::json wl = nlohmann::json::array();
-        for (size_t k = 0; k < std::min<size_t>(10, worst_list.size()); ++k) {
-          const auto& w = worst_list[k];
-          wl.push_back({{"pair", w.pair}, {"corner", w.corner}, {"rel_error", w.rel}, {"range_m", w.range},
-                        {"angle_to_baseline_deg", w.theta_deg}, {"predicted_sigma_rel_0.1px", w.sigma_rel},
-                        {"ray_gap_mm", w.gap_mm}});
-        }
-        j["sparse_depth"]["worst_points"] = wl;
+        const auto listing = [](const std::vector<const Worst*>& ws) {
+          nlohmann::json wl = nlohmann::json::array();
+          for (size_t k = 0; k < std::min<size_t>(10, ws.size()); ++k) {
+            const Worst& w = *ws[k];
+            wl.push_back({{"pair", w.pair}, {"corner", w.corner}, {"rel_error", w.rel}, {"range_m", w.range},
+                          {"angle_to_baseline_deg", w.theta_deg}, {"predicted_sigma_rel_0.1px", w.sigma_rel},
+                          {"ray_gap_mm", w.gap_mm}, {"left_corner_error_px", w.err_l},
+                          {"right_corner_error_px", w.err_r}});
+          }
+          return wl;
+        };
+        std::vector<const Worst*> all_worst, cond_worst;
         // Away from the baseline direction (where a pixel of disparity is a large fraction of the range and the
         // dense depth masks too): the figures the geometry allows.
         constexpr double kMinAngle = 15;
         std::vector<double> cond;
-        for (const auto& w : worst_list)
-          if (w.theta_deg >= kMinAngle && w.theta_deg <= 180 - kMinAngle) cond.push_back(w.rel);
+        for (const auto& w : worst_list) {
+          all_worst.push_back(&w);
+          if (w.theta_deg >= kMinAngle && w.theta_deg <= 180 - kMinAngle) cond.push_back(w.rel), cond_worst.push_back(&w);
+        }
+        j["sparse_depth"]["worst_points"] = listing(all_worst);
         if (!cond.empty()) {
           std::sort(cond.begin(), cond.end());
           j["sparse_depth"]["conditioned"] = {
               {"min_angle_to_baseline_deg", kMinAngle}, {"points", cond.size()},
               {"median_rel_error", cond[cond.size() / 2]},
-              {"p95_rel_error", cond[std::min(cond.size() - 1, cond.size() * 95 / 100)]}, {"max_rel_error", cond.back()}};
+              {"p95_rel_error", cond[std::min(cond.size() - 1, cond.size() * 95 / 100)]}, {"max_rel_error", cond.back()},
+              {"worst_points", listing(cond_worst)}};
           std::snprintf(line, sizeof line, "  of them %zu at least %.0f deg from the baseline: worst %.3f %%\n",
                         cond.size(), kMinAngle, 100 * cond.back());
           summary += line;

@@ -10,6 +10,7 @@
 #include <set>
 
 #include "calib/aruco_dictionary.h"
+#include "depth/marker_edges.h"
 #include "core/error.h"
 
 namespace hovs::depth {
@@ -79,6 +80,8 @@ void MarkerDetectOptions::Check(const std::string& where) const {
   HOVS_REQUIRE(calib::ArucoDictionaryId(dictionary) >= 0, where, "unknown ArUco dictionary '", dictionary, "' (known: ", calib::ArucoDictionaryNames(), ")");
   HOVS_REQUIRE(views >= 1 && views <= 64, where, "views must be 1..64");
   HOVS_REQUIRE(hfov_deg > 0 && hfov_deg < 170 && width >= 64 && height >= 64, where, "bad view size or field");
+  HOVS_REQUIRE(corner_refinement == "edges" || corner_refinement == "subpix", where + ".corner_refinement",
+               "unknown corner refinement '", corner_refinement, "' (known: edges, subpix)");
 }
 
 void StereoCalibrationOptions::Check(const std::string& where) const {
@@ -172,12 +175,56 @@ std::vector<CornerObservation> MarkerDetector::Detect(const unwrap::Image8& imag
   if (!refined.empty())
     cv::cornerSubPix(grey, refined, cv::Size(options_.refine_window, options_.refine_window), cv::Size(-1, -1),
                      cv::TermCriteria(cv::TermCriteria::EPS + cv::TermCriteria::COUNT, 50, 1e-3));
-  std::vector<CornerObservation> out;
+  // Guides for the edge measurement: the corner window's result unless it wandered off.
+  std::vector<Vec2d> guide(pts.size());
+  std::vector<char> guide_ok(pts.size());
   for (size_t i = 0; i < pts.size(); ++i) {
     const Vec2d a(pts[i].x, pts[i].y), r(refined[i].x, refined[i].y);
+    guide_ok[i] = (a - r).norm() <= options_.max_refine_shift_px;
+    guide[i] = guide_ok[i] ? r : a;
+  }
+  std::vector<char> by_edges(pts.size(), 0);
+  if (options_.corner_refinement == "edges") {
+    MarkerEdgeOptions eo;
+    eo.cells = dict->markerSize + 2;
+    for (size_t m = 0; m + 3 < pts.size(); m += 4) {
+      // Repeated from its own result until the corners settle (each pass starts from better guides where the
+      // unwrapped view's detection was poor, e.g. markers squeezed near the rim; at most 4 passes). A corner
+      // is taken when its last move was under 0.1 px; it may then be further than the corner window's limit
+      // from the first detection (up to half a cell). A corner whose edges were measured but did not settle
+      // is dropped rather than left to cornerSubPix, which the board's edge and the inner bits pull.
+      std::array<Vec2d, 4> c{guide[m], guide[m + 1], guide[m + 2], guide[m + 3]};
+      std::array<bool, 4> ok{};
+      std::array<double, 4> moved{HUGE_VAL, HUGE_VAL, HUGE_VAL, HUGE_VAL};
+      for (int pass = 0; pass < 4; ++pass) {
+        std::array<Vec2d, 4> next = c;
+        ok = RefineMarkerCornersByEdges(grey, &next, eo);
+        double worst = 0;
+        for (int j = 0; j < 4; ++j) {
+          moved[j] = ok[j] ? (next[j] - c[j]).norm() : HUGE_VAL;
+          if (ok[j]) worst = std::max(worst, moved[j]);
+        }
+        c = next;
+        if (pass > 0 && worst < 0.02) break;
+      }
+      double side = 0;
+      for (int j = 0; j < 4; ++j) side += 0.25 * (c[j] - c[(j + 1) % 4]).norm();
+      const double limit = std::max(options_.max_refine_shift_px, 0.5 * side / eo.cells);
+      for (int j = 0; j < 4; ++j) {
+        if (!ok[j]) continue;   // not measurable: the corner window's result stands
+        if (moved[j] > 0.1 || (c[j] - Vec2d(pts[m + j].x, pts[m + j].y)).norm() > limit) {
+          guide_ok[m + j] = 0;   // measured but unstable, or far from the detection: dropped
+          continue;
+        }
+        guide[m + j] = c[j], by_edges[m + j] = 1;
+      }
+    }
+  }
+  std::vector<CornerObservation> out;
+  for (size_t i = 0; i < pts.size(); ++i) {
     // A refinement that wanders off is not a marker corner (another edge, a partly hidden marker): dropped.
-    if ((a - r).norm() > options_.max_refine_shift_px) continue;
-    out.push_back({ids[i], r});
+    if (!guide_ok[i] && !by_edges[i]) continue;
+    out.push_back({ids[i], guide[i]});
   }
   return out;
 }

@@ -3,8 +3,9 @@
 // Detection: ArUco knows no catadioptric camera, so each image is unwrapped into overlapping virtual
 // perspective views (a ring of views around the mirror axis), markers are detected there with sub-pixel corner
 // refinement, and every corner is mapped back to the catadioptric image through the same model (the source
-// pixel the view shows at that position), then refined there (cornerSubPix; corners that move more than
-// max_refine_shift_px are dropped). A marker seen in two views keeps the detection nearest a view centre.
+// pixel the view shows at that position), then refined there: cornerSubPix, then (by default) the
+// intersection of the marker's two sides measured along their whole length (depth/marker_edges.h), which
+// the marker's inner bits cannot bias; corners that move more than max_refine_shift_px are dropped. A marker seen in two views keeps the detection nearest a view centre.
 //
 // Calibration: per pair, each unit's board pose starts from PnP in the view that holds the most markers; then
 // one Ceres problem over all pairs: the relative pose right_from_left (rotation as a quaternion on its
@@ -32,6 +33,10 @@ struct MarkerDetectOptions {
   int width = 1000, height = 750;
   int refine_window = 4;                // half size (px) of the corner refinement in the catadioptric image
   double max_refine_shift_px = 1.5;     // corners the refinement moves further are dropped
+  // "edges": each corner where the marker's two sides, measured along their length and fitted, meet
+  // (depth/marker_edges.h; corners whose sides do not measure well keep the cornerSubPix result);
+  // "subpix": cornerSubPix only.
+  std::string corner_refinement = "edges";
   void Check(const std::string& where) const;
 };
 
