@@ -104,7 +104,11 @@ Runner SetupStereoCalibrate(CLI::App* sub, const GlobalOptions* global) {
         bad_l = depth::RejectInconsistentMarkers(left, &p.left, board, o->marker_check_px);
         bad_r = depth::RejectInconsistentMarkers(right, &p.right, board, o->marker_check_px);
       }
+      const auto by_edges = [](const std::vector<depth::CornerObservation>& cs) {
+        return std::count_if(cs.begin(), cs.end(), [](const auto& c) { return c.from_edges; });
+      };
       detections.push_back({{"pair", p.name}, {"left_corners", p.left.size()}, {"right_corners", p.right.size()},
+                            {"left_from_edges", by_edges(p.left)}, {"right_from_edges", by_edges(p.right)},
                             {"inconsistent_markers_left", bad_l}, {"inconsistent_markers_right", bad_r}});
       if (!global->quiet)
         std::fprintf(stderr, "  %s: %zu corners left, %zu right\n", p.name.c_str(), p.left.size(), p.right.size());
@@ -196,7 +200,7 @@ Runner SetupStereoCalibrate(CLI::App* sub, const GlobalOptions* global) {
       // sigma for 0.1 px of corner noise, and the rays' gap.
       // Also each unit's corner error against the board's true pose projected through the unit's model (the
       // exact ground truth with the exact models).
-      struct Worst { double rel, range, theta_deg, sigma_rel, gap_mm; std::string pair; int corner; double err_l, err_r; };
+      struct Worst { double rel, range, theta_deg, sigma_rel, gap_mm; std::string pair; int corner; double err_l, err_r; bool edges_l, edges_r; };
       std::vector<Worst> worst_list;
       const double px_rad = 0.1 * (M_PI / 2) / std::max(1, ul.rig.camera.width / 2);   // ~0.1 px at the rim
       const Vec3d base_dir = c.right_from_left.Inverse().translation.normalized();
@@ -213,7 +217,8 @@ Runner SetupStereoCalibrate(CLI::App* sub, const GlobalOptions* global) {
         const Rigid3d left_from_board = ul.world_from_mirror.Inverse() * world_from_board;
         const Rigid3d right_from_board = ur.world_from_mirror.Inverse() * world_from_board;
         std::map<int, Vec2d> rpx;
-        for (const auto& p : it->right) rpx[p.id] = p.pixel;
+        std::map<int, bool> redges;
+        for (const auto& p : it->right) rpx[p.id] = p.pixel, redges[p.id] = p.from_edges;
         for (const auto& p : it->left) {
           const auto r = rpx.find(p.id);
           const auto b = board.find(p.id);
@@ -235,7 +240,7 @@ Runner SetupStereoCalibrate(CLI::App* sub, const GlobalOptions* global) {
           const double er = right.ImgFromMirror(right_from_board * b->second, &tr) ? (tr - r->second).norm() : -1;
           worst_list.push_back({std::abs(rel), true_range,
                                 std::acos(std::clamp(X.normalized().dot(base_dir), -1.0, 1.0)) * 180 / M_PI,
-                                tri.sigma_range / true_range, 1e3 * tri.gap, name, p.id, el, er});
+                                tri.sigma_range / true_range, 1e3 * tri.gap, name, p.id, el, er, p.from_edges, redges[p.id]});
           for (auto& band : bands)
             if (true_range >= band.lo && true_range < band.hi) band.rel.push_back(std::abs(rel));
           worst = std::max(worst, std::abs(rel)), ss += rel * rel, ++n;
@@ -263,7 +268,9 @@ Runner SetupStereoCalibrate(CLI::App* sub, const GlobalOptions* global) {
             wl.push_back({{"pair", w.pair}, {"corner", w.corner}, {"rel_error", w.rel}, {"range_m", w.range},
                           {"angle_to_baseline_deg", w.theta_deg}, {"predicted_sigma_rel_0.1px", w.sigma_rel},
                           {"ray_gap_mm", w.gap_mm}, {"left_corner_error_px", w.err_l},
-                          {"right_corner_error_px", w.err_r}});
+                          {"right_corner_error_px", w.err_r},
+                          {"left_refinement", w.edges_l ? "edges" : "window"},
+                          {"right_refinement", w.edges_r ? "edges" : "window"}});
           }
           return wl;
         };

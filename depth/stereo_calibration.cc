@@ -224,7 +224,7 @@ std::vector<CornerObservation> MarkerDetector::Detect(const unwrap::Image8& imag
   for (size_t i = 0; i < pts.size(); ++i) {
     // A refinement that wanders off is not a marker corner (another edge, a partly hidden marker): dropped.
     if (!guide_ok[i] && !by_edges[i]) continue;
-    out.push_back({ids[i], guide[i]});
+    out.push_back({ids[i], guide[i], by_edges[i] != 0});
   }
   return out;
 }

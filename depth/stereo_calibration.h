@@ -44,6 +44,7 @@ struct MarkerDetectOptions {
 struct CornerObservation {
   int id = 0;
   Vec2d pixel = Vec2d::Zero();   // catadioptric image
+  bool from_edges = false;       // refined from the marker's edges (else by the corner window)
 };
 
 class MarkerDetector {
