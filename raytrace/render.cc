@@ -5,6 +5,7 @@
 #include <unistd.h>
 
 #include <atomic>
+#include <optional>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -62,6 +63,7 @@ class RayMaker {
       HOVS_REQUIRE(cam.unit < static_cast<int>(scene.description().units.size()), "render",
                    "the scene has no unit ", cam.unit);
       unit_ = &scene.description().units[cam.unit];
+      reflector_.emplace(unit_->rig.mirror);
       mirror_from_cam_ = unit_->rig.cam_from_mirror.Inverse();
       world_from_cam_ = unit_->world_from_mirror * mirror_from_cam_;
       // Rotation matrices for the per-sample transforms (a quaternion rotation costs twice as much).
@@ -98,7 +100,7 @@ class RayMaker {
       const Vec3d o = R_mirror_from_cam_ * origin_cam + t_mirror_from_cam_, v = R_mirror_from_cam_ * dir_cam;
       Vec3d M, d;
       // The pixel's ray from the camera, reflected by the exact mirror (RayFromImg without a second unprojection).
-      if (unit_->rig.ReflectCameraRay(o, v, &M, &d)) {
+      if (reflector_->Reflect(o, v, &M, &d)) {
         r.valid = r.via_mirror = true;
         r.from_mirror = cam_.unit;
         r.mirror_point = M;
@@ -131,6 +133,7 @@ class RayMaker {
   const ViewCamera& cam_;
   double lens_radius_ = 0, focus_distance_ = 1;
   const CatadioptricUnit* unit_ = nullptr;
+  std::optional<MirrorReflector> reflector_;   // the unit's mirror (same law as rig.ReflectCameraRay)
   Rigid3d world_from_cam_, mirror_from_cam_;
   Eigen::Matrix3d R_mirror_from_cam_ = Eigen::Matrix3d::Identity(), R_world_from_mirror_ = Eigen::Matrix3d::Identity();
   Vec3d t_mirror_from_cam_ = Vec3d::Zero(), t_world_from_mirror_ = Vec3d::Zero();
