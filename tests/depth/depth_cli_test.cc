@@ -34,6 +34,15 @@ TEST(StereoCli, CalibratesRenderedPairsAndComputesDepth) {
   EXPECT_TRUE(fs::exists(dir / "cal/stereo.yaml"));
   EXPECT_NE(ReadFile(dir / "cal/stereo.yaml").find("baseline"), std::string::npos);
   EXPECT_TRUE(fs::exists(dir / "cal/figures/frame0_left.png"));   // reprojection figure per pair and unit
+  EXPECT_EQ(j["corner_refinement"], "edges");
+  for (const auto& det : j["detections"])   // at 1 spp most corners still come from the markers' edges
+    EXPECT_GE(det["left_from_edges"].get<double>(), 0.5 * det["left_corners"].get<double>()) << det.dump();
+  // An unknown corner refinement: one error naming the option, nothing written.
+  const auto badref = Hovs("stereo-calibrate --dataset " + (dir / "stereo/dataset.json").string() +
+                           " --corner-refinement lines -o " + (dir / "badref").string());
+  EXPECT_NE(badref.exit_code, 0);
+  EXPECT_NE(badref.output.find("--corner-refinement"), std::string::npos) << badref.output;
+  EXPECT_FALSE(fs::exists(dir / "badref"));
 
   // Depth of the first pair's frame (the board and the floor) against its range channel, with the calibrated
   // relative pose.
