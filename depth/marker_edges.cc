@@ -146,8 +146,9 @@ std::optional<SideFit> MeasureSide(const cv::Mat& g, const Vec2d& a, const Vec2d
   for (int i = 0; i < n; ++i) s[i] = ts[i] / fit.len - 0.5;
   std::vector<char> use(n, 1);
   // A quadratic offset from the chord unless a cubic is clearly better (a long side near the image's
-  // centre): the corner is extrapolated a cell beyond the data, where a needless cubic term costs accuracy
-  // (rendered markers: 0.047 px RMS with quadratics, 0.103 px with cubics).
+  // centre): the corner lies beyond the data, where a needless cubic term costs accuracy (rendered markers,
+  // measured when the data stopped a cell short of the corners: 0.047 px RMS with quadratics, 0.103 px with
+  // cubics).
   const auto sum_sq = [&](int degree) {
     fit.coef = FitPoly(s, offs, use, degree);
     double ss = 0;

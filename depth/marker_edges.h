@@ -1,14 +1,17 @@
 // Sub-pixel marker corners from the marker's edges.
 //
 // A square marker's outer corner is an L-junction, not a saddle: a corner detector's window (cornerSubPix)
-// also sees the edges of the marker's inner bits once a bit cell is only a few pixels wide, and is pulled
-// towards them. The marker's four sides, however, are long straight edges in the scene. Here each side is
-// measured along its whole length (one cell kept clear of each end): at about one-pixel steps a short
-// intensity profile across the side gives the sub-pixel position where it crosses half-way between the dark
-// border and the bright surround (unbiased for a symmetric blur), the positions are fitted by a polynomial
-// offset from the side's chord (cubic with enough samples: the catadioptric image bends straight lines), one
-// round of outlier rejection, and each corner is the intersection of its two fitted sides. Everything happens
-// in the image itself, so it needs no camera model and works with any calibration (or none).
+// also sees the edges of the marker's inner bits once a bit cell is only a few pixels wide (and the board's
+// edge for outer markers), and is pulled towards them. The marker's four sides, however, are long straight
+// edges in the scene. Here each side is measured along its length (to within 2 px, or a quarter cell, of
+// each corner) at one-pixel steps: a short intensity profile across the side gives the edge position as the
+// area of its dark fraction between the dark border and the bright surround (preserved by any symmetric blur
+// and by the pixels' own integration, unlike a threshold crossing), the profile taken as flat beyond the first
+// sample back at either level. The positions are tracked along the side, fitted by a quadratic offset from
+// the side's chord (cubic only where clearly better: the catadioptric image bends straight lines), measured
+// again centred on the fit with the side's median levels, cleaned of outliers, and each corner is where its
+// two fitted sides meet. Everything happens in the image itself: no camera model is needed, so it works with
+// any calibration (or none).
 //
 // Pixel convention: (u, v) = (column, row), the centre of the top-left pixel at (0, 0), as in the core.
 #pragma once
