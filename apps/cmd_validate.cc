@@ -35,7 +35,9 @@ struct Preset {
   std::string name;
   int downscale = 1;
   int mono_count = 9, mono_samples = 4;
-  int stereo_count = 12, stereo_samples = 2;
+  // Stereo pairs at 4 samples per pixel (a 2 x 2 stratified grid): at 2 (random jitter) the marker edges are
+  // nearly binary and far corners are found to 0.3-0.5 px only (sparse depth worst 1.8 % vs 0.8 % at 4).
+  int stereo_count = 12, stereo_samples = 4;
   int street_samples = 4, truth_samples = 4;
   int depth_width = 2048, depth_height = 512, disparities = 320;
   bool design = true, real = true;
