@@ -81,10 +81,15 @@ struct HyperboloidMirror {
   // Intersection of the ray o + t v (t > t_min) with the sheet: the smallest such t on the upper sheet
   // (z + c > 0). Does not test the rim. Solves the quadratic in a cancellation-free form.
   bool IntersectSheet(const Vec3<T>& o, const Vec3<T>& v, T* t, double t_min = 0.0) const {
+    return IntersectSheetWith(c(), T(1) / (a * a), T(1) / (b * b), o, v, t, t_min);
+  }
+
+  // IntersectSheet with the mirror's constants given (c, 1 / a^2, 1 / b^2): shared with MirrorReflector,
+  // which computes them once for many rays.
+  static bool IntersectSheetWith(const T& cc, const T& ia2, const T& ib2, const Vec3<T>& o, const Vec3<T>& v, T* t,
+                                 double t_min = 0.0) {
     using std::abs;
     using std::sqrt;
-    const T cc = c();
-    const T ia2 = T(1) / (a * a), ib2 = T(1) / (b * b);
     const T oz = o(2) + cc;
     const T A = v(2) * v(2) * ia2 - (v(0) * v(0) + v(1) * v(1)) * ib2;
     const T B = oz * v(2) * ia2 - (o(0) * v(0) + o(1) * v(1)) * ib2;
@@ -134,8 +139,8 @@ struct HyperboloidMirror {
 
 // The renderer's hot path: the reflection of many camera rays by one mirror in double precision, with the
 // mirror's constants (c, 1/a^2, 1/b^2, rim radius^2) computed once and the normal left unnormalised. The
-// same intersection (same root choice: the nearest root ahead on the lower sheet), rim test and law of
-// reflection as HyperboloidMirror::IntersectSheet / WithinRim / Normal; tests assert agreement to 1e-12.
+// intersection is HyperboloidMirror::IntersectSheetWith itself; the rim test and the law of reflection are
+// those of WithinRim / Normal; tests assert agreement with ReflectCameraRay to 1e-12.
 class MirrorReflector {
  public:
   explicit MirrorReflector(const HyperboloidMirror<double>& m)
@@ -143,31 +148,8 @@ class MirrorReflector {
 
   // Ray o + t v (mirror frame, v any length): the mirror point within the rim and the unit reflected direction.
   bool Reflect(const Vec3d& o, const Vec3d& v, Vec3d* mirror_point, Vec3d* direction) const {
-    const double oz = o(2) + c_;
-    const double A = v(2) * v(2) * ia2_ - (v(0) * v(0) + v(1) * v(1)) * ib2_;
-    const double B = oz * v(2) * ia2_ - (o(0) * v(0) + o(1) * v(1)) * ib2_;
-    const double C = oz * oz * ia2_ - (o(0) * o(0) + o(1) * o(1)) * ib2_ - 1.0;
-    double roots[2];
-    int count = 0;
-    if (std::abs(A) < 1e-14 * (std::abs(B) + std::abs(A) + 1e-300)) {
-      if (B == 0) return false;
-      roots[count++] = -C / (2 * B);
-    } else {
-      const double disc = B * B - A * C;
-      if (disc < 0) return false;
-      const double sq = std::sqrt(disc);
-      const double q = B >= 0 ? -(B + sq) : -(B - sq);
-      if (q != 0) roots[count++] = C / q;
-      roots[count++] = q / A;
-    }
     double t = 0;
-    bool found = false;
-    for (int i = 0; i < count; ++i) {
-      const double ti = roots[i];
-      if (!(ti > 0) || !std::isfinite(ti) || !(oz + ti * v(2) > 0)) continue;
-      if (!found || ti < t) t = ti, found = true;
-    }
-    if (!found) return false;
+    if (!HyperboloidMirror<double>::IntersectSheetWith(c_, ia2_, ib2_, o, v, &t)) return false;
     const Vec3d M = o + t * v;
     if (M(0) * M(0) + M(1) * M(1) > rim2_) return false;
     const Vec3d n(M(0) * ib2_, M(1) * ib2_, -(M(2) + c_) * ia2_);

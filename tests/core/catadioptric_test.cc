@@ -124,7 +124,7 @@ TEST(Catadioptric, FastReflectorAgreesWithTheTemplatedReflection) {
       // moved about the centre like a thin lens's aperture.
       const Vec3d o = C + (k % 3 == 0 ? Vec3d(0.004 * U(rng), 0.004 * U(rng), 0.0) : Vec3d::Zero());
       const Vec3d v(0.4 * U(rng), 0.4 * U(rng), k % 50 == 0 ? -1.0 : 1.0);
-      Vec3d M1, d1, M2, d2;
+      Vec3d M1 = Vec3d::Zero(), d1 = Vec3d::Zero(), M2 = Vec3d::Zero(), d2 = Vec3d::Zero();
       const bool a = rig.ReflectCameraRay(o, v, &M1, &d1), b = fast.Reflect(o, v, &M2, &d2);
       ASSERT_EQ(a, b) << "ray " << k;
       if (!a) {
