@@ -71,7 +71,8 @@ void DetectInto(const std::filesystem::path& path, const std::string& name, cons
                " differs from the first image's ", *width, "x", *height);
   const auto det = calib::DetectCheckerboard(grey, o);
   nlohmann::json row = {{"image", name}, {"status", det.status}, {"found", det.found}, {"complete", det.complete},
-                        {"corners", det.pixels.size()}, {"candidates", det.candidates}};
+                        {"corners", det.pixels.size()}, {"from_edges", det.from_edges}, {"candidates", det.candidates},
+                        {"corner_refinement", o.corner_refinement}};
   if (truth && det.found) {
     double ss = 0, worst = 0;
     for (const auto& p : det.pixels) {
@@ -294,6 +295,7 @@ Runner SetupCalibrate(CLI::App* sub, const GlobalOptions* global) {
     bool truth_corners = false, physical = false, physical_intrinsics = false, physical_mirror = false, rim = true;
     std::string nominal;
     int subpix = 0;
+    std::string corner_refinement = "edges";
     std::vector<int> degrees = {2, 3, 4, 5, 6};
     int degree = 4;
     double loss_scale = 1.0, noise = 0.0, outlier_sigmas = 5.0;
@@ -320,6 +322,10 @@ Runner SetupCalibrate(CLI::App* sub, const GlobalOptions* global) {
                 "--physical: do not fit the rim of the mirror image (by default it is found in every image and fixes "
                 "the camera's height and lateral place)");
   sub->add_flag("--truth-corners", o->truth_corners, "use a synthetic manifest's exact corners instead of detecting");
+  sub->add_option("--corner-refinement", o->corner_refinement,
+                  "edges: corners where the board lines measured along their length cross (default); subpix: "
+                  "cv::cornerSubPix alone")
+      ->capture_default_str();
   sub->add_option("--subpix-window", o->subpix, "cornerSubPix half window, px (0: 0.35 x the local square)")
       ->capture_default_str();
   sub->add_option("--unit", o->unit, "unit name in the manifest (default: the first)");
@@ -338,6 +344,7 @@ Runner SetupCalibrate(CLI::App* sub, const GlobalOptions* global) {
                  "hovs calibrate", "give exactly one of --corners, --dataset and --images");
     calib::CheckerboardDetectOptions detect;
     detect.subpix_half_window = o->subpix;
+    detect.corner_refinement = o->corner_refinement;
     if (!o->board.empty()) detect.board = ParseBoard(o->board);
     else detect.board.square = 0;  // from the manifest
     Input in;
@@ -438,18 +445,20 @@ Runner SetupCalibrate(CLI::App* sub, const GlobalOptions* global) {
     if (!in.detection.empty()) j["detection"] = in.detection;
     std::string detection_summary;
     if (!in.detection.empty()) {
-      int complete = 0, corners = 0;
+      int complete = 0, corners = 0, from_edges = 0;
       double ss = 0;
       int with_truth = 0;
       for (const auto& d : in.detection) {
         complete += d["complete"].get<bool>();
         if (!d["found"].get<bool>()) continue;
         corners += d["corners"].get<int>();
+        from_edges += d["from_edges"].get<int>();
         if (d.contains("rms_to_truth_px"))
           ss += std::pow(d["rms_to_truth_px"].get<double>(), 2) * d["corners"].get<int>(), with_truth += d["corners"].get<int>();
       }
       detection_summary += "  detection: board in " + std::to_string(in.obs.size()) + " of " + std::to_string(in.detection.size()) +
-                 " images (" + std::to_string(complete) + " complete), " + std::to_string(corners) + " corners";
+                 " images (" + std::to_string(complete) + " complete), " + std::to_string(corners) + " corners (" +
+                 std::to_string(from_edges) + " from the board's edges)";
       if (with_truth) {
         const double rms = std::sqrt(ss / with_truth);
         j["detection_rms_to_truth_px"] = rms;

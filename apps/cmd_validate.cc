@@ -384,8 +384,8 @@ Runner SetupValidate(CLI::App* sub, const GlobalOptions* global) {
                 "--out", v.Out("calib-" + unit)}},
               [&]() {
                 const json c = ReadJson(out / ("calib-" + unit) / "calibration.json");
-                int found = 0;
-                for (const auto& d : c["detection"]) found += d["found"].get<bool>();
+                int found = 0, from_edges = 0;
+                for (const auto& d : c["detection"]) found += d["found"].get<bool>(), from_edges += d["from_edges"].get<int>();
                 calib[unit] = {{"images", c["detection"].size()}, {"boards_found", found},
                                {"detection_rms_px", Num(c, {"detection_rms_to_truth_px"})},
                                {"rms_px", Num(c, {"polynomial", "rms_px"})},
@@ -509,16 +509,20 @@ Runner SetupValidate(CLI::App* sub, const GlobalOptions* global) {
                 (fs::path(o->real) / "VMRImage0.jpg").string(), "--out", v.Out("real/panorama")}},
               [&]() {
                 const json c = ReadJson(out / "real" / "calib" / "calibration.json");
-                int found = 0;
-                for (const auto& d : c["detection"]) found += d["found"].get<bool>();
+                int found = 0, from_edges = 0;
+                for (const auto& d : c["detection"]) found += d["found"].get<bool>(), from_edges += d["from_edges"].get<int>();
                 v.Figure("real", {{"images", c["detection"].size()}, {"boards_found", found},
+                                  {"corners_from_edges", from_edges},
                                   {"polynomial_rms_px", Num(c, {"polynomial", "rms_px"})},
                                   {"unified_rms_px", Num(c, {"unified", "rms_px"})},
                                   {"opencv_omnidir_rms_px", Num(c, {"opencv_omnidir", "rms_px"})},
                                   {"target_rms_px", 0.30}});
                 v.Check("real: boards found", found, "min", static_cast<double>(c["detection"].size()), "images",
                         "issue 4");
-                v.Check("real: calibration RMS", Num(c, {"polynomial", "rms_px"}), "max", 0.30, "px", "issue 4", false);
+                v.Check("real: calibration RMS, polynomial model", Num(c, {"polynomial", "rms_px"}), "max", 0.30, "px",
+                        "issue 4", false);
+                v.Check("real: calibration RMS, unified model", Num(c, {"unified", "rms_px"}), "max", 0.30, "px",
+                        "issue 4", false);
               });
     } else if (p.real) {
       v.Skip("real images", "no folder '" + o->real + "'");

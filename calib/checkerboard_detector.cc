@@ -1,5 +1,7 @@
 #include "calib/checkerboard_detector.h"
 
+#include "calib/checkerboard_edges.h"
+
 #include <algorithm>
 #include <cmath>
 #include <opencv2/imgproc.hpp>
@@ -21,6 +23,8 @@ void CheckerboardDetectOptions::Check(const std::string& where) const {
                "min_contrast must lie in (0, 1) (got ", min_contrast, ")");
   HOVS_REQUIRE(max_seeds >= 1, where, "max_seeds must be at least 1");
   HOVS_REQUIRE(subpix_half_window >= 0 && subpix_half_window <= 30, where, "subpix_half_window must lie in [0, 30]");
+  HOVS_REQUIRE(corner_refinement == "edges" || corner_refinement == "subpix", where,
+               "corner_refinement must be 'edges' or 'subpix' (got '", corner_refinement, "')");
 }
 
 namespace {
@@ -350,6 +354,15 @@ CheckerboardDetection DetectCheckerboard(const cv::Mat& image, const Checkerboar
       det.board_points.emplace_back(i * o.board.square, j * o.board.square, 0.0);
       det.indices.emplace_back(i, j);
     }
+  // Then from the board's edges (calib/checkerboard_edges.h); corners whose lines cannot be measured keep
+  // their cornerSubPix position.
+  if (o.corner_refinement == "edges") {
+    std::vector<std::optional<Vec2d>> grid(det.pixels.begin(), det.pixels.end());
+    CheckerboardEdgeOptions eo;
+    eo.min_contrast = 255.0 * o.min_contrast;
+    const auto refined = RefineCheckerboardCornersByEdges(image, cols, rows, &grid, eo);
+    for (size_t k = 0; k < grid.size(); ++k) det.pixels[k] = *grid[k], det.from_edges += refined[k];
+  }
   const std::string dims = std::to_string(cols) + "x" + std::to_string(rows);
   if (det.complete) {
     det.found = true;

@@ -15,7 +15,9 @@
 //     the expected orientation in the image (one mirror reflection mirrors the board; the sign is an option).
 //     Partial grids are labelled from their own first corner: for monocular calibration, where each image has its
 //     own pose, that is exact. Grids larger than the board are refused (the board does not match the image).
-//  5. Sub-pixel refinement (cv::cornerSubPix) with a window scaled to the local square size.
+//  5. Sub-pixel refinement (cv::cornerSubPix) with a window scaled to the local square size, then (by default)
+//     each corner where the two board lines through it, measured along their length, cross
+//     (calib/checkerboard_edges.h).
 // An optional validity predicate (from a prior model: outside the rim, the camera's reflection) drops candidates.
 // Every image gets a status: what was found, or why nothing was.
 #pragma once
@@ -47,6 +49,9 @@ struct CheckerboardDetectOptions {
   double min_contrast = 0.06;    // bright minus dark on the verification circle, in [0, 1] grey
   int max_seeds = 60;            // seed candidates tried (strongest first)
   int subpix_half_window = 0;    // cv::cornerSubPix half window; 0: 0.35 x the local square size, in [2, 11]
+  // "edges": after cornerSubPix, each corner where the two board lines measured along their length cross
+  // (calib/checkerboard_edges.h); "subpix": cornerSubPix alone.
+  std::string corner_refinement = "edges";
   std::function<bool(const Vec2d&)> valid;  // optional: pixels where the board can be seen (prior model)
   void Check(const std::string& where) const;
 };
@@ -58,6 +63,7 @@ struct CheckerboardDetection {
   int candidates = 0;      // verified saddle points in the image
   int grid_cols = 0, grid_rows = 0;
   std::vector<Vec2d> pixels;        // refined corners (u, v)
+  int from_edges = 0;               // corners refined from the board's edges (the others: cornerSubPix)
   std::vector<Vec3d> board_points;  // board frame, metres, z = 0
   std::vector<Eigen::Vector2i> indices;      // (column, row) on the board
 };
