@@ -34,7 +34,9 @@ using json = nlohmann::json;
 struct Preset {
   std::string name;
   int downscale = 1;
-  int mono_count = 9, mono_samples = 4;
+  // Calibration sets at 16 samples per pixel (4 x 4 stratified), close to the issue's noise-free render: at 4
+  // the render's own sampling moves the corners by 0.05 px RMS and the polynomial model's rays by 0.018 deg.
+  int mono_count = 9, mono_samples = 16;
   // Stereo pairs at 4 samples per pixel (a 2 x 2 stratified grid): at 2 (random jitter) the marker edges are
   // nearly binary and far corners are found to 0.3-0.5 px only (sparse depth worst 1.8 % vs 0.8 % at 4).
   int stereo_count = 12, stereo_samples = 4;
@@ -387,6 +389,7 @@ Runner SetupValidate(CLI::App* sub, const GlobalOptions* global) {
                 int found = 0, from_edges = 0;
                 for (const auto& d : c["detection"]) found += d["found"].get<bool>(), from_edges += d["from_edges"].get<int>();
                 calib[unit] = {{"images", c["detection"].size()}, {"boards_found", found},
+                               {"corners_from_edges", from_edges},
                                {"detection_rms_px", Num(c, {"detection_rms_to_truth_px"})},
                                {"rms_px", Num(c, {"polynomial", "rms_px"})},
                                {"mean_ray_angle_deg", Num(c, {"ground_truth", "mean_ray_angle_deg"})},
@@ -409,9 +412,16 @@ Runner SetupValidate(CLI::App* sub, const GlobalOptions* global) {
                 v.Check(unit + ": physical model (boards + rim), mean ray angle vs true rig",
                         Num(c, {"physical", "ground_truth", "mean_ray_angle_deg"}), "max", 0.01 * p.downscale, "deg",
                         "issue 4 (0.01 deg)", p.downscale == 1);
-                v.Check(unit + ": polynomial, mean ray angle vs true rig (frame rotation removed)",
-                        Num(c, {"ground_truth", "mean_ray_angle_aligned_deg"}), "max", 0.01 * p.downscale, "deg",
-                        "issue 4 (0.01 deg)", false);
+                // The issue's 0.01 deg is for the aligned rig: a misaligned unit is not single-viewpoint and the
+                // polynomial (central) model cannot represent it (its figure is reported above).
+                bool single_viewpoint = false;
+                const json manifest = ReadJson(out / "data" / ("mono-" + unit) / "dataset.json");
+                for (const auto& u : manifest["units"])
+                  if (u["name"] == unit) single_viewpoint = u.value("single_viewpoint", false);
+                if (single_viewpoint)
+                  v.Check(unit + ": polynomial, mean ray angle vs true rig (frame rotation removed)",
+                          Num(c, {"ground_truth", "mean_ray_angle_aligned_deg"}), "max", 0.01 * p.downscale, "deg",
+                          "issue 4 (0.01 deg, aligned rig)", false);
               });
     }
     const std::string lm = v.Out("calib-left/calibration.json"), rm = v.Out("calib-right/calibration.json");

@@ -10,8 +10,8 @@
 // sample back at either level. The positions are tracked along the side, fitted by a quadratic offset from
 // the side's chord (cubic only where clearly better: the catadioptric image bends straight lines), measured
 // again centred on the fit with the side's median levels, cleaned of outliers, and each corner is where its
-// two fitted sides meet. Everything happens in the image itself: no camera model is needed, so it works with
-// any calibration (or none).
+// two fitted sides meet (the edge measurement is calib/edge_curve.h, shared with the checkerboard corners).
+// Everything happens in the image itself: no camera model is needed, so it works with any calibration (or none).
 //
 // Pixel convention: (u, v) = (column, row), the centre of the top-left pixel at (0, 0), as in the core.
 #pragma once
