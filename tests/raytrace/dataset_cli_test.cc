@@ -215,6 +215,8 @@ TEST(CalibrateCli, CalibratesASyntheticSetAgainstGroundTruthAndRejectsBadInput) 
   rejected("--images " + (dir / "set" / "images").string(), "needs --board");
   rejected("--images " + (dir / "set" / "images").string() + " --board 5x4x0.03", "larger than the 5x4 board");
   rejected("--images " + (dir / "set" / "images").string() + " --board 7x5", "expected COLSxROWSxSQUARE");
+  rejected("--images " + (dir / "set" / "images").string() + " --board 7x5x0.03 --corner-refinement sharp",
+           "corner_refinement must be 'edges' or 'subpix'");
   rejected("--corners /nonexistent.csv --size 1024x768", "cannot open the corner table");
   std::ofstream(dir / "two.csv") << "image,corner,board_x_mm,board_y_mm,u_px,v_px\n"
                                  << "a.png,0,0,0,100,100\na.png,1,30,0,110,100\nb.png,0,0,0,200,200\n";
