@@ -1,11 +1,11 @@
 #include "calib/checkerboard_detector.h"
 
-#include "calib/checkerboard_edges.h"
-
 #include <algorithm>
 #include <cmath>
+#include <optional>
 #include <opencv2/imgproc.hpp>
 
+#include "calib/checkerboard_edges.h"
 #include "core/error.h"
 
 namespace hovs::calib {
