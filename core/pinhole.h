@@ -63,11 +63,16 @@ struct PinholeCamera {
   }
 
   bool CamFromImg(const Vec2<T>& uv, Vec3<T>* bearing) const {
-    const Vec2<T> md((uv(0) - cx) / fx, (uv(1) - cy) / fy);
     Vec2<T> m;
-    if (!distortion.Undistort(md, &m)) return false;
+    if (!NormalisedFromImg(uv, &m)) return false;
     *bearing = Normalized(Vec3<T>(m(0), m(1), T(1)));
     return true;
+  }
+
+  // The undistorted point (x, y) on the plane z = 1 whose ray images at uv: CamFromImg before normalising.
+  bool NormalisedFromImg(const Vec2<T>& uv, Vec2<T>* m) const {
+    const Vec2<T> md((uv(0) - cx) / fx, (uv(1) - cy) / fy);
+    return distortion.Undistort(md, m);
   }
 
   std::array<T, kNumParams> Params() const {

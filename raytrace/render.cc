@@ -5,6 +5,7 @@
 #include <unistd.h>
 
 #include <atomic>
+#include <memory>
 #include <optional>
 #include <chrono>
 #include <cmath>
@@ -72,17 +73,86 @@ class RayMaker {
       t_world_from_mirror_ = unit_->world_from_mirror.translation;
       viewpoint_ = unit_->world_from_mirror.translation;
       width_ = unit_->rig.camera.width, height_ = unit_->rig.camera.height;
+      R_world_from_cam_ = world_from_cam_.rotation.toRotationMatrix();
+      viewpoint_cam_ = world_from_cam_.translation;
     } else {
       cam.pinhole.Check("render camera");
       world_from_cam_ = cam.world_from_cam;
       viewpoint_ = cam.world_from_cam.translation;
       width_ = cam.pinhole.width, height_ = cam.pinhole.height;
+      R_world_from_cam_ = world_from_cam_.rotation.toRotationMatrix();
+      viewpoint_cam_ = world_from_cam_.translation;
     }
     HOVS_REQUIRE(width_ > 0 && height_ > 0, "render", "the camera has no image size");
   }
   int width() const { return width_; }
   int height() const { return height_; }
   const Vec3d& viewpoint() const { return viewpoint_; }
+
+  // The rays of n image points (n <= RayBatch::kMax) into a batch, with each ray's mirror point (mirror frame;
+  // meaningful where from_mirror >= 0). lens, tau: per point as in Make, or null for a pinhole at time 0, the
+  // vectorised path: the camera rays of the batch are reflected together (MirrorReflector::ReflectBatch).
+  void MakeBatch(int n, const double* u, const double* v, const Vec2d* lens, const double* tau, RayBatch* b,
+                 double* Mx, double* My, double* Mz) const {
+    b->n = n;
+    if (lens || tau) {
+      for (int i = 0; i < n; ++i) {
+        const RayRequest r = Make(Vec2d(u[i], v[i]), lens ? lens[i] : Vec2d::Zero(), tau ? tau[i] : 0.0);
+        Store(r, i, b);
+        Mx[i] = r.mirror_point.x(), My[i] = r.mirror_point.y(), Mz[i] = r.mirror_point.z();
+      }
+      return;
+    }
+    const PinholeCamera<double>& cam = unit_ ? unit_->rig.camera : cam_.pinhole;
+    double mx[RayBatch::kMax], my[RayBatch::kMax];
+    unsigned char in_domain[RayBatch::kMax];
+    for (int i = 0; i < n; ++i) {
+      Vec2d m;
+      in_domain[i] = cam.NormalisedFromImg(Vec2d(u[i], v[i]), &m);
+      mx[i] = in_domain[i] ? m.x() : 0.0, my[i] = in_domain[i] ? m.y() : 0.0;
+    }
+    unsigned char on_mirror[RayBatch::kMax] = {};
+    double dx[RayBatch::kMax], dy[RayBatch::kMax], dz[RayBatch::kMax];
+    if (unit_) {
+      // The camera rays (x, y, 1) in the mirror frame, all from the camera centre; reflected together.
+      double vx[RayBatch::kMax], vy[RayBatch::kMax], vz[RayBatch::kMax];
+      const Eigen::Matrix3d& R = R_mirror_from_cam_;
+      for (int i = 0; i < n; ++i) {
+        vx[i] = R(0, 0) * mx[i] + R(0, 1) * my[i] + R(0, 2);
+        vy[i] = R(1, 0) * mx[i] + R(1, 1) * my[i] + R(1, 2);
+        vz[i] = R(2, 0) * mx[i] + R(2, 1) * my[i] + R(2, 2);
+      }
+      reflector_->ReflectBatch(t_mirror_from_cam_, n, vx, vy, vz, Mx, My, Mz, dx, dy, dz, on_mirror);
+    }
+    const Eigen::Matrix3d& Rw = R_world_from_mirror_;
+    const Vec3d& tw = t_world_from_mirror_;
+    for (int i = 0; i < n; ++i) {
+      b->valid[i] = in_domain[i];
+      if (on_mirror[i] && in_domain[i]) {
+        const Vec3d M(Mx[i], My[i], Mz[i]), d(dx[i], dy[i], dz[i]);
+        const Vec3d o = Rw * M + tw, dw = Rw * d;
+        b->ox[i] = o.x(), b->oy[i] = o.y(), b->oz[i] = o.z();
+        b->dx[i] = dw.x(), b->dy[i] = dw.y(), b->dz[i] = dw.z();
+        b->tnear[i] = 1e-5f;  // as in Make
+        b->from_mirror[i] = cam_.unit;
+      } else {
+        // Straight from the camera (past the mirror's rim, or a pinhole view camera).
+        const Vec3d d = R_world_from_cam_ * Vec3d(mx[i], my[i], 1.0).normalized();
+        b->ox[i] = viewpoint_cam_.x(), b->oy[i] = viewpoint_cam_.y(), b->oz[i] = viewpoint_cam_.z();
+        b->dx[i] = d.x(), b->dy[i] = d.y(), b->dz[i] = d.z();
+        b->tnear[i] = 0;
+        b->from_mirror[i] = -1;
+      }
+    }
+  }
+
+  static void Store(const RayRequest& r, int i, RayBatch* b) {
+    b->valid[i] = r.valid;
+    b->ox[i] = r.origin.x(), b->oy[i] = r.origin.y(), b->oz[i] = r.origin.z();
+    b->dx[i] = r.direction.x(), b->dy[i] = r.direction.y(), b->dz[i] = r.direction.z();
+    b->tnear[i] = static_cast<float>(r.tnear);
+    b->from_mirror[i] = r.from_mirror;
+  }
 
   // The ray of image point uv. lens: a point on the unit disc (thin lens), tau: time in the exposure.
   RayRequest Make(const Vec2d& uv, const Vec2d& lens = Vec2d::Zero(), double tau = 0) const {
@@ -138,45 +208,9 @@ class RayMaker {
   Eigen::Matrix3d R_mirror_from_cam_ = Eigen::Matrix3d::Identity(), R_world_from_mirror_ = Eigen::Matrix3d::Identity();
   Vec3d t_mirror_from_cam_ = Vec3d::Zero(), t_world_from_mirror_ = Vec3d::Zero();
   Vec3d viewpoint_ = Vec3d::Zero();
+  Eigen::Matrix3d R_world_from_cam_ = Eigen::Matrix3d::Identity();
+  Vec3d viewpoint_cam_ = Vec3d::Zero();  // the camera's centre in the world
   int width_ = 0, height_ = 0;
-};
-
-// Collects ray requests and traces them 16 at a time.
-class Batch {
- public:
-  explicit Batch(const RayScene& scene, bool colour = true) : scene_(scene), colour_(colour) {}
-  template <class OnHit>
-  void Add(const RayRequest& r, int tag, const OnHit& on_hit) {
-    if (!r.valid) {
-      Hit miss;
-      on_hit(tag, r, miss);
-      return;
-    }
-    reqs_[n_] = r, tags_[n_] = tag, o_[n_] = r.origin, d_[n_] = r.direction, tn_[n_] = r.tnear;
-    from_[n_] = r.from_mirror;
-    if (++n_ == 16) Flush(on_hit);
-  }
-  template <class OnHit>
-  void Flush(const OnHit& on_hit) {
-    if (n_ == 0) return;
-    scene_.Trace16(n_, o_, d_, tn_, hits_, from_, colour_);
-    rays_ += n_;
-    for (int i = 0; i < n_; ++i) on_hit(tags_[i], reqs_[i], hits_[i]);
-    n_ = 0;
-  }
-  uint64_t rays() const { return rays_; }
-
- private:
-  const RayScene& scene_;
-  bool colour_ = true;
-  RayRequest reqs_[16];
-  int tags_[16];
-  Vec3d o_[16], d_[16];
-  double tn_[16];
-  int from_[16];
-  Hit hits_[16];
-  int n_ = 0;
-  uint64_t rays_ = 0;
 };
 
 }  // namespace
@@ -211,6 +245,7 @@ Frame Render(const RayScene& scene, const ViewCamera& camera, const RenderOption
   const int n = options.samples;
   const int grid = static_cast<int>(std::lround(std::sqrt(n)));
   const bool stratified = grid * grid == n;
+  const double inv_grid = 1.0 / grid;
   const float weight = 1.0f / n;
   std::atomic<uint64_t> rays{0};
   std::atomic<int> done{0};
@@ -218,63 +253,97 @@ Frame Render(const RayScene& scene, const ViewCamera& camera, const RenderOption
   int last_percent = -1;
 
   tbb::parallel_for(tbb::blocked_range<int>(0, ntiles), [&](const tbb::blocked_range<int>& range) {
-    Batch batch(scene), truth_batch(scene, false);
+    // Per task: one batch of up to 256 rays in structure-of-arrays form, reused for every chunk.
+    constexpr int kMax = RayBatch::kMax;
+    const auto batch = std::make_unique<RayBatch>();
+    struct Scratch {
+      double u[kMax], v[kMax], Mx[kMax], My[kMax], Mz[kMax], tau[kMax];
+      Vec2d disc[kMax];
+      int px[kMax];
+      float rgb[3 * kMax];
+      Hit hits[kMax];
+    };
+    const auto scratch = std::make_unique<Scratch>();
+    Scratch& sc = *scratch;
+    uint64_t task_rays = 0;
     for (int ti = range.begin(); ti != range.end(); ++ti) {
       const int x0 = roi.x0 + (ti % tiles_x) * tile, y0 = roi.y0 + (ti / tiles_x) * tile;
       const int x1 = std::min(x0 + tile, roi.x1), y1 = std::min(y0 + tile, roi.y1);
-      const auto accumulate = [&](int px, const RayRequest&, const Hit& h) {
-        float* c = &f.rgb[3 * static_cast<size_t>(px)];
-        for (int k = 0; k < 3; ++k) c[k] += weight * h.colour[k];
-      };
-      for (int y = y0; y < y1; ++y)
-        for (int x = x0; x < x1; ++x) {
+      const int tw = x1 - x0, tile_px = tw * (y1 - y0);
+      // The samples of the tile, pixel by pixel, in chunks of up to kMax.
+      const long total = static_cast<long>(tile_px) * n;
+      // Sample s of pixel (x, y); counters instead of divisions (this loop runs for every sample).
+      int s = 0, sx = 0, sy = 0, x = x0, y = y0;
+      for (long j0 = 0; j0 < total; j0 += kMax) {
+        const int m = static_cast<int>(std::min<long>(kMax, total - j0));
+        for (int k = 0; k < m; ++k) {
           const int px = y * f.width + x;
-          for (int s = 0; s < n; ++s) {
-            const uint64_t h = SplitMix(options.seed * 0x100000001B3ull ^ (static_cast<uint64_t>(px) * 4096 + s));
-            const double ju = Uniform(h), jv = Uniform(SplitMix(h));
-            double du, dv;
-            if (stratified) {
-              du = (s % grid + ju) / grid - 0.5;
-              dv = (s / grid + jv) / grid - 0.5;
-            } else {
-              du = ju - 0.5, dv = jv - 0.5;
+          const uint64_t h = SplitMix(options.seed * 0x100000001B3ull ^ (static_cast<uint64_t>(px) * 4096 + s));
+          const double ju = Uniform(h), jv = Uniform(SplitMix(h));
+          double du, dv;
+          if (stratified) {
+            du = (sx + ju) * inv_grid - 0.5;
+            dv = (sy + jv) * inv_grid - 0.5;
+          } else {
+            du = ju - 0.5, dv = jv - 0.5;
+          }
+          sc.u[k] = x + du, sc.v[k] = y + dv, sc.px[k] = px;
+          if (lens || blur) {
+            const uint64_t h2 = SplitMix(h ^ 0xD1B54A32D192ED03ull);
+            sc.disc[k] = Vec2d::Zero();
+            if (lens) {  // uniform on the unit disc
+              const double rr = std::sqrt(Uniform(h2)), phi = 2 * M_PI * Uniform(SplitMix(h2));
+              sc.disc[k] = Vec2d(rr * std::cos(phi), rr * std::sin(phi));
             }
-            Vec2d disc = Vec2d::Zero();
-            double tau = 0;
-            if (lens || blur) {
-              const uint64_t h2 = SplitMix(h ^ 0xD1B54A32D192ED03ull);
-              if (lens) {  // uniform on the unit disc
-                const double rr = std::sqrt(Uniform(h2)), phi = 2 * M_PI * Uniform(SplitMix(h2));
-                disc = Vec2d(rr * std::cos(phi), rr * std::sin(phi));
-              }
-              if (blur) tau = options.exposure_time * Uniform(SplitMix(h2 ^ 0x9E3779B97F4A7C15ull));
-            }
-            batch.Add(maker.Make(Vec2d(x + du, y + dv), disc, tau), px, accumulate);
+            sc.tau[k] = blur ? options.exposure_time * Uniform(SplitMix(h2 ^ 0x9E3779B97F4A7C15ull)) : 0.0;
+          }
+          // Next sample: the stratum's column and row, then the next pixel of the tile.
+          if (++sx == grid) sx = 0, ++sy;
+          if (++s == n) {
+            s = sx = sy = 0;
+            if (++x == x1) x = x0, ++y;
           }
         }
-      batch.Flush(accumulate);
+        maker.MakeBatch(m, sc.u, sc.v, lens || blur ? sc.disc : nullptr, lens || blur ? sc.tau : nullptr,
+                        batch.get(), sc.Mx, sc.My, sc.Mz);
+        scene.Colours(*batch, sc.rgb);
+        for (int k = 0; k < m; ++k) {
+          task_rays += batch->valid[k];
+          float* c = &f.rgb[3 * static_cast<size_t>(sc.px[k])];
+          for (int ch = 0; ch < 3; ++ch) c[ch] += weight * sc.rgb[3 * k + ch];
+        }
+      }
       if (options.ground_truth) {
-        const auto record = [&](int px, const RayRequest& r, const Hit& h) {
-          float* g = &f.truth.data[static_cast<size_t>(px) * GroundTruth::kChannels];
-          g[8] = r.via_mirror && h.object_id != kCameraBodyId ? 1.0f : 0.0f;
-          if (r.via_mirror)
-            for (int k = 0; k < 3; ++k) g[9 + k] = static_cast<float>(r.mirror_point(k));
-          if (!h.hit) {
-            g[0] = std::numeric_limits<float>::infinity();
-            return;
+        // The pixel-centre rays of the tile, without colour.
+        int gx = x0, gy = y0;
+        for (int p0 = 0; p0 < tile_px; p0 += kMax) {
+          const int m = std::min(kMax, tile_px - p0);
+          for (int k = 0; k < m; ++k) {
+            sc.u[k] = gx, sc.v[k] = gy, sc.px[k] = gy * f.width + gx;
+            if (++gx == x1) gx = x0, ++gy;
           }
-          g[0] = static_cast<float>((h.point - maker.viewpoint()).norm());
-          for (int k = 0; k < 3; ++k) g[1 + k] = static_cast<float>(h.point(k)), g[4 + k] = static_cast<float>(h.normal(k));
-          g[7] = static_cast<float>(h.object_id);
-        };
-        for (int y = y0; y < y1; ++y)
-          for (int x = x0; x < x1; ++x) {
-            const int px = y * f.width + x;
-            const RayRequest r = maker.Make(Vec2d(x, y));
-            if (!r.valid) f.truth.data[static_cast<size_t>(px) * GroundTruth::kChannels] = std::numeric_limits<float>::infinity();
-            truth_batch.Add(r, px, record);
+          maker.MakeBatch(m, sc.u, sc.v, nullptr, nullptr, batch.get(), sc.Mx, sc.My, sc.Mz);
+          scene.Geometry(*batch, sc.hits);
+          for (int k = 0; k < m; ++k) {
+            float* g = &f.truth.data[static_cast<size_t>(sc.px[k]) * GroundTruth::kChannels];
+            if (!batch->valid[k]) {
+              g[0] = std::numeric_limits<float>::infinity();
+              continue;
+            }
+            ++task_rays;
+            const Hit& h = sc.hits[k];
+            const bool via_mirror = batch->from_mirror[k] >= 0;
+            g[8] = via_mirror && h.object_id != kCameraBodyId ? 1.0f : 0.0f;
+            if (via_mirror) g[9] = static_cast<float>(sc.Mx[k]), g[10] = static_cast<float>(sc.My[k]), g[11] = static_cast<float>(sc.Mz[k]);
+            if (!h.hit) {
+              g[0] = std::numeric_limits<float>::infinity();
+              continue;
+            }
+            g[0] = static_cast<float>((h.point - maker.viewpoint()).norm());
+            for (int c = 0; c < 3; ++c) g[1 + c] = static_cast<float>(h.point(c)), g[4 + c] = static_cast<float>(h.normal(c));
+            g[7] = static_cast<float>(h.object_id);
           }
-        truth_batch.Flush(record);
+        }
       }
       const int d = ++done;
       if (progress) {
@@ -286,7 +355,7 @@ Frame Render(const RayScene& scene, const ViewCamera& camera, const RenderOption
         }
       }
     }
-    rays += batch.rays() + truth_batch.rays();
+    rays += task_rays;
   });
   f.rays = rays;
   f.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();

@@ -26,17 +26,25 @@ struct RayScene::UserGeometry {
   HyperboloidMirror<double> mirror;  // kMirror: local frame = mirror frame
   double r_inner = 0, r_outer = 0;   // kAnnulus: disc in local z = 0
   Rgb colour = {0, 0, 0}, back_colour = {0, 0, 0};
+  // The transforms as matrices (a quaternion rotation costs twice a matrix product): set by Prepare().
+  Eigen::Matrix3d R_local_from_world, R_world_from_local;
+  Vec3d t_local_from_world;
+  void Prepare() {
+    R_local_from_world = local_from_world.rotation.toRotationMatrix();
+    R_world_from_local = world_from_local.rotation.toRotationMatrix();
+    t_local_from_world = local_from_world.translation;
+  }
 
   // Ray in world coordinates; t along the given (not necessarily unit) direction.
   bool Intersect(const Vec3d& o_w, const Vec3d& d_w, double tnear, double tfar, double* t, Vec3d* n_w) const {
-    const Vec3d o = local_from_world * o_w, d = local_from_world.Rotate(d_w);
+    const Vec3d o = R_local_from_world * o_w + t_local_from_world, d = R_local_from_world * d_w;
     if (kind == Kind::kMirror) {
       double tt = 0;
       if (!mirror.IntersectSheet(o, d, &tt, tnear) || !(tt < tfar)) return false;
       const Vec3d p = o + tt * d;
       if (!mirror.WithinRim(p)) return false;
       *t = tt;
-      if (n_w) *n_w = world_from_local.Rotate(mirror.Normal(p));
+      if (n_w) *n_w = R_world_from_local * mirror.Normal(p);
       return true;
     }
     if (d.z() == 0) return false;
@@ -46,7 +54,7 @@ struct RayScene::UserGeometry {
     const double r2 = p.x() * p.x() + p.y() * p.y();
     if (r2 < r_inner * r_inner || r2 > r_outer * r_outer) return false;
     *t = tt;
-    if (n_w) *n_w = world_from_local.Rotate(Vec3d(0, 0, 1));
+    if (n_w) *n_w = R_world_from_local.col(2);
     return true;
   }
 
@@ -77,6 +85,14 @@ struct RayScene::UserGeometry {
 namespace {
 
 using UG = RayScene::UserGeometry;
+
+// Embree masks: unit u's mirror (u < 31) has its own bit, every other geometry bit 0. A ray leaving unit u's
+// mirror clears that bit, so Embree does not even call the mirror's callback for it (LaneRay's id test stays
+// for units from 31 on, which share bit 0).
+unsigned MirrorMaskBit(int unit) { return unit >= 0 && unit < 31 ? 1u << (unit + 1) : 1u; }
+unsigned RayMask(int from_mirror) {
+  return from_mirror >= 0 && from_mirror < 31 ? ~MirrorMaskBit(from_mirror) : 0xFFFFFFFFu;
+}
 
 void UserBounds(const RTCBoundsFunctionArguments* args) {
   static_cast<const UG*>(args->geometryUserPtr)->Bounds(args->bounds_o);
@@ -185,6 +201,11 @@ RayScene::RayScene(SceneDescription description) : desc_(std::move(description))
     }
   }
 
+  for (const Rect& r : desc_.rects) {
+    const Eigen::Matrix3d R = r.world_from_rect.rotation.toRotationMatrix();
+    rect_frames_.push_back({r.world_from_rect.translation, R.col(2), R.col(0), R.col(1)});
+  }
+
   // All rectangles: one quad mesh; primID = index into rects.
   if (!desc_.rects.empty()) {
     RTCGeometry g = rtcNewGeometry(device_, RTC_GEOMETRY_TYPE_QUAD);
@@ -204,18 +225,21 @@ RayScene::RayScene(SceneDescription description) : desc_(std::move(description))
         idx[4 * i + k] = static_cast<unsigned>(4 * i + k);
       }
     }
+    rtcSetGeometryMask(g, 1u);
     rtcCommitGeometry(g);
     rect_geom_ = rtcAttachGeometry(scene_, g);
     rtcReleaseGeometry(g);
   }
 
   const auto attach = [&](std::unique_ptr<UserGeometry> ug) {
+    ug->Prepare();
     RTCGeometry g = rtcNewGeometry(device_, RTC_GEOMETRY_TYPE_USER);
     rtcSetGeometryUserPrimitiveCount(g, 1);
     rtcSetGeometryUserData(g, ug.get());
     rtcSetGeometryBoundsFunction(g, UserBounds, nullptr);
     rtcSetGeometryIntersectFunction(g, UserIntersect);
     rtcSetGeometryOccludedFunction(g, UserOccluded);
+    rtcSetGeometryMask(g, ug->kind == UserGeometry::Kind::kMirror ? MirrorMaskBit(ug->unit) : 1u);
     rtcCommitGeometry(g);
     const unsigned id = rtcAttachGeometry(scene_, g);
     rtcReleaseGeometry(g);
@@ -267,13 +291,13 @@ RayScene::~RayScene() {
 void RayScene::Shade(const Vec3d& o, const Vec3d& d, unsigned geom_id, unsigned prim_id, Hit* h, bool colour) const {
   if (geom_id == rect_geom_) {
     const Rect& r = desc_.rects[prim_id];
-    const Vec3d n = r.world_from_rect.Rotate(Vec3d(0, 0, 1));
-    const Vec3d c = r.world_from_rect.translation;
+    const RectFrame& fr = rect_frames_[prim_id];
+    const Vec3d& n = fr.normal;
     const double denom = d.dot(n);
     if (denom == 0) return;
-    const double t = (c - o).dot(n) / denom;
+    const double t = (fr.centre - o).dot(n) / denom;
     const Vec3d X = o + t * d;
-    const Vec3d local = r.world_from_rect.rotation.conjugate() * (X - c);
+    const Vec2d local(fr.axis_x.dot(X - fr.centre), fr.axis_y.dot(X - fr.centre));
     const bool front = denom < 0;
     h->hit = true;
     h->object_id = r.object_id;
@@ -316,7 +340,7 @@ void IntersectPacket(RTCScene scene, int count, const Vec3d* o, const Vec3d* d, 
     rh->ray.dir_z[i] = static_cast<float>(d[k].z());
     rh->ray.tnear[i] = static_cast<float>(tnear ? tnear[k] : 0.0);
     rh->ray.tfar[i] = std::numeric_limits<float>::infinity();
-    rh->ray.mask[i] = 0xFFFFFFFFu, rh->ray.flags[i] = 0, rh->ray.time[i] = 0;
+    rh->ray.mask[i] = RayMask(from_mirror ? from_mirror[k] : -1), rh->ray.flags[i] = 0, rh->ray.time[i] = 0;
     // The id carries the unit whose (convex) mirror the ray leaves, which the mirror callback then skips.
     rh->ray.id[i] = from_mirror ? static_cast<unsigned>(from_mirror[k] + 1) : 0u;
     rh->hit.geomID[i] = RTC_INVALID_GEOMETRY_ID;
@@ -341,6 +365,105 @@ void RayScene::Trace16(int count, const Vec3d* o, const Vec3d* d, const double* 
       continue;
     }
     Shade(o[i], d[i], rh.hit.geomID[i], rh.hit.primID[i], &h, colour);
+  }
+}
+
+void RayScene::IntersectBatch16(const RayBatch& b, int i0, unsigned* geom_ids, unsigned* prim_ids) const {
+  alignas(64) RTCRayHit16 rh;
+  alignas(64) int valid[16];
+  const int count = std::min(16, b.n - i0);
+  for (int i = 0; i < 16; ++i) {
+    const int k = i0 + (i < count ? i : 0);
+    valid[i] = i < count && b.valid[k] ? -1 : 0;
+    rh.ray.org_x[i] = static_cast<float>(b.ox[k]), rh.ray.org_y[i] = static_cast<float>(b.oy[k]);
+    rh.ray.org_z[i] = static_cast<float>(b.oz[k]);
+    rh.ray.dir_x[i] = static_cast<float>(b.dx[k]), rh.ray.dir_y[i] = static_cast<float>(b.dy[k]);
+    rh.ray.dir_z[i] = static_cast<float>(b.dz[k]);
+    rh.ray.tnear[i] = b.tnear[k];
+    rh.ray.tfar[i] = std::numeric_limits<float>::infinity();
+    rh.ray.mask[i] = RayMask(b.from_mirror[k]), rh.ray.flags[i] = 0, rh.ray.time[i] = 0;
+    rh.ray.id[i] = static_cast<unsigned>(b.from_mirror[k] + 1);  // see IntersectPacket
+    rh.hit.geomID[i] = RTC_INVALID_GEOMETRY_ID;
+    rh.hit.instID[0][i] = RTC_INVALID_GEOMETRY_ID;
+  }
+  RTCIntersectContext ctx;
+  rtcInitIntersectContext(&ctx);
+  ctx.flags = RTC_INTERSECT_CONTEXT_FLAG_COHERENT;
+  rtcIntersect16(valid, scene_, &ctx, &rh);
+  for (int i = 0; i < count; ++i) geom_ids[i] = rh.hit.geomID[i], prim_ids[i] = rh.hit.primID[i];
+}
+
+void RayScene::Colours(const RayBatch& b, float* rgb) const {
+  const int n = b.n;
+  unsigned geom[RayBatch::kMax], prim[RayBatch::kMax];
+  for (int i0 = 0; i0 < n; i0 += 16) IntersectBatch16(b, i0, geom + i0, prim + i0);
+  // Rectangle hits with a noise texture are collected per rectangle and evaluated together.
+  int deferred[RayBatch::kMax], n_deferred = 0;
+  const auto put = [&](int i, const Rgb& c) { rgb[3 * i] = c[0], rgb[3 * i + 1] = c[1], rgb[3 * i + 2] = c[2]; };
+  double s_at[RayBatch::kMax], t_at[RayBatch::kMax];
+  for (int i = 0; i < n; ++i) {
+    if (!b.valid[i]) {
+      put(i, {0, 0, 0});
+      continue;
+    }
+    const unsigned g = geom[i];
+    const Vec3d d(b.dx[i], b.dy[i], b.dz[i]);
+    if (g == RTC_INVALID_GEOMETRY_ID) {
+      put(i, desc_.sky.Eval(d));
+    } else if (g == rect_geom_) {
+      const Rect& r = desc_.rects[prim[i]];
+      const RectFrame& fr = rect_frames_[prim[i]];
+      const double denom = d.dot(fr.normal);
+      if (denom == 0 || (denom > 0 && !r.double_sided)) {  // edge-on: no hit (as Shade)
+        put(i, denom == 0 ? Rgb{0, 0, 0} : r.back);
+        continue;
+      }
+      const Vec3d o(b.ox[i], b.oy[i], b.oz[i]);
+      const Vec3d X = o + ((fr.centre - o).dot(fr.normal) / denom) * d - fr.centre;
+      s_at[i] = fr.axis_x.dot(X), t_at[i] = fr.axis_y.dot(X);
+      if (r.front.kind == Texture::Kind::kNoise) {
+        deferred[n_deferred++] = i;
+      } else {
+        put(i, r.front.Eval(s_at[i], t_at[i]));
+      }
+    } else if (g < geom_to_user_.size() && geom_to_user_[g] >= 0) {
+      const UserGeometry& u = *user_[geom_to_user_[g]];
+      put(i, u.kind == UserGeometry::Kind::kMirror ? u.back_colour : u.colour);
+    } else {
+      put(i, {0, 0, 0});
+    }
+  }
+  // The noise: one batch per rectangle, in order of first appearance.
+  bool done[RayBatch::kMax] = {};
+  double s_batch[RayBatch::kMax], t_batch[RayBatch::kMax];
+  int lanes[RayBatch::kMax];
+  Rgb colours[RayBatch::kMax];
+  for (int a = 0; a < n_deferred; ++a) {
+    if (done[a]) continue;
+    const unsigned p = prim[deferred[a]];
+    int m = 0;
+    for (int k = a; k < n_deferred; ++k) {
+      const int i = deferred[k];
+      if (done[k] || prim[i] != p) continue;
+      done[k] = true;
+      lanes[m] = i, s_batch[m] = s_at[i], t_batch[m] = t_at[i], ++m;
+    }
+    desc_.rects[p].front.EvalBatch(m, s_batch, t_batch, colours);
+    for (int k = 0; k < m; ++k) put(lanes[k], colours[k]);
+  }
+}
+
+void RayScene::Geometry(const RayBatch& b, Hit* hits) const {
+  unsigned geom[16], prim[16];
+  for (int i0 = 0; i0 < b.n; i0 += 16) {
+    IntersectBatch16(b, i0, geom, prim);
+    for (int i = 0; i < std::min(16, b.n - i0); ++i) {
+      Hit& h = hits[i0 + i];
+      h = Hit();
+      const int k = i0 + i;
+      if (!b.valid[k] || geom[i] == RTC_INVALID_GEOMETRY_ID) continue;
+      Shade(Vec3d(b.ox[k], b.oy[k], b.oz[k]), Vec3d(b.dx[k], b.dy[k], b.dz[k]), geom[i], prim[i], &h, false);
+    }
   }
 }
 

@@ -84,6 +84,17 @@ struct Hit {
   int unit = -1;      // for mirror / mount / body hits: which unit
 };
 
+// Rays in structure-of-arrays form: the renderer's per-sample path, traced 16 at a time.
+struct RayBatch {
+  static constexpr int kMax = 256;
+  int n = 0;
+  alignas(64) double ox[kMax], oy[kMax], oz[kMax];  // world
+  alignas(64) double dx[kMax], dy[kMax], dz[kMax];  // world, unit
+  alignas(64) float tnear[kMax];
+  alignas(64) int from_mirror[kMax];                // the unit whose mirror the ray leaves, -1: none
+  alignas(64) unsigned char valid[kMax];            // 0: no ray (outside the camera's domain): black, no hit
+};
+
 // The Embree scene built from a description. Thread-safe for tracing once built.
 class RayScene {
  public:
@@ -100,6 +111,11 @@ class RayScene {
   // colour = false: geometry only (point, normal, id; no texture lookup), for ground-truth rays.
   void Trace16(int count, const Vec3d* origins, const Vec3d* directions, const double* tnear, Hit* hits,
                const int* from_mirror = nullptr, bool colour = true) const;
+  // The colour seen along each ray of a batch (3 floats per ray; black where !valid): Trace16 with colour,
+  // without the hit geometry, and with the textures evaluated in batches.
+  void Colours(const RayBatch& batch, float* rgb) const;
+  // The hits of a batch without colour (point, normal, id): the ground-truth path.
+  void Geometry(const RayBatch& batch, Hit* hits) const;
   Hit Trace(const Vec3d& origin, const Vec3d& direction, double tnear = 0, int from_mirror = -1) const;
   // True if anything blocks the open segment from a to b (rtcOccluded1).
   bool Occluded(const Vec3d& a, const Vec3d& b, double eps = 1e-7) const;
@@ -112,6 +128,14 @@ class RayScene {
 
  private:
   void Shade(const Vec3d& o, const Vec3d& d, unsigned geom_id, unsigned prim_id, Hit* hit, bool colour) const;
+  // Intersects batch rays [i0, i0 + 16) (fewer at the end) with rtcIntersect16.
+  void IntersectBatch16(const RayBatch& b, int i0, unsigned* geom_ids, unsigned* prim_ids) const;
+
+  // A rectangle's frame for shading: centre, unit normal and in-plane axes in the world.
+  struct RectFrame {
+    Vec3d centre, normal, axis_x, axis_y;
+  };
+  std::vector<RectFrame> rect_frames_;
 
   SceneDescription desc_;
   RTCDevice device_ = nullptr;
