@@ -75,6 +75,22 @@ struct PinholeCamera {
     return distortion.Undistort(md, m);
   }
 
+  // NormalisedFromImg for n points (u[i], v[i]) (the renderer's per-sample path): the same values; without
+  // distortion a loop the compiler vectorises. ok[i] = 0 where undistortion fails (x, y set to 0 there).
+  void NormalisedFromImgBatch(int n, const T* u, const T* v, T* x, T* y, unsigned char* ok) const {
+    if (distortion.IsZero()) {
+      const T fx_ = fx, fy_ = fy, cx_ = cx, cy_ = cy;
+      for (int i = 0; i < n; ++i) x[i] = (u[i] - cx_) / fx_, y[i] = (v[i] - cy_) / fy_;
+      for (int i = 0; i < n; ++i) ok[i] = 1;
+      return;
+    }
+    for (int i = 0; i < n; ++i) {
+      Vec2<T> m;
+      ok[i] = NormalisedFromImg(Vec2<T>(u[i], v[i]), &m);
+      x[i] = ok[i] ? m(0) : T(0), y[i] = ok[i] ? m(1) : T(0);
+    }
+  }
+
   std::array<T, kNumParams> Params() const {
     return {fx, fy, cx, cy, distortion.k1, distortion.k2, distortion.p1, distortion.p2};
   }

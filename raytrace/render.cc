@@ -14,6 +14,7 @@
 #include <random>
 
 #include "core/error.h"
+#include "core/vector_clones.h"
 
 namespace hovs::raytrace {
 
@@ -55,6 +56,36 @@ struct RayRequest {
   int from_mirror = -1;                // unit whose mirror the ray leaves
   Vec3d mirror_point = Vec3d::Zero();  // mirror frame
 };
+
+// The world rays of a batch. Where via[i] = 1: from mirror point M along the reflected direction d (both in the
+// mirror frame; d given in dx, dy, dz and replaced), mapped by world_from_mirror (column-major Rm, tm).
+// Elsewhere: straight from the camera centre c along Rc (x, y, 1), normalised (Rc: world_from_cam, column-major).
+HOVS_VECTOR_CLONES
+void WorldRays(int n, const double* __restrict Rm, const double* __restrict tm, const double* __restrict Rc,
+               const double* __restrict c, const double* __restrict via, const double* __restrict x,
+               const double* __restrict y, const double* __restrict Mx, const double* __restrict My,
+               const double* __restrict Mz, double* __restrict dx, double* __restrict dy, double* __restrict dz,
+               double* __restrict ox, double* __restrict oy, double* __restrict oz) {
+  const double c0 = c[0], c1 = c[1], c2 = c[2];  // loaded once: a load inside a select stops if-conversion
+  for (int i = 0; i < n; ++i) {
+    const double len = std::sqrt(x[i] * x[i] + y[i] * y[i] + 1.0);
+    const double sx = x[i] / len, sy = y[i] / len, sz = 1.0 / len;
+    const double cdx = Rc[0] * sx + Rc[3] * sy + Rc[6] * sz, cdy = Rc[1] * sx + Rc[4] * sy + Rc[7] * sz,
+                 cdz = Rc[2] * sx + Rc[5] * sy + Rc[8] * sz;
+    const double mdx = Rm[0] * dx[i] + Rm[3] * dy[i] + Rm[6] * dz[i], mdy = Rm[1] * dx[i] + Rm[4] * dy[i] + Rm[7] * dz[i],
+                 mdz = Rm[2] * dx[i] + Rm[5] * dy[i] + Rm[8] * dz[i];
+    const double mox = Rm[0] * Mx[i] + Rm[3] * My[i] + Rm[6] * Mz[i] + tm[0],
+                 moy = Rm[1] * Mx[i] + Rm[4] * My[i] + Rm[7] * Mz[i] + tm[1],
+                 moz = Rm[2] * Mx[i] + Rm[5] * My[i] + Rm[8] * Mz[i] + tm[2];
+    // One comparison per select: GCC 12 if-converts these, not six selects on one bool.
+    ox[i] = via[i] > 0.5 ? mox : c0;
+    oy[i] = via[i] > 0.5 ? moy : c1;
+    oz[i] = via[i] > 0.5 ? moz : c2;
+    dx[i] = via[i] > 0.5 ? mdx : cdx;
+    dy[i] = via[i] > 0.5 ? mdy : cdy;
+    dz[i] = via[i] > 0.5 ? mdz : cdz;
+  }
+}
 
 class RayMaker {
  public:
@@ -105,14 +136,8 @@ class RayMaker {
     }
     const PinholeCamera<double>& cam = unit_ ? unit_->rig.camera : cam_.pinhole;
     double mx[RayBatch::kMax], my[RayBatch::kMax];
-    unsigned char in_domain[RayBatch::kMax];
-    for (int i = 0; i < n; ++i) {
-      Vec2d m;
-      in_domain[i] = cam.NormalisedFromImg(Vec2d(u[i], v[i]), &m);
-      mx[i] = in_domain[i] ? m.x() : 0.0, my[i] = in_domain[i] ? m.y() : 0.0;
-    }
-    unsigned char on_mirror[RayBatch::kMax] = {};
-    double dx[RayBatch::kMax], dy[RayBatch::kMax], dz[RayBatch::kMax];
+    cam.NormalisedFromImgBatch(n, u, v, mx, my, b->valid);
+    unsigned char on_mirror[RayBatch::kMax];
     if (unit_) {
       // The camera rays (x, y, 1) in the mirror frame, all from the camera centre; reflected together.
       double vx[RayBatch::kMax], vy[RayBatch::kMax], vz[RayBatch::kMax];
@@ -122,28 +147,18 @@ class RayMaker {
         vy[i] = R(1, 0) * mx[i] + R(1, 1) * my[i] + R(1, 2);
         vz[i] = R(2, 0) * mx[i] + R(2, 1) * my[i] + R(2, 2);
       }
-      reflector_->ReflectBatch(t_mirror_from_cam_, n, vx, vy, vz, Mx, My, Mz, dx, dy, dz, on_mirror);
+      reflector_->ReflectBatch(t_mirror_from_cam_, n, vx, vy, vz, Mx, My, Mz, b->dx, b->dy, b->dz, on_mirror);
+    } else {
+      std::fill(on_mirror, on_mirror + n, 0);
     }
-    const Eigen::Matrix3d& Rw = R_world_from_mirror_;
-    const Vec3d& tw = t_world_from_mirror_;
+    double via[RayBatch::kMax];
     for (int i = 0; i < n; ++i) {
-      b->valid[i] = in_domain[i];
-      if (on_mirror[i] && in_domain[i]) {
-        const Vec3d M(Mx[i], My[i], Mz[i]), d(dx[i], dy[i], dz[i]);
-        const Vec3d o = Rw * M + tw, dw = Rw * d;
-        b->ox[i] = o.x(), b->oy[i] = o.y(), b->oz[i] = o.z();
-        b->dx[i] = dw.x(), b->dy[i] = dw.y(), b->dz[i] = dw.z();
-        b->tnear[i] = 1e-5f;  // as in Make
-        b->from_mirror[i] = cam_.unit;
-      } else {
-        // Straight from the camera (past the mirror's rim, or a pinhole view camera).
-        const Vec3d d = R_world_from_cam_ * Vec3d(mx[i], my[i], 1.0).normalized();
-        b->ox[i] = viewpoint_cam_.x(), b->oy[i] = viewpoint_cam_.y(), b->oz[i] = viewpoint_cam_.z();
-        b->dx[i] = d.x(), b->dy[i] = d.y(), b->dz[i] = d.z();
-        b->tnear[i] = 0;
-        b->from_mirror[i] = -1;
-      }
+      via[i] = on_mirror[i];
+      b->tnear[i] = on_mirror[i] ? 1e-5f : 0.0f;  // 1e-5 as in Make
+      b->from_mirror[i] = on_mirror[i] ? cam_.unit : -1;
     }
+    WorldRays(n, R_world_from_mirror_.data(), t_world_from_mirror_.data(), R_world_from_cam_.data(),
+              viewpoint_cam_.data(), via, mx, my, Mx, My, Mz, b->dx, b->dy, b->dz, b->ox, b->oy, b->oz);
   }
 
   static void Store(const RayRequest& r, int i, RayBatch* b) {

@@ -372,17 +372,24 @@ void RayScene::IntersectBatch16(const RayBatch& b, int i0, unsigned* geom_ids, u
   alignas(64) RTCRayHit16 rh;
   alignas(64) int valid[16];
   const int count = std::min(16, b.n - i0);
+  // Lanes past count repeat the batch's ray i0 (masked off); field by field, so the conversions vectorise.
+  int k[16];
+  for (int i = 0; i < 16; ++i) k[i] = i0 + (i < count ? i : 0);
+  const auto fill = [&](float* dst, const double* src) {
+    if (count == 16) {
+      for (int i = 0; i < 16; ++i) dst[i] = static_cast<float>(src[i0 + i]);
+    } else {
+      for (int i = 0; i < 16; ++i) dst[i] = static_cast<float>(src[k[i]]);
+    }
+  };
+  fill(rh.ray.org_x, b.ox), fill(rh.ray.org_y, b.oy), fill(rh.ray.org_z, b.oz);
+  fill(rh.ray.dir_x, b.dx), fill(rh.ray.dir_y, b.dy), fill(rh.ray.dir_z, b.dz);
   for (int i = 0; i < 16; ++i) {
-    const int k = i0 + (i < count ? i : 0);
-    valid[i] = i < count && b.valid[k] ? -1 : 0;
-    rh.ray.org_x[i] = static_cast<float>(b.ox[k]), rh.ray.org_y[i] = static_cast<float>(b.oy[k]);
-    rh.ray.org_z[i] = static_cast<float>(b.oz[k]);
-    rh.ray.dir_x[i] = static_cast<float>(b.dx[k]), rh.ray.dir_y[i] = static_cast<float>(b.dy[k]);
-    rh.ray.dir_z[i] = static_cast<float>(b.dz[k]);
-    rh.ray.tnear[i] = b.tnear[k];
+    valid[i] = i < count && b.valid[k[i]] ? -1 : 0;
+    rh.ray.tnear[i] = b.tnear[k[i]];
     rh.ray.tfar[i] = std::numeric_limits<float>::infinity();
-    rh.ray.mask[i] = RayMask(b.from_mirror[k]), rh.ray.flags[i] = 0, rh.ray.time[i] = 0;
-    rh.ray.id[i] = static_cast<unsigned>(b.from_mirror[k] + 1);  // see IntersectPacket
+    rh.ray.mask[i] = RayMask(b.from_mirror[k[i]]), rh.ray.flags[i] = 0, rh.ray.time[i] = 0;
+    rh.ray.id[i] = static_cast<unsigned>(b.from_mirror[k[i]] + 1);  // see IntersectPacket
     rh.hit.geomID[i] = RTC_INVALID_GEOMETRY_ID;
     rh.hit.instID[0][i] = RTC_INVALID_GEOMETRY_ID;
   }
