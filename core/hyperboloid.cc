@@ -47,9 +47,9 @@ void ReflectKernel(double cc, double ia2, double ib2, double rim2, double o0, do
     const double n0 = M0 * ib2, n1 = M1 * ib2, n2 = -(M2 + cc) * ia2;
     const double k = 2 * (v0 * n0 + v1 * n1 + v2 * n2) / (n0 * n0 + n1 * n1 + n2 * n2);
     const double w0 = v0 - k * n0, w1 = v1 - k * n1, w2 = v2 - k * n2;
-    const double len = std::sqrt(w0 * w0 + w1 * w1 + w2 * w2);
+    const double inv_len = 1.0 / std::sqrt(w0 * w0 + w1 * w1 + w2 * w2);
     Mx[i] = M0, My[i] = M1, Mz[i] = M2;
-    dx[i] = w0 / len, dy[i] = w1 / len, dz[i] = w2 / len;
+    dx[i] = w0 * inv_len, dy[i] = w1 * inv_len, dz[i] = w2 * inv_len;
     ok[i] = degenerate > hit ? degenerate : hit;
   }
 }

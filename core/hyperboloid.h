@@ -170,8 +170,8 @@ class MirrorReflector {
     const double n0 = M0 * ib2_, n1 = M1 * ib2_, n2 = -(M2 + c_) * ia2_;
     const double k = 2 * (v0 * n0 + v1 * n1 + v2 * n2) / (n0 * n0 + n1 * n1 + n2 * n2);
     const double r0 = v0 - k * n0, r1 = v1 - k * n1, r2 = v2 - k * n2;
-    const double len = std::sqrt(r0 * r0 + r1 * r1 + r2 * r2);
-    *d0 = r0 / len, *d1 = r1 / len, *d2 = r2 / len;
+    const double inv_len = 1.0 / std::sqrt(r0 * r0 + r1 * r1 + r2 * r2);
+    *d0 = r0 * inv_len, *d1 = r1 * inv_len, *d2 = r2 * inv_len;
   }
 
  private:

@@ -154,8 +154,9 @@ class RayMaker {
     double via[RayBatch::kMax];
     for (int i = 0; i < n; ++i) {
       via[i] = on_mirror[i];
-      b->tnear[i] = on_mirror[i] ? 1e-5f : 0.0f;  // 1e-5 as in Make
+      b->tnear[i] = unit_ ? 1e-5f : 0.0f;  // 1e-5 as in Make (off the mirror, or off the lens face)
       b->from_mirror[i] = on_mirror[i] ? cam_.unit : -1;
+      b->from_camera[i] = on_mirror[i] || !unit_ ? -1 : cam_.unit;
     }
     WorldRays(n, R_world_from_mirror_.data(), t_world_from_mirror_.data(), R_world_from_cam_.data(),
               viewpoint_cam_.data(), via, mx, my, Mx, My, Mz, b->dx, b->dy, b->dz, b->ox, b->oy, b->oz);
@@ -167,6 +168,7 @@ class RayMaker {
     b->dx[i] = r.direction.x(), b->dy[i] = r.direction.y(), b->dz[i] = r.direction.z();
     b->tnear[i] = static_cast<float>(r.tnear);
     b->from_mirror[i] = r.from_mirror;
+    b->from_camera[i] = -1;
   }
 
   // The ray of image point uv. lens: a point on the unit disc (thin lens), tau: time in the exposure.
@@ -205,6 +207,7 @@ class RayMaker {
       r.valid = true;
       r.origin = world_from_cam * origin_cam;
       r.direction = world_from_cam.Rotate(dir_cam);
+      r.tnear = 1e-5;  // the ray starts on the camera's own lens face: not a hit at t = 0
       return r;
     }
     r.valid = true;
@@ -246,8 +249,15 @@ Frame Render(const RayScene& scene, const ViewCamera& camera, const RenderOption
       std::fill(b->begin() + static_cast<std::ptrdiff_t>(r.begin()), b->begin() + static_cast<std::ptrdiff_t>(r.end()), 0.0f);
     });
   };
-  zero(&f.rgb);
-  zero(&f.truth.data);
+  // Tiles write every pixel and channel of the region (first touch in the rendering threads); only pixels
+  // outside a region need zeros.
+  const bool whole = options.region.Empty() ||
+                     (options.region.x0 <= 0 && options.region.y0 <= 0 && options.region.x1 >= f.width &&
+                      options.region.y1 >= f.height);
+  if (!whole) {
+    zero(&f.rgb);
+    zero(&f.truth.data);
+  }
 
   const int tile = 16;
   RenderOptions::Region roi = options.region;
@@ -275,6 +285,7 @@ Frame Render(const RayScene& scene, const ViewCamera& camera, const RenderOption
       double u[kMax], v[kMax], Mx[kMax], My[kMax], Mz[kMax], tau[kMax];
       Vec2d disc[kMax];
       int px[kMax];
+      bool first[kMax];
       float rgb[3 * kMax];
       Hit hits[kMax];
     };
@@ -302,7 +313,7 @@ Frame Render(const RayScene& scene, const ViewCamera& camera, const RenderOption
           } else {
             du = ju - 0.5, dv = jv - 0.5;
           }
-          sc.u[k] = x + du, sc.v[k] = y + dv, sc.px[k] = px;
+          sc.u[k] = x + du, sc.v[k] = y + dv, sc.px[k] = px, sc.first[k] = s == 0;
           if (lens || blur) {
             const uint64_t h2 = SplitMix(h ^ 0xD1B54A32D192ED03ull);
             sc.disc[k] = Vec2d::Zero();
@@ -325,7 +336,11 @@ Frame Render(const RayScene& scene, const ViewCamera& camera, const RenderOption
         for (int k = 0; k < m; ++k) {
           task_rays += batch->valid[k];
           float* c = &f.rgb[3 * static_cast<size_t>(sc.px[k])];
-          for (int ch = 0; ch < 3; ++ch) c[ch] += weight * sc.rgb[3 * k + ch];
+          if (sc.first[k]) {  // the pixel's first sample (0 + x = x: the same sum as zeroing first)
+            for (int ch = 0; ch < 3; ++ch) c[ch] = weight * sc.rgb[3 * k + ch];
+          } else {
+            for (int ch = 0; ch < 3; ++ch) c[ch] += weight * sc.rgb[3 * k + ch];
+          }
         }
       }
       if (options.ground_truth) {
@@ -340,7 +355,9 @@ Frame Render(const RayScene& scene, const ViewCamera& camera, const RenderOption
           maker.MakeBatch(m, sc.u, sc.v, nullptr, nullptr, batch.get(), sc.Mx, sc.My, sc.Mz);
           scene.Geometry(*batch, sc.hits);
           for (int k = 0; k < m; ++k) {
+            // Every channel of the pixel is written (the buffer is not zeroed first).
             float* g = &f.truth.data[static_cast<size_t>(sc.px[k]) * GroundTruth::kChannels];
+            std::fill(g, g + GroundTruth::kChannels, 0.0f);
             if (!batch->valid[k]) {
               g[0] = std::numeric_limits<float>::infinity();
               continue;

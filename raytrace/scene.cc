@@ -86,12 +86,17 @@ namespace {
 
 using UG = RayScene::UserGeometry;
 
-// Embree masks: unit u's mirror (u < 31) has its own bit, every other geometry bit 0. A ray leaving unit u's
-// mirror clears that bit, so Embree does not even call the mirror's callback for it (LaneRay's id test stays
-// for units from 31 on, which share bit 0).
-unsigned MirrorMaskBit(int unit) { return unit >= 0 && unit < 31 ? 1u << (unit + 1) : 1u; }
-unsigned RayMask(int from_mirror) {
-  return from_mirror >= 0 && from_mirror < 31 ? ~MirrorMaskBit(from_mirror) : 0xFFFFFFFFu;
+// Embree masks: for units 0..14, unit u's mirror has bit 1 + 2u and its lens face bit 2 + 2u; every other
+// geometry has bit 0. A ray leaving unit u's mirror clears the mirror's bit; a ray leaving unit u's camera
+// straight (it missed the mirror within the rim, so it cannot meet it, and it starts on the lens face) clears
+// both. Embree then does not even call those callbacks. Units from 15 on share bit 0 (LaneRay's id test stays).
+unsigned MirrorMaskBit(int unit) { return unit >= 0 && unit < 15 ? 1u << (1 + 2 * unit) : 1u; }
+unsigned LensMaskBit(int unit) { return unit >= 0 && unit < 15 ? 1u << (2 + 2 * unit) : 1u; }
+unsigned RayMask(int from_mirror, int from_camera = -1) {
+  unsigned m = 0xFFFFFFFFu;
+  if (from_mirror >= 0 && from_mirror < 15) m &= ~MirrorMaskBit(from_mirror);
+  if (from_camera >= 0 && from_camera < 15) m &= ~(MirrorMaskBit(from_camera) | LensMaskBit(from_camera));
+  return m;
 }
 
 void UserBounds(const RTCBoundsFunctionArguments* args) {
@@ -239,7 +244,10 @@ RayScene::RayScene(SceneDescription description) : desc_(std::move(description))
     rtcSetGeometryBoundsFunction(g, UserBounds, nullptr);
     rtcSetGeometryIntersectFunction(g, UserIntersect);
     rtcSetGeometryOccludedFunction(g, UserOccluded);
-    rtcSetGeometryMask(g, ug->kind == UserGeometry::Kind::kMirror ? MirrorMaskBit(ug->unit) : 1u);
+    const bool lens_face = ug->kind == UserGeometry::Kind::kAnnulus && ug->object_id == kCameraBodyId;
+    rtcSetGeometryMask(g, ug->kind == UserGeometry::Kind::kMirror ? MirrorMaskBit(ug->unit)
+                          : lens_face                             ? LensMaskBit(ug->unit)
+                                                                  : 1u);
     rtcCommitGeometry(g);
     const unsigned id = rtcAttachGeometry(scene_, g);
     rtcReleaseGeometry(g);
@@ -388,7 +396,7 @@ void RayScene::IntersectBatch16(const RayBatch& b, int i0, unsigned* geom_ids, u
     valid[i] = i < count && b.valid[k[i]] ? -1 : 0;
     rh.ray.tnear[i] = b.tnear[k[i]];
     rh.ray.tfar[i] = std::numeric_limits<float>::infinity();
-    rh.ray.mask[i] = RayMask(b.from_mirror[k[i]]), rh.ray.flags[i] = 0, rh.ray.time[i] = 0;
+    rh.ray.mask[i] = RayMask(b.from_mirror[k[i]], b.from_camera[k[i]]), rh.ray.flags[i] = 0, rh.ray.time[i] = 0;
     rh.ray.id[i] = static_cast<unsigned>(b.from_mirror[k[i]] + 1);  // see IntersectPacket
     rh.hit.geomID[i] = RTC_INVALID_GEOMETRY_ID;
     rh.hit.instID[0][i] = RTC_INVALID_GEOMETRY_ID;

@@ -92,6 +92,7 @@ struct RayBatch {
   alignas(64) double dx[kMax], dy[kMax], dz[kMax];  // world, unit
   alignas(64) float tnear[kMax];
   alignas(64) int from_mirror[kMax];                // the unit whose mirror the ray leaves, -1: none
+  alignas(64) int from_camera[kMax];                // the unit whose camera it leaves past the mirror, -1: none
   alignas(64) unsigned char valid[kMax];            // 0: no ray (outside the camera's domain): black, no hit
 };
 

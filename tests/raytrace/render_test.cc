@@ -345,6 +345,35 @@ TEST(SceneConfig, RejectsBadInput) {
   expect(std::string(unit).insert(unit.find("    pose"), "    misalignment: {height_error: -0.2}\n"), "inside the mirror");
 }
 
+TEST(Render, PastTheRimTheCameraSeesTheMountNotItsOwnLens) {
+  // A camera ray that misses the mirror leaves the camera's own lens face; it used to meet that face again at
+  // t = 0 (float rounding), which painted everything past the rim in the body's colour with the body's id.
+  // Both ray paths (the batched pinhole path and the per-sample thin-lens path) must see the mount ring.
+  SceneConfig cfg = BoardScene(false);
+  auto& cam = cfg.description.units[0].rig.camera;
+  cam = PinholeCamera<double>::FromPhysical(0.016, 4.54e-6 * 25, 110, 88);
+  const RayScene scene(cfg.description);
+  const auto& unit = scene.description().units[0];
+  for (const double lens : {0.0, 1e-4}) {
+    raytrace::RenderOptions ro;
+    ro.samples = 4;
+    ro.lens_radius = lens;
+    const raytrace::Frame f = raytrace::Render(scene, raytrace::ViewCamera::Unit(0), ro);
+    int past_rim = 0;
+    for (const auto& [x, y] : {std::pair{0, 0}, {109, 0}, {0, 87}, {109, 87}}) {
+      Vec3d M, d;
+      ASSERT_FALSE(unit.rig.RayFromImg(Vec2d(x, y), &M, &d)) << "the corner must lie past the rim";
+      ++past_rim;
+      const size_t p = static_cast<size_t>(y) * f.width + x;
+      for (int c = 0; c < 3; ++c) EXPECT_FLOAT_EQ(f.rgb[3 * p + c], unit.mount_colour[c]) << "lens " << lens;
+      // The ground truth (pixel centre, no lens): the mount, beyond the camera, not the lens face.
+      EXPECT_EQ(f.truth.data[p * raytrace::GroundTruth::kChannels + 7], raytrace::kMountId);
+      EXPECT_EQ(f.truth.data[p * raytrace::GroundTruth::kChannels + 8], 0.0f) << "not a mirror pixel";
+    }
+    EXPECT_EQ(past_rim, 4);
+  }
+}
+
 TEST(GoldenRender, SmallReferenceFrameIsUnchanged) {
   SceneConfig cfg = BoardScene(false);
   auto& cam = cfg.description.units[0].rig.camera;
