@@ -9,6 +9,7 @@
 #include <opencv2/imgproc.hpp>
 
 #include <cmath>
+#include <random>
 #include <filesystem>
 
 #include "calib/checkerboard_edges.h"
@@ -372,6 +373,69 @@ TEST(Render, PastTheRimTheCameraSeesTheMountNotItsOwnLens) {
     }
     EXPECT_EQ(past_rim, 4);
   }
+}
+
+TEST(Texture, BatchNoiseIsTheScalarNoiseToTheBit) {
+  // The vectorised noise (EvalBatch) and Eval at the same points: identical. The noise spans its colour range,
+  // is continuous (a 0.1 mm step changes it little) and stays defined far away (coordinates clamp).
+  raytrace::Texture tex;
+  tex.kind = raytrace::Texture::Kind::kNoise;
+  tex.scale = 0.08, tex.octaves = 5, tex.seed = 11;
+  tex.colour_a = {0.2f, 0.1f, 0.0f}, tex.colour_b = {0.8f, 0.9f, 1.0f};
+  std::mt19937 rng(9);
+  std::uniform_real_distribution<double> U(-20, 20);
+  const int n = 1001;
+  std::vector<double> s(n), t(n);
+  for (int i = 0; i < n; ++i) s[i] = U(rng), t[i] = U(rng);
+  s[0] = 1e7, t[0] = -3e9;  // far: clamped
+  std::vector<raytrace::Rgb> batch(n);
+  tex.EvalBatch(n, s.data(), t.data(), batch.data());
+  double lo = 1, hi = 0, step = 0;
+  for (int i = 0; i < n; ++i) {
+    const raytrace::Rgb one = tex.Eval(s[i], t[i]);
+    for (int c = 0; c < 3; ++c) ASSERT_EQ(batch[i][c], one[c]) << "point " << i;
+    const double v = (batch[i][1] - tex.colour_a[1]) / (tex.colour_b[1] - tex.colour_a[1]);
+    ASSERT_TRUE(v >= 0 && v <= 1) << v;
+    lo = std::min(lo, v), hi = std::max(hi, v);
+    step = std::max(step, std::abs(static_cast<double>(tex.Eval(s[i] + 1e-4, t[i])[1] - one[1])));
+  }
+  EXPECT_LT(lo, 0.3);
+  EXPECT_GT(hi, 0.7);
+  EXPECT_LT(step, 0.02) << "0.1 mm is 1/50 of the finest octave's cell";
+}
+
+TEST(Render, BatchColoursAgreeWithTheScalarTrace) {
+  // RayScene::Colours (the renderer's batched path) against Trace16 (the scalar shading) on the reflected rays
+  // of a grid of pixels: the same colour except where a ray grazes a texture edge (float rounding of the hit).
+  const SceneConfig cfg = BoardScene(true);
+  const RayScene scene(cfg.description);
+  const auto& unit = scene.description().units[0];
+  raytrace::RayBatch b;
+  std::vector<float> rgb(3 * raytrace::RayBatch::kMax);
+  int compared = 0, differ = 0;
+  for (int y = 50; y < unit.rig.camera.height; y += 37) {
+    b.n = 0;
+    for (int x = 20; x < unit.rig.camera.width && b.n < raytrace::RayBatch::kMax; x += 11) {
+      Vec3d M, d;
+      if (!unit.rig.RayFromImg(Vec2d(x, y), &M, &d)) continue;
+      const Vec3d o = unit.world_from_mirror * M, dw = unit.world_from_mirror.Rotate(d);
+      const int i = b.n++;
+      b.ox[i] = o.x(), b.oy[i] = o.y(), b.oz[i] = o.z(), b.dx[i] = dw.x(), b.dy[i] = dw.y(), b.dz[i] = dw.z();
+      b.tnear[i] = 1e-5f, b.from_mirror[i] = 0, b.from_camera[i] = -1, b.valid[i] = 1;
+    }
+    if (b.n == 0) continue;
+    scene.Colours(b, rgb.data());
+    for (int i = 0; i < b.n; ++i) {
+      const raytrace::Hit h =
+          scene.Trace(Vec3d(b.ox[i], b.oy[i], b.oz[i]), Vec3d(b.dx[i], b.dy[i], b.dz[i]), 1e-5, 0);
+      ++compared;
+      double worst = 0;
+      for (int c = 0; c < 3; ++c) worst = std::max(worst, std::abs(static_cast<double>(rgb[3 * i + c] - h.colour[c])));
+      differ += worst > 1e-6;
+    }
+  }
+  EXPECT_GT(compared, 5000);
+  EXPECT_LE(differ, compared / 1000) << differ << " of " << compared;
 }
 
 TEST(GoldenRender, SmallReferenceFrameIsUnchanged) {
