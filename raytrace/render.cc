@@ -234,12 +234,19 @@ class RayMaker {
 }  // namespace
 
 Frame Render(const RayScene& scene, const ViewCamera& camera, const RenderOptions& options) {
+  Frame f;
+  RenderInto(scene, camera, options, &f);
+  return f;
+}
+
+void RenderInto(const RayScene& scene, const ViewCamera& camera, const RenderOptions& options, Frame* frame) {
   options.Check("render");
   const auto start = std::chrono::steady_clock::now();
   const RayMaker maker(scene, camera, options);
   const bool lens = options.lens_radius > 0, blur = options.exposure_time > 0 && camera.unit >= 0;
-  Frame f;
+  Frame& f = *frame;
   f.width = maker.width(), f.height = maker.height();
+  if (!options.ground_truth) f.truth.data.clear();
   const size_t npx = static_cast<size_t>(f.width) * f.height;
   // Zeroed in parallel (the first touch of ~360 MB at full resolution with ground truth).
   f.rgb.resize(npx * 3);
@@ -391,7 +398,6 @@ Frame Render(const RayScene& scene, const ViewCamera& camera, const RenderOption
   });
   f.rays = rays;
   f.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-  return f;
 }
 
 std::vector<float> ApplySensor(const Frame& f, const SensorOptions& s, uint64_t seed, int* channels) {

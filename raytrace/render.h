@@ -102,6 +102,9 @@ struct Frame {
 };
 
 Frame Render(const RayScene& scene, const ViewCamera& camera, const RenderOptions& options);
+// Render into *frame, reusing its buffers where large enough: a sequence of frames (a dataset) then touches its
+// memory once. At 2750 x 2200 with ground truth that first touch (362 MB) costs about 0.15 s per frame.
+void RenderInto(const RayScene& scene, const ViewCamera& camera, const RenderOptions& options, Frame* frame);
 
 // The sensor model applied to a frame: 3 channels (or 1 for Bayer), values in [0, 1] before quantisation.
 std::vector<float> ApplySensor(const Frame& frame, const SensorOptions& sensor, uint64_t seed, int* channels);

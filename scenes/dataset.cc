@@ -59,11 +59,13 @@ struct ViewRecord {
 };
 
 // Renders unit u of the scene into dir: image, EXR ground truth, sidecar. Returns the manifest view.
+// scratch: the frame buffers, reused from view to view (they are touched once per dataset, not per frame).
 ViewRecord RenderView(const SceneConfig& cfg, const raytrace::RayScene& scene, int u, const fs::path& dir,
-                      const std::string& stem, bool progress, nlohmann::json* stats) {
+                      const std::string& stem, bool progress, nlohmann::json* stats, raytrace::Frame* scratch) {
   raytrace::RenderOptions ro = cfg.render;
   ro.progress = progress;
-  const raytrace::Frame frame = raytrace::Render(scene, raytrace::ViewCamera::Unit(u), ro);
+  raytrace::RenderInto(scene, raytrace::ViewCamera::Unit(u), ro, scratch);
+  const raytrace::Frame& frame = *scratch;
   int channels = 0;
   const std::vector<float> img = raytrace::ApplySensor(frame, ro.sensor, ro.seed ^ std::hash<std::string>{}(stem), &channels);
   const std::string unit = scene.description().units[u].name;
@@ -164,10 +166,11 @@ void RenderSceneFolder(const SceneConfig& cfg, const fs::path& out, bool progres
   nlohmann::json m = ManifestHead(cfg, "render", cfg.render.seed, versions);
   nlohmann::json views = nlohmann::json::array();
   nlohmann::json stats = nlohmann::json::array();
+  raytrace::Frame scratch;
   for (size_t u = 0; u < cfg.description.units.size(); ++u) {
     nlohmann::json s;
     views.push_back(ViewJson(RenderView(cfg, scene, static_cast<int>(u), stage.staging(),
-                                        cfg.description.units[u].name, progress, &s)));
+                                        cfg.description.units[u].name, progress, &s, &scratch)));
     stats.push_back(s);
   }
   nlohmann::json boards = nlohmann::json::array();
@@ -255,6 +258,7 @@ void WriteCalibrationDataset(const SceneConfig& base, const DatasetOptions& o, c
                     {"edge_margin_px", o.edge_margin_px}};
   nlohmann::json frames = nlohmann::json::array();
   nlohmann::json boards = nlohmann::json::array();
+  raytrace::Frame scratch;  // reused by every frame's render
   for (size_t i = 0; i < poses.size(); ++i) {
     SceneConfig cfg = base;
     // Replace the scene's boards by the calibration board at this pose.
@@ -285,7 +289,8 @@ void WriteCalibrationDataset(const SceneConfig& base, const DatasetOptions& o, c
       char stem[96];
       std::snprintf(stem, sizeof stem, "%s_%04zu", cfg.description.units[u].name.c_str(), i);
       nlohmann::json stats;
-      views.push_back(ViewJson(RenderView(cfg, scene, static_cast<int>(u), stage.staging(), stem, o.progress, &stats)));
+      views.push_back(
+          ViewJson(RenderView(cfg, scene, static_cast<int>(u), stage.staging(), stem, o.progress, &stats, &scratch)));
       seconds += stats["seconds"].get<double>();
       rays += stats["rays"].get<uint64_t>();
     }
@@ -354,6 +359,7 @@ void WriteDepthSequence(const SceneConfig& base, const DatasetOptions& o, const 
                  " m per frame (heading " + std::to_string(o.heading_deg) + " deg, yaw step " +
                  std::to_string(o.yaw_step_deg) + " deg); every unit rendered per frame with ground truth "
                  "(truth/*.exr: Z, P, N, id, mask, M; truth/*.json: the rig of that frame).");
+  raytrace::Frame scratch;  // reused by every frame's render
   for (int i = 0; i < o.count; ++i) {
     SceneConfig cfg = base;
     const Rigid3d world_from_rig = WorldFromRigAt(base, o, i);
@@ -366,7 +372,8 @@ void WriteDepthSequence(const SceneConfig& base, const DatasetOptions& o, const 
       char stem[96];
       std::snprintf(stem, sizeof stem, "%s_%04d", cfg.description.units[u].name.c_str(), i);
       nlohmann::json stats;
-      views.push_back(ViewJson(RenderView(cfg, scene, static_cast<int>(u), stage.staging(), stem, o.progress, &stats)));
+      views.push_back(
+          ViewJson(RenderView(cfg, scene, static_cast<int>(u), stage.staging(), stem, o.progress, &stats, &scratch)));
       seconds += stats["seconds"].get<double>();
     }
     for (const auto& view : views) {

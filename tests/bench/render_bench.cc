@@ -34,6 +34,25 @@ void BM_RenderFrame(benchmark::State& state) {
 }
 BENCHMARK(BM_RenderFrame)->Args({4, 1})->Args({4, 0})->Unit(benchmark::kMillisecond)->UseRealTime()->Iterations(3);
 
+// The same frame rendered into reused buffers (RenderInto, as the dataset writer does from its second frame on):
+// the frame's memory is already mapped, so this is the steady state of a sequence of frames.
+void BM_RenderFrameReused(benchmark::State& state) {
+  const hovs::raytrace::RayScene scene(Scene().description);
+  hovs::raytrace::RenderOptions ro;
+  ro.samples = static_cast<int>(state.range(0));
+  ro.ground_truth = state.range(1) != 0;
+  hovs::raytrace::Frame f;
+  hovs::raytrace::RenderInto(scene, hovs::raytrace::ViewCamera::Unit(0), ro, &f);  // maps the buffers
+  uint64_t rays = 0;
+  for (auto _ : state) {
+    hovs::raytrace::RenderInto(scene, hovs::raytrace::ViewCamera::Unit(0), ro, &f);
+    rays += f.rays;
+    benchmark::DoNotOptimize(f.rgb.data());
+  }
+  state.counters["rays_per_s"] = benchmark::Counter(static_cast<double>(rays), benchmark::Counter::kIsRate);
+}
+BENCHMARK(BM_RenderFrameReused)->Args({4, 1})->Unit(benchmark::kMillisecond)->UseRealTime()->Iterations(3);
+
 void BM_RawIntersect16(benchmark::State& state) {
   const hovs::raytrace::RayScene scene(Scene().description);
   const auto& unit = scene.description().units[0];
