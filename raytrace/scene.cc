@@ -189,6 +189,7 @@ RayScene::RayScene(SceneDescription description) : desc_(std::move(description))
   device_ = rtcNewDevice(nullptr);
   HOVS_REQUIRE(device_ != nullptr, "embree", "cannot create a device (error ", static_cast<int>(rtcGetDeviceError(nullptr)), ")");
   scene_ = rtcNewScene(device_);
+  native16_ = rtcGetDeviceProperty(device_, RTC_DEVICE_PROPERTY_NATIVE_RAY16_SUPPORTED) != 0;
   rtcSetSceneBuildQuality(scene_, RTC_BUILD_QUALITY_HIGH);
 
   // Camera bodies of the units become rectangles (a box behind the lens face, along the optical axis).
@@ -336,10 +337,11 @@ void RayScene::Shade(const Vec3d& o, const Vec3d& d, unsigned geom_id, unsigned 
 
 namespace {
 // Fills a 16-wide packet (lanes past count are masked off) and intersects it with the scene.
-void IntersectPacket(RTCScene scene, int count, const Vec3d* o, const Vec3d* d, const double* tnear,
-                     const int* from_mirror, RTCRayHit16* rh) {
-  alignas(64) int valid[16];
-  for (int i = 0; i < 16; ++i) {
+template <int W, class RayHitW, class IntersectW>
+void IntersectPacketW(RTCScene scene, int count, const Vec3d* o, const Vec3d* d, const double* tnear,
+                      const int* from_mirror, RayHitW* rh, IntersectW intersect) {
+  alignas(64) int valid[W];
+  for (int i = 0; i < W; ++i) {
     valid[i] = i < count ? -1 : 0;
     const int k = i < count ? i : 0;
     rh->ray.org_x[i] = static_cast<float>(o[k].x()), rh->ray.org_y[i] = static_cast<float>(o[k].y());
@@ -357,7 +359,12 @@ void IntersectPacket(RTCScene scene, int count, const Vec3d* o, const Vec3d* d, 
   RTCIntersectContext ctx;
   rtcInitIntersectContext(&ctx);
   ctx.flags = RTC_INTERSECT_CONTEXT_FLAG_COHERENT;
-  rtcIntersect16(valid, scene, &ctx, rh);
+  intersect(valid, scene, &ctx, rh);
+}
+
+void IntersectPacket(RTCScene scene, int count, const Vec3d* o, const Vec3d* d, const double* tnear,
+                     const int* from_mirror, RTCRayHit16* rh) {
+  IntersectPacketW<16>(scene, count, o, d, tnear, from_mirror, rh, rtcIntersect16);
 }
 }  // namespace
 
@@ -376,23 +383,28 @@ void RayScene::Trace16(int count, const Vec3d* o, const Vec3d* d, const double* 
   }
 }
 
-void RayScene::IntersectBatch16(const RayBatch& b, int i0, unsigned* geom_ids, unsigned* prim_ids) const {
-  alignas(64) RTCRayHit16 rh;
-  alignas(64) int valid[16];
-  const int count = std::min(16, b.n - i0);
+namespace {
+
+// Batch rays [i0, i0 + W) (fewer at the end) as one Embree packet of width W (RTCRayHit8 or RTCRayHit16).
+template <int W, class RayHitW, class IntersectW>
+void IntersectBatchPacket(RTCScene scene, const RayBatch& b, int i0, unsigned* geom_ids, unsigned* prim_ids,
+                          IntersectW intersect) {
+  alignas(64) RayHitW rh;
+  alignas(64) int valid[W];
+  const int count = std::min(W, b.n - i0);
   // Lanes past count repeat the batch's ray i0 (masked off); field by field, so the conversions vectorise.
-  int k[16];
-  for (int i = 0; i < 16; ++i) k[i] = i0 + (i < count ? i : 0);
+  int k[W];
+  for (int i = 0; i < W; ++i) k[i] = i0 + (i < count ? i : 0);
   const auto fill = [&](float* dst, const double* src) {
-    if (count == 16) {
-      for (int i = 0; i < 16; ++i) dst[i] = static_cast<float>(src[i0 + i]);
+    if (count == W) {
+      for (int i = 0; i < W; ++i) dst[i] = static_cast<float>(src[i0 + i]);
     } else {
-      for (int i = 0; i < 16; ++i) dst[i] = static_cast<float>(src[k[i]]);
+      for (int i = 0; i < W; ++i) dst[i] = static_cast<float>(src[k[i]]);
     }
   };
   fill(rh.ray.org_x, b.ox), fill(rh.ray.org_y, b.oy), fill(rh.ray.org_z, b.oz);
   fill(rh.ray.dir_x, b.dx), fill(rh.ray.dir_y, b.dy), fill(rh.ray.dir_z, b.dz);
-  for (int i = 0; i < 16; ++i) {
+  for (int i = 0; i < W; ++i) {
     valid[i] = i < count && b.valid[k[i]] ? -1 : 0;
     rh.ray.tnear[i] = b.tnear[k[i]];
     rh.ray.tfar[i] = std::numeric_limits<float>::infinity();
@@ -404,8 +416,20 @@ void RayScene::IntersectBatch16(const RayBatch& b, int i0, unsigned* geom_ids, u
   RTCIntersectContext ctx;
   rtcInitIntersectContext(&ctx);
   ctx.flags = RTC_INTERSECT_CONTEXT_FLAG_COHERENT;
-  rtcIntersect16(valid, scene_, &ctx, &rh);
+  intersect(valid, scene, &ctx, &rh);
   for (int i = 0; i < count; ++i) geom_ids[i] = rh.hit.geomID[i], prim_ids[i] = rh.hit.primID[i];
+}
+
+}  // namespace
+
+void RayScene::IntersectBatch16(const RayBatch& b, int i0, unsigned* geom_ids, unsigned* prim_ids) const {
+  if (native16_) {
+    IntersectBatchPacket<16, RTCRayHit16>(scene_, b, i0, geom_ids, prim_ids, rtcIntersect16);
+    return;
+  }
+  // Without native 16-wide packets (no AVX-512) Embree emulates rtcIntersect16; two rtcIntersect8 are faster.
+  IntersectBatchPacket<8, RTCRayHit8>(scene_, b, i0, geom_ids, prim_ids, rtcIntersect8);
+  if (b.n - i0 > 8) IntersectBatchPacket<8, RTCRayHit8>(scene_, b, i0 + 8, geom_ids + 8, prim_ids + 8, rtcIntersect8);
 }
 
 void RayScene::Colours(const RayBatch& b, float* rgb) const {
@@ -512,6 +536,13 @@ void RayScene::IntersectOnly16(int count, const Vec3d* o, const Vec3d* d, unsign
                                const int* from_mirror) const {
   alignas(64) RTCRayHit16 rh;
   IntersectPacket(scene_, count, o, d, nullptr, from_mirror, &rh);
+  for (int i = 0; i < count; ++i) geom_ids[i] = rh.hit.geomID[i];
+}
+
+void RayScene::IntersectOnly8(int count, const Vec3d* o, const Vec3d* d, unsigned* geom_ids,
+                              const int* from_mirror) const {
+  alignas(32) RTCRayHit8 rh;
+  IntersectPacketW<8>(scene_, count, o, d, nullptr, from_mirror, &rh, rtcIntersect8);
   for (int i = 0; i < count; ++i) geom_ids[i] = rh.hit.geomID[i];
 }
 

@@ -124,12 +124,16 @@ class RayScene {
   // Raw Embree throughput reference: rtcIntersect16 only, no shading (for the benchmark's comparison).
   void IntersectOnly16(int count, const Vec3d* origins, const Vec3d* directions, unsigned* geom_ids,
                        const int* from_mirror = nullptr) const;
+  // The same with rtcIntersect8 (up to 8 rays): the packet width the renderer uses without AVX-512.
+  void IntersectOnly8(int count, const Vec3d* origins, const Vec3d* directions, unsigned* geom_ids,
+                      const int* from_mirror = nullptr) const;
 
   struct UserGeometry;  // mirror, annulus (mount, lens face): analytic shapes, defined in scene.cc
 
  private:
   void Shade(const Vec3d& o, const Vec3d& d, unsigned geom_id, unsigned prim_id, Hit* hit, bool colour) const;
-  // Intersects batch rays [i0, i0 + 16) (fewer at the end) with rtcIntersect16.
+  // Intersects batch rays [i0, i0 + 16) (fewer at the end): rtcIntersect16 where the CPU has native 16-wide
+  // packets, else two rtcIntersect8.
   void IntersectBatch16(const RayBatch& b, int i0, unsigned* geom_ids, unsigned* prim_ids) const;
 
   // A rectangle's frame for shading: centre, unit normal and in-plane axes in the world.
@@ -142,6 +146,7 @@ class RayScene {
   RTCDevice device_ = nullptr;
   RTCScene scene_ = nullptr;
   unsigned rect_geom_ = RTC_INVALID_GEOMETRY_ID;
+  bool native16_ = false;  // the device traces 16-wide packets natively (AVX-512)
   std::vector<std::unique_ptr<UserGeometry>> user_;  // index = user geometry slot
   std::vector<int> geom_to_user_;                    // geomID -> slot in user_, or -1
 };
