@@ -104,16 +104,13 @@ class RayMaker {
       t_world_from_mirror_ = unit_->world_from_mirror.translation;
       viewpoint_ = unit_->world_from_mirror.translation;
       width_ = unit_->rig.camera.width, height_ = unit_->rig.camera.height;
-      R_world_from_cam_ = world_from_cam_.rotation.toRotationMatrix();
-      viewpoint_cam_ = world_from_cam_.translation;
     } else {
       cam.pinhole.Check("render camera");
       world_from_cam_ = cam.world_from_cam;
       viewpoint_ = cam.world_from_cam.translation;
       width_ = cam.pinhole.width, height_ = cam.pinhole.height;
-      R_world_from_cam_ = world_from_cam_.rotation.toRotationMatrix();
-      viewpoint_cam_ = world_from_cam_.translation;
     }
+    R_world_from_cam_ = world_from_cam_.rotation.toRotationMatrix();
     HOVS_REQUIRE(width_ > 0 && height_ > 0, "render", "the camera has no image size");
   }
   int width() const { return width_; }
@@ -159,7 +156,7 @@ class RayMaker {
       b->from_camera[i] = on_mirror[i] || !unit_ ? -1 : cam_.unit;
     }
     WorldRays(n, R_world_from_mirror_.data(), t_world_from_mirror_.data(), R_world_from_cam_.data(),
-              viewpoint_cam_.data(), via, mx, my, Mx, My, Mz, b->dx, b->dy, b->dz, b->ox, b->oy, b->oz);
+              world_from_cam_.translation.data(), via, mx, my, Mx, My, Mz, b->dx, b->dy, b->dz, b->ox, b->oy, b->oz);
   }
 
   static void Store(const RayRequest& r, int i, RayBatch* b) {
@@ -227,7 +224,6 @@ class RayMaker {
   Vec3d t_mirror_from_cam_ = Vec3d::Zero(), t_world_from_mirror_ = Vec3d::Zero();
   Vec3d viewpoint_ = Vec3d::Zero();
   Eigen::Matrix3d R_world_from_cam_ = Eigen::Matrix3d::Identity();
-  Vec3d viewpoint_cam_ = Vec3d::Zero();  // the camera's centre in the world
   int width_ = 0, height_ = 0;
 };
 

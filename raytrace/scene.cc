@@ -337,6 +337,28 @@ void RayScene::Shade(const Vec3d& o, const Vec3d& d, unsigned geom_id, unsigned 
 
 namespace {
 // Fills a 16-wide packet (lanes past count are masked off) and intersects it with the scene.
+// Lane i of a packet, everything but origin and direction: tnear, an infinite tfar, the Embree mask of the
+// ray's origin (see RayMask), and the id, which carries the unit whose (convex) mirror the ray leaves (the
+// mirror callback skips it; -1: none).
+template <class RayHitW>
+void SetLane(RayHitW* rh, int i, float tnear, int from_mirror, int from_camera) {
+  rh->ray.tnear[i] = tnear;
+  rh->ray.tfar[i] = std::numeric_limits<float>::infinity();
+  rh->ray.mask[i] = RayMask(from_mirror, from_camera), rh->ray.flags[i] = 0, rh->ray.time[i] = 0;
+  rh->ray.id[i] = static_cast<unsigned>(std::max(from_mirror, -1) + 1);
+  rh->hit.geomID[i] = RTC_INVALID_GEOMETRY_ID;
+  rh->hit.instID[0][i] = RTC_INVALID_GEOMETRY_ID;
+}
+
+// Traces a filled packet (rtcIntersect8 or rtcIntersect16), rays flagged coherent.
+template <class RayHitW, class IntersectW>
+void TracePacket(RTCScene scene, const int* valid, RayHitW* rh, IntersectW intersect) {
+  RTCIntersectContext ctx;
+  rtcInitIntersectContext(&ctx);
+  ctx.flags = RTC_INTERSECT_CONTEXT_FLAG_COHERENT;
+  intersect(valid, scene, &ctx, rh);
+}
+
 template <int W, class RayHitW, class IntersectW>
 void IntersectPacketW(RTCScene scene, int count, const Vec3d* o, const Vec3d* d, const double* tnear,
                       const int* from_mirror, RayHitW* rh, IntersectW intersect) {
@@ -348,18 +370,9 @@ void IntersectPacketW(RTCScene scene, int count, const Vec3d* o, const Vec3d* d,
     rh->ray.org_z[i] = static_cast<float>(o[k].z());
     rh->ray.dir_x[i] = static_cast<float>(d[k].x()), rh->ray.dir_y[i] = static_cast<float>(d[k].y());
     rh->ray.dir_z[i] = static_cast<float>(d[k].z());
-    rh->ray.tnear[i] = static_cast<float>(tnear ? tnear[k] : 0.0);
-    rh->ray.tfar[i] = std::numeric_limits<float>::infinity();
-    rh->ray.mask[i] = RayMask(from_mirror ? from_mirror[k] : -1), rh->ray.flags[i] = 0, rh->ray.time[i] = 0;
-    // The id carries the unit whose (convex) mirror the ray leaves, which the mirror callback then skips.
-    rh->ray.id[i] = from_mirror ? static_cast<unsigned>(from_mirror[k] + 1) : 0u;
-    rh->hit.geomID[i] = RTC_INVALID_GEOMETRY_ID;
-    rh->hit.instID[0][i] = RTC_INVALID_GEOMETRY_ID;
+    SetLane(rh, i, static_cast<float>(tnear ? tnear[k] : 0.0), from_mirror ? from_mirror[k] : -1, -1);
   }
-  RTCIntersectContext ctx;
-  rtcInitIntersectContext(&ctx);
-  ctx.flags = RTC_INTERSECT_CONTEXT_FLAG_COHERENT;
-  intersect(valid, scene, &ctx, rh);
+  TracePacket(scene, valid, rh, intersect);
 }
 
 void IntersectPacket(RTCScene scene, int count, const Vec3d* o, const Vec3d* d, const double* tnear,
@@ -406,17 +419,9 @@ void IntersectBatchPacket(RTCScene scene, const RayBatch& b, int i0, unsigned* g
   fill(rh.ray.dir_x, b.dx), fill(rh.ray.dir_y, b.dy), fill(rh.ray.dir_z, b.dz);
   for (int i = 0; i < W; ++i) {
     valid[i] = i < count && b.valid[k[i]] ? -1 : 0;
-    rh.ray.tnear[i] = b.tnear[k[i]];
-    rh.ray.tfar[i] = std::numeric_limits<float>::infinity();
-    rh.ray.mask[i] = RayMask(b.from_mirror[k[i]], b.from_camera[k[i]]), rh.ray.flags[i] = 0, rh.ray.time[i] = 0;
-    rh.ray.id[i] = static_cast<unsigned>(b.from_mirror[k[i]] + 1);  // see IntersectPacket
-    rh.hit.geomID[i] = RTC_INVALID_GEOMETRY_ID;
-    rh.hit.instID[0][i] = RTC_INVALID_GEOMETRY_ID;
+    SetLane(&rh, i, b.tnear[k[i]], b.from_mirror[k[i]], b.from_camera[k[i]]);
   }
-  RTCIntersectContext ctx;
-  rtcInitIntersectContext(&ctx);
-  ctx.flags = RTC_INTERSECT_CONTEXT_FLAG_COHERENT;
-  intersect(valid, scene, &ctx, &rh);
+  TracePacket(scene, valid, &rh, intersect);
   for (int i = 0; i < count; ++i) geom_ids[i] = rh.hit.geomID[i], prim_ids[i] = rh.hit.primID[i];
 }
 
