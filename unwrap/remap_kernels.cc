@@ -2,6 +2,8 @@
 
 #include <immintrin.h>
 
+#include <algorithm>
+#include <atomic>
 #include <cstring>
 
 namespace hovs::unwrap::kernels {
@@ -26,10 +28,27 @@ inline int BayerGridValue(const uint8_t* src, ptrdiff_t stride, int32_t x, int32
 
 }  // namespace
 
-bool HaveAvx2() {
-  static const bool have = __builtin_cpu_supports("avx2");
-  return have;
+const char* ToString(Isa isa) {
+  return isa == Isa::kAvx512 ? "avx512" : isa == Isa::kAvx2 ? "avx2" : "scalar";
 }
+
+Isa DetectedIsa() {
+  static const Isa isa = [] {
+    __builtin_cpu_init();
+    if (__builtin_cpu_supports("avx512f") && __builtin_cpu_supports("avx512bw") && __builtin_cpu_supports("avx512vl") &&
+        __builtin_cpu_supports("avx512dq") && __builtin_cpu_supports("avx512vbmi"))
+      return Isa::kAvx512;
+    return __builtin_cpu_supports("avx2") ? Isa::kAvx2 : Isa::kScalar;
+  }();
+  return isa;
+}
+
+namespace {
+std::atomic<int> g_isa_limit{static_cast<int>(Isa::kAvx512)};
+}  // namespace
+
+Isa ActiveIsa() { return static_cast<Isa>(std::min(static_cast<int>(DetectedIsa()), g_isa_limit.load())); }
+void LimitIsa(Isa max) { g_isa_limit = static_cast<int>(max); }
 
 void BilinearRgbRowScalar(const uint8_t* src, ptrdiff_t stride, const RowCoords& c, int i0, int n,
                           uint8_t* o) {
@@ -285,13 +304,60 @@ __attribute__((target("avx2"))) void BayerRgbRowAvx2(const uint8_t* data, ptrdif
 }  // namespace
 
 void BilinearRgbRow(const uint8_t* src, ptrdiff_t stride, const RowCoords& c, int i0, int n, uint8_t* out) {
-  HaveAvx2() ? BilinearRgbRowAvx2(src, stride, c, i0, n, out) : BilinearRgbRowScalar(src, stride, c, i0, n, out);
+  switch (ActiveIsa()) {
+    case Isa::kAvx512: return avx512::BilinearRgbRow(src, stride, c, i0, n, out);
+    case Isa::kAvx2: return BilinearRgbRowAvx2(src, stride, c, i0, n, out);
+    default: return BilinearRgbRowScalar(src, stride, c, i0, n, out);
+  }
 }
 void BilinearGrayRow(const uint8_t* src, ptrdiff_t stride, const RowCoords& c, int i0, int n, uint8_t* out) {
-  HaveAvx2() ? BilinearGrayRowAvx2(src, stride, c, i0, n, out) : BilinearGrayRowScalar(src, stride, c, i0, n, out);
+  switch (ActiveIsa()) {
+    case Isa::kAvx512: return avx512::BilinearGrayRow(src, stride, c, i0, n, out);
+    case Isa::kAvx2: return BilinearGrayRowAvx2(src, stride, c, i0, n, out);
+    default: return BilinearGrayRowScalar(src, stride, c, i0, n, out);
+  }
 }
 void BayerRgbRow(const uint8_t* src, ptrdiff_t stride, const RowCoords& c, int i0, int n, uint8_t* out) {
-  HaveAvx2() ? BayerRgbRowAvx2(src, stride, c, i0, n, out) : BayerRgbRowScalar(src, stride, c, i0, n, out);
+  switch (ActiveIsa()) {
+    case Isa::kAvx512: return avx512::BayerRgbRow(src, stride, c, i0, n, out);
+    case Isa::kAvx2: return BayerRgbRowAvx2(src, stride, c, i0, n, out);
+    default: return BayerRgbRowScalar(src, stride, c, i0, n, out);
+  }
+}
+
+namespace {
+
+using RowKernel = void (*)(const uint8_t*, ptrdiff_t, const RowCoords&, int, int, uint8_t*);
+
+// The scalar and AVX2 tile path: row by row through a small local buffer, then copied out (measured with the
+// AVX2 kernels: about 8 % faster than writing each pixel into the view directly).
+void TileByRows(RowKernel row, int bytes_per_pixel, const uint8_t* src, ptrdiff_t stride, const Tile& t, int T,
+                int nu, int nv, uint8_t* out, ptrdiff_t ostride) {
+  alignas(64) uint8_t local[64 * 3 + 32];
+  RowCoords c;
+  for (int j = 0; j < nv; ++j) {
+    c.poly = InterpRowPoly(t, T, j);
+    row(src, stride, c, 0, nu, local);
+    std::memcpy(out + j * ostride, local, size_t(nu) * bytes_per_pixel);
+  }
+}
+
+}  // namespace
+
+void BilinearRgbTile(const uint8_t* src, ptrdiff_t stride, const Tile& t, int T, int nu, int nv, uint8_t* out,
+                     ptrdiff_t ostride) {
+  if (ActiveIsa() == Isa::kAvx512) return avx512::BilinearRgbTile(src, stride, t, T, nu, nv, out, ostride);
+  TileByRows(BilinearRgbRow, 3, src, stride, t, T, nu, nv, out, ostride);
+}
+void BilinearGrayTile(const uint8_t* src, ptrdiff_t stride, const Tile& t, int T, int nu, int nv, uint8_t* out,
+                      ptrdiff_t ostride) {
+  if (ActiveIsa() == Isa::kAvx512) return avx512::BilinearGrayTile(src, stride, t, T, nu, nv, out, ostride);
+  TileByRows(BilinearGrayRow, 1, src, stride, t, T, nu, nv, out, ostride);
+}
+void BayerRgbTile(const uint8_t* src, ptrdiff_t stride, const Tile& t, int T, int nu, int nv, uint8_t* out,
+                  ptrdiff_t ostride) {
+  if (ActiveIsa() == Isa::kAvx512) return avx512::BayerRgbTile(src, stride, t, T, nu, nv, out, ostride);
+  TileByRows(BayerRgbRow, 3, src, stride, t, T, nu, nv, out, ostride);
 }
 
 }  // namespace hovs::unwrap::kernels

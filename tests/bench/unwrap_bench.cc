@@ -10,6 +10,7 @@
 
 #include "core/model_fit.h"
 #include "unwrap/remap.h"
+#include "unwrap/remap_kernels.h"
 
 namespace {
 
@@ -55,8 +56,15 @@ const CvMaps& Maps() {
   return maps;
 }
 
+// Arguments: input (0 RGB, 1 Bayer), kernels (2 the widest this CPU runs, 1 AVX2 at most).
 void BM_HovsSixViews(benchmark::State& state) {
   const bool bayer = state.range(0) != 0;
+  const auto isa = static_cast<unwrap::kernels::Isa>(state.range(1));
+  if (isa == unwrap::kernels::Isa::kAvx2 && unwrap::kernels::DetectedIsa() != unwrap::kernels::Isa::kAvx512) {
+    state.SkipWithError("AVX2 is already this CPU's widest kernel set (see the other run)");
+    return;
+  }
+  unwrap::kernels::LimitIsa(isa);
   const cv::Mat frame = Frame(bayer ? CV_8UC1 : CV_8UC3);
   unwrap::Remapper remapper(Table());
   const unwrap::ImageView src{frame.data, frame.cols, frame.rows, frame.step,
@@ -66,9 +74,22 @@ void BM_HovsSixViews(benchmark::State& state) {
     remapper.Run(src, unwrap::Interpolation::kBilinear, &out);
     benchmark::DoNotOptimize(out[0].data.data());
   }
-  state.SetLabel(bayer ? "bayer_rggb8 -> rgb" : "rgb8");
+  const auto& t = Table();
+  int interp = 0, dense = 0, empty = 0, minified = 0;
+  for (const auto& v : t.views) {
+    interp += v.interp_tiles, dense += v.dense_tiles, empty += v.empty_tiles;
+    for (const auto& tl : v.tiles) minified += tl.kind != unwrap::TileKind::kEmpty && tl.level > 0;
+  }
+  state.counters["pyramid_ms"] = remapper.last_pyramid_ms();
+  state.counters["levels"] = t.levels;
+  state.counters["interp_tiles"] = interp;
+  state.counters["dense_tiles"] = dense;
+  state.counters["empty_tiles"] = empty;
+  state.counters["pyramid_tiles"] = minified;
+  state.SetLabel(std::string(bayer ? "bayer_rggb8 -> rgb, " : "rgb8, ") + unwrap::kernels::ToString(unwrap::kernels::ActiveIsa()));
+  unwrap::kernels::LimitIsa(unwrap::kernels::Isa::kAvx512);
 }
-BENCHMARK(BM_HovsSixViews)->Arg(0)->Arg(1)->Unit(benchmark::kMillisecond)->UseRealTime()->MinTime(2.0);
+BENCHMARK(BM_HovsSixViews)->Args({0, 2})->Args({1, 2})->Args({0, 1})->Args({1, 1})->Unit(benchmark::kMillisecond)->UseRealTime()->MinTime(2.0);
 
 void BM_OpenCvRemapSixViews(benchmark::State& state) {
   const bool bayer = state.range(0) != 0;

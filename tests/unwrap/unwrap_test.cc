@@ -203,34 +203,76 @@ kernels::RowCoords RandomRow(std::mt19937* rng, int n, int w, int h, std::vector
   return c;
 }
 
+// Every instruction set this CPU runs, against the scalar kernels: rows (random coordinates and the row
+// polynomial, lengths that leave tails) and whole interp tiles, RGB, grey and Bayer.
 TEST(Kernels, VectorAndScalarAgreeBitForBit) {
-  if (!kernels::HaveAvx2()) GTEST_SKIP() << "this CPU has no AVX2: only the scalar kernels run here";
   std::mt19937 rng(11);
   const int w = 300, h = 200;
   std::vector<uint8_t> rgb(w * h * 3), grey(w * h);
   for (auto& v : rgb) v = uint8_t(rng());
   for (auto& v : grey) v = uint8_t(rng());
-  for (int trial = 0; trial < 20; ++trial) {
-    std::vector<int32_t> xs, ys;
-    const int n = 37 + trial;
-    kernels::RowCoords c = RandomRow(&rng, n, w, h, &xs, &ys);
-    if (trial % 2) {   // the polynomial form of interp tiles
-      c.xs = c.ys = nullptr;
-      c.poly = {float((20 + trial) * 65536), 0.9f * 65536, 0.01f * 65536, float((30 + trial) * 65536), 0.3f * 65536,
-                -0.002f * 65536};
+  std::vector<kernels::Isa> isas;
+  for (int i = 0; i <= static_cast<int>(kernels::DetectedIsa()); ++i) isas.push_back(static_cast<kernels::Isa>(i));
+  int compared = 0;
+  for (const kernels::Isa isa : isas) {
+    kernels::LimitIsa(isa);
+    ASSERT_EQ(kernels::ActiveIsa(), isa);
+    for (int trial = 0; trial < 24; ++trial) {
+      std::vector<int32_t> xs, ys;
+      const int n = 33 + trial;
+      kernels::RowCoords c = RandomRow(&rng, n, w, h, &xs, &ys);
+      if (trial % 2) {   // the polynomial form of interp tiles
+        c.xs = c.ys = nullptr;
+        c.poly = {float((20 + trial) * 65536), 0.9f * 65536, 0.01f * 65536, float((30 + trial) * 65536), 0.3f * 65536,
+                  -0.002f * 65536};
+      }
+      const std::string what = std::string(kernels::ToString(isa)) + " trial " + std::to_string(trial);
+      std::vector<uint8_t> a(3 * n), b(3 * n);
+      kernels::BilinearRgbRow(rgb.data(), 3 * w, c, 0, n, a.data());
+      kernels::BilinearRgbRowScalar(rgb.data(), 3 * w, c, 0, n, b.data());
+      EXPECT_EQ(a, b) << "rgb " << what;
+      kernels::BayerRgbRow(grey.data(), w, c, 0, n, a.data());
+      kernels::BayerRgbRowScalar(grey.data(), w, c, 0, n, b.data());
+      EXPECT_EQ(a, b) << "bayer " << what;
+      std::vector<uint8_t> g1(n), g2(n);
+      kernels::BilinearGrayRow(grey.data(), w, c, 0, n, g1.data());
+      kernels::BilinearGrayRowScalar(grey.data(), w, c, 0, n, g2.data());
+      EXPECT_EQ(g1, g2) << "grey " << what;
+      ++compared;
     }
-    std::vector<uint8_t> a(3 * n), b(3 * n);
-    kernels::BilinearRgbRow(rgb.data(), 3 * w, c, 0, n, a.data());
-    kernels::BilinearRgbRowScalar(rgb.data(), 3 * w, c, 0, n, b.data());
-    EXPECT_EQ(a, b) << "rgb trial " << trial;
-    kernels::BayerRgbRow(grey.data(), w, c, 0, n, a.data());
-    kernels::BayerRgbRowScalar(grey.data(), w, c, 0, n, b.data());
-    EXPECT_EQ(a, b) << "bayer trial " << trial;
-    std::vector<uint8_t> g1(n), g2(n);
-    kernels::BilinearGrayRow(grey.data(), w, c, 0, n, g1.data());
-    kernels::BilinearGrayRowScalar(grey.data(), w, c, 0, n, g2.data());
-    EXPECT_EQ(g1, g2) << "grey trial " << trial;
+    // Whole tiles (partial ones too): a rotated, scaled, slightly curved patch well inside the image, written
+    // into a larger output with a row stride, against the scalar rows of the same polynomials.
+    for (int trial = 0; trial < 6; ++trial) {
+      const int T = 32, nu = trial % 3 == 0 ? 32 : 9 + 5 * trial, nv = trial % 2 ? 32 : 7 + trial;
+      Tile t;
+      t.kind = TileKind::kInterp;
+      for (int r = 0; r < 3; ++r)
+        for (int q = 0; q < 3; ++q) {
+          const float u = 16.f * q, v = 16.f * r;
+          t.x[3 * r + q] = 60 + 1.3f * u - 0.4f * v + 0.01f * u * v + trial;
+          t.y[3 * r + q] = 50 + 0.5f * u + 1.1f * v - 0.006f * u * u + 0.7f * trial;
+        }
+      const ptrdiff_t os = 3 * 40;
+      std::vector<uint8_t> got(size_t(os) * T, 7), want(size_t(os) * T, 7), ggot(40 * T, 7), gwant(40 * T, 7);
+      std::vector<uint8_t> bgot(size_t(os) * T, 7), bwant(size_t(os) * T, 7);
+      kernels::BilinearRgbTile(rgb.data(), 3 * w, t, T, nu, nv, got.data(), os);
+      kernels::BilinearGrayTile(grey.data(), w, t, T, nu, nv, ggot.data(), 40);
+      kernels::BayerRgbTile(grey.data(), w, t, T, nu, nv, bgot.data(), os);
+      kernels::RowCoords c;
+      for (int j = 0; j < nv; ++j) {
+        c.poly = InterpRowPoly(t, T, j);
+        kernels::BilinearRgbRowScalar(rgb.data(), 3 * w, c, 0, nu, want.data() + j * os);
+        kernels::BilinearGrayRowScalar(grey.data(), w, c, 0, nu, gwant.data() + j * 40);
+        kernels::BayerRgbRowScalar(grey.data(), w, c, 0, nu, bwant.data() + j * os);
+      }
+      const std::string what = std::string(kernels::ToString(isa)) + " tile " + std::to_string(trial);
+      EXPECT_EQ(got, want) << "rgb " << what;   // also: nothing written outside the tile's nu x nv pixels
+      EXPECT_EQ(ggot, gwant) << "grey " << what;
+      EXPECT_EQ(bgot, bwant) << "bayer " << what;
+    }
   }
+  kernels::LimitIsa(kernels::Isa::kAvx512);
+  EXPECT_EQ(compared, 24 * static_cast<int>(isas.size()));
 }
 
 TEST(Kernels, BilinearReproducesALinearRamp) {

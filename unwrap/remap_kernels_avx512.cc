@@ -1,0 +1,260 @@
+// AVX-512 versions of the remap kernels (AVX-512 F, BW, VL, DQ and VBMI: Intel Ice Lake and later, AMD Zen 4 and
+// later), 16 output pixels per step. The arithmetic is the scalar kernels' (remap_kernels.h), so the outputs are
+// bit-identical to theirs; this file is compiled with -ffp-contract=off so the row polynomial's multiply and add
+// are never fused.
+//
+// What differs from the AVX2 kernels is the reading: each pixel's source bytes (two 8-byte words per source row
+// for RGB, four for a Bayer mosaic, one 4-byte word per row for grey) are fetched by gathers of 8 or 16 lanes
+// instead of one scalar load per pixel and word, the offsets never leave the vector registers, and the 16 pixels
+// are put into their output order by one byte permutation (VBMI) and written with two plain stores. Row tails
+// run the same 16-lane code with the lanes past the row's end given lane 0's coordinates and a masked store.
+#include <immintrin.h>
+
+#include "unwrap/remap_kernels.h"
+
+// GCC 12's AVX-512 headers start many intrinsics from _mm512_undefined_*(), which -Wmaybe-uninitialized reports
+// at every inlined use (a known false alarm of the headers, not of this file).
+#pragma GCC diagnostic ignored "-Wmaybe-uninitialized"
+
+#define HOVS_AVX512 __attribute__((target("avx512f,avx512bw,avx512vl,avx512dq,avx512vbmi")))
+
+namespace hovs::unwrap::kernels::avx512 {
+namespace {
+
+constexpr int32_t kHalf = 1 << 9;   // as remap_kernels.cc: positions rounded to the nearest 1/64 px
+
+// Coordinates of pixels i .. i + 15 of a row (the row polynomial in RowPoly::X's float operations). Lanes at or
+// past `n` (n < 16 for a tail) repeat lane 0, so every lane reads inside the image.
+HOVS_AVX512 inline void Coords16(const RowCoords& c, int i, int n, __m512i* x, __m512i* y) {
+  const __mmask16 live = n >= 16 ? __mmask16(0xFFFF) : __mmask16((1u << n) - 1);
+  if (c.xs) {
+    *x = _mm512_maskz_loadu_epi32(live, c.xs + i);
+    *y = _mm512_maskz_loadu_epi32(live, c.ys + i);
+  } else {
+    const __m512 fi = _mm512_cvtepi32_ps(
+        _mm512_add_epi32(_mm512_set1_epi32(i), _mm512_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15)));
+    const __m512i one = _mm512_set1_epi32(65536);
+    const RowPoly& p = c.poly;
+    const __m512 px = _mm512_add_ps(_mm512_set1_ps(p.bx),
+                                    _mm512_mul_ps(fi, _mm512_add_ps(_mm512_set1_ps(p.c1x), _mm512_mul_ps(fi, _mm512_set1_ps(p.c2x)))));
+    const __m512 py = _mm512_add_ps(_mm512_set1_ps(p.by),
+                                    _mm512_mul_ps(fi, _mm512_add_ps(_mm512_set1_ps(p.c1y), _mm512_mul_ps(fi, _mm512_set1_ps(p.c2y)))));
+    *x = _mm512_sub_epi32(_mm512_cvttps_epi32(px), one);
+    *y = _mm512_sub_epi32(_mm512_cvttps_epi32(py), one);
+  }
+  if (n < 16) {
+    const __m512i zero = _mm512_setzero_si512();
+    *x = _mm512_mask_blend_epi32(live, _mm512_permutexvar_epi32(zero, *x), *x);
+    *y = _mm512_mask_blend_epi32(live, _mm512_permutexvar_epi32(zero, *y), *y);
+  }
+}
+
+// Stores the first `bytes` (<= 48) bytes of v: two plain stores for a whole step, a masked store for a tail.
+HOVS_AVX512 inline void Store48(__m512i v, int bytes, uint8_t* o) {
+  if (bytes == 48) {
+    _mm256_storeu_si256(reinterpret_cast<__m256i*>(o), _mm512_castsi512_si256(v));
+    _mm_storeu_si128(reinterpret_cast<__m128i*>(o + 32), _mm512_extracti32x4_epi32(v, 2));
+  } else {
+    _mm512_mask_storeu_epi8(o, (__mmask64(1) << bytes) - 1, v);
+  }
+}
+
+// Per 128-bit lane, the bytes of each 64-bit word's low 16 bits repeated four times.
+HOVS_AVX512 inline __m512i RepeatLowWord(__m512i v) {
+  const __m512i rep = _mm512_broadcast_i32x4(_mm_setr_epi8(0, 1, 0, 1, 0, 1, 0, 1, 8, 9, 8, 9, 8, 9, 8, 9));
+  return _mm512_shuffle_epi8(v, rep);
+}
+
+// The 8 x 32-bit lanes of a 256-bit half, each widened to a 64-bit word (high half zero).
+HOVS_AVX512 inline __m512i Widen(__m512i v, int half) {
+  return _mm512_cvtepu32_epi64(half == 0 ? _mm512_castsi512_si256(v) : _mm512_extracti64x4_epi64(v, 1));
+}
+
+// 16 RGB pixels (bilinear) at 16.16 coordinates (x, y); the first `count` are stored at o.
+HOVS_AVX512 inline void Rgb16(const uint8_t* data, ptrdiff_t stride, __m512i x, __m512i y, int count, uint8_t* o) {
+  const __m512i m63 = _mm512_set1_epi32(63), c64 = _mm512_set1_epi32(64);
+  x = _mm512_add_epi32(x, _mm512_set1_epi32(kHalf));
+  y = _mm512_add_epi32(y, _mm512_set1_epi32(kHalf));
+  const __m512i ix = _mm512_srai_epi32(x, 16), iy = _mm512_srai_epi32(y, 16);
+  const __m512i fx = _mm512_and_si512(_mm512_srai_epi32(x, 10), m63);
+  const __m512i fy = _mm512_and_si512(_mm512_srai_epi32(y, 10), m63);
+  const __m512i off = _mm512_add_epi32(_mm512_mullo_epi32(iy, _mm512_set1_epi32(static_cast<int>(stride))),
+                                       _mm512_add_epi32(ix, _mm512_add_epi32(ix, ix)));
+  const __m512i wxd = _mm512_or_si512(_mm512_slli_epi32(fx, 8), _mm512_sub_epi32(c64, fx));
+  const __m512i wyd = _mm512_slli_epi32(fy, 9);
+  // (left, right) byte pairs of R, G, B in each pixel's 8-byte word.
+  const __m512i pairs = _mm512_broadcast_i32x4(_mm_setr_epi8(0, 3, 1, 4, 2, 5, -1, -1, 8, 11, 9, 12, 10, 13, -1, -1));
+  const __m512i round = _mm512_set1_epi16(32);
+  __m512i v[2];
+  for (int h = 0; h < 2; ++h) {
+    const __m256i o8 = h == 0 ? _mm512_castsi512_si256(off) : _mm512_extracti64x4_epi64(off, 1);
+    const __m512i top = _mm512_i32gather_epi64(o8, data, 1);
+    const __m512i bot = _mm512_i32gather_epi64(o8, data + stride, 1);
+    const __m512i wx = RepeatLowWord(Widen(wxd, h)), wy = RepeatLowWord(Widen(wyd, h));
+    const __m512i ht = _mm512_maddubs_epi16(_mm512_shuffle_epi8(top, pairs), wx);
+    const __m512i hb = _mm512_maddubs_epi16(_mm512_shuffle_epi8(bot, pairs), wx);
+    const __m512i vv = _mm512_add_epi16(ht, _mm512_mulhrs_epi16(_mm512_sub_epi16(hb, ht), wy));
+    v[h] = _mm512_srli_epi16(_mm512_add_epi16(vv, round), 6);
+  }
+  // Lane k of the pack: pixels 2k, 2k + 1 (first half) and 8 + 2k, 9 + 2k (second half), 4 bytes each (R G B 0).
+  const __m512i packed = _mm512_packus_epi16(v[0], v[1]);
+  alignas(64) static const uint8_t kOrder[64] = {
+      0,  1,  2,  4,  5,  6,  16, 17, 18, 20, 21, 22, 32, 33, 34, 36, 37, 38, 48, 49, 50, 52,
+      53, 54, 8,  9,  10, 12, 13, 14, 24, 25, 26, 28, 29, 30, 40, 41, 42, 44, 45, 46, 56, 57,
+      58, 60, 61, 62, 0,  0,  0,  0,  0,  0,  0,  0,  0,  0,  0,  0,  0,  0,  0,  0};
+  Store48(_mm512_permutexvar_epi8(_mm512_load_si512(kOrder), packed), 3 * count, o);
+}
+
+// 16 grey pixels (bilinear).
+HOVS_AVX512 inline void Gray16(const uint8_t* data, ptrdiff_t stride, __m512i x, __m512i y, int count, uint8_t* o) {
+  const __m512i m63 = _mm512_set1_epi32(63), c64 = _mm512_set1_epi32(64), low16 = _mm512_set1_epi32(0xFFFF);
+  x = _mm512_add_epi32(x, _mm512_set1_epi32(kHalf));
+  y = _mm512_add_epi32(y, _mm512_set1_epi32(kHalf));
+  const __m512i fx = _mm512_and_si512(_mm512_srai_epi32(x, 10), m63);
+  const __m512i fy = _mm512_and_si512(_mm512_srai_epi32(y, 10), m63);
+  const __m512i off = _mm512_add_epi32(_mm512_mullo_epi32(_mm512_srai_epi32(y, 16), _mm512_set1_epi32(static_cast<int>(stride))),
+                                       _mm512_srai_epi32(x, 16));
+  const __m512i t = _mm512_and_si512(_mm512_i32gather_epi32(off, data, 1), low16);   // p0 p1 0 0
+  const __m512i b = _mm512_and_si512(_mm512_i32gather_epi32(off, data + stride, 1), low16);
+  const __m512i wx = _mm512_or_si512(_mm512_slli_epi32(fx, 8), _mm512_sub_epi32(c64, fx));
+  const __m512i ht = _mm512_maddubs_epi16(t, wx), hb = _mm512_maddubs_epi16(b, wx);
+  const __m512i wy = _mm512_or_si512(_mm512_slli_epi32(fy, 16), _mm512_sub_epi32(c64, fy));
+  __m512i r = _mm512_madd_epi16(_mm512_or_si512(ht, _mm512_slli_epi32(hb, 16)), wy);
+  r = _mm512_srli_epi32(_mm512_add_epi32(r, _mm512_set1_epi32(1 << 11)), 12);
+  const __m128i bytes = _mm512_cvtepi32_epi8(r);
+  if (count == 16) {
+    _mm_storeu_si128(reinterpret_cast<__m128i*>(o), bytes);
+  } else {
+    _mm_mask_storeu_epi8(o, __mmask16((1u << count) - 1), bytes);
+  }
+}
+
+// 16 pixels of an RGGB mosaic to RGB, bilinear on each colour grid as BayerGridValue (remap_kernels.cc). In
+// mosaic columns, a pixel's even-column grids (R, G2) are sampled at columns ce, ce + 2 and its odd-column grids
+// (G1, B) at co, co + 2 with co = ce - 1 or ce + 1 (the odd grids sit half a grid cell from the even ones), so
+// the four taps of a row lie in the 4 bytes from min(ce, co): one 32-bit gather per mosaic row, four rows
+// (two of the even-row grids, two of the odd-row grids). Returns false (nothing written) when a pixel's 4-byte
+// read would pass the end of its row.
+HOVS_AVX512 inline bool Bayer16(const uint8_t* data, ptrdiff_t stride, __m512i x, __m512i y, int count, uint8_t* o) {
+  const __m512i half = _mm512_set1_epi32(kHalf), m63 = _mm512_set1_epi32(63), c64 = _mm512_set1_epi32(64);
+  const __m512i one = _mm512_set1_epi32(65536), lowmask = _mm512_set1_epi32(0xFFFF), ones = _mm512_set1_epi32(1);
+  const __m512i vstride = _mm512_set1_epi32(static_cast<int>(stride));
+  const __m512i pxe = _mm512_add_epi32(_mm512_srai_epi32(x, 1), half);
+  const __m512i pxo = _mm512_add_epi32(_mm512_srai_epi32(_mm512_sub_epi32(x, one), 1), half);
+  const __m512i pye = _mm512_add_epi32(_mm512_srai_epi32(y, 1), half);
+  const __m512i pyo = _mm512_add_epi32(_mm512_srai_epi32(_mm512_sub_epi32(y, one), 1), half);
+  const __m512i ce = _mm512_slli_epi32(_mm512_srai_epi32(pxe, 16), 1);
+  const __m512i co = _mm512_add_epi32(_mm512_slli_epi32(_mm512_srai_epi32(pxo, 16), 1), ones);
+  const __mmask16 odd_first = _mm512_cmplt_epi32_mask(co, ce);
+  const __m512i start = _mm512_min_epi32(ce, co);
+  if (_mm512_cmpgt_epi32_mask(start, _mm512_set1_epi32(static_cast<int>(stride) - 4)) != 0) return false;
+  const __m512i fxe = _mm512_and_si512(_mm512_srai_epi32(pxe, 10), m63);
+  const __m512i fxo = _mm512_and_si512(_mm512_srai_epi32(pxo, 10), m63);
+  const __m512i fye = _mm512_and_si512(_mm512_srai_epi32(pye, 10), m63);
+  const __m512i fyo = _mm512_and_si512(_mm512_srai_epi32(pyo, 10), m63);
+  // The odd-row grids' first row is rowe - 1 or rowe + 1 (as for the columns).
+  const __m512i rowe = _mm512_slli_epi32(_mm512_srai_epi32(pye, 16), 1);
+  const __m512i rowo = _mm512_add_epi32(_mm512_slli_epi32(_mm512_srai_epi32(pyo, 16), 1), ones);
+  const __m512i offe = _mm512_add_epi32(_mm512_mullo_epi32(rowe, vstride), start);
+  const __m512i offo = _mm512_mask_blend_epi32(_mm512_cmplt_epi32_mask(rowo, rowe), _mm512_add_epi32(offe, vstride),
+                                               _mm512_sub_epi32(offe, vstride));
+  // Byte indices (ce, ce + 2, co, co + 2) - start inside each pixel's own dword: (1, 3, 0, 2) when co = ce - 1,
+  // (0, 2, 1, 3) when co = ce + 1; plus the dword's place in its 128-bit lane.
+  const __m512i idx = _mm512_add_epi8(
+      _mm512_mask_blend_epi32(odd_first, _mm512_set1_epi32(0x03010200), _mm512_set1_epi32(0x02000301)),
+      _mm512_broadcast_i32x4(_mm_setr_epi32(0, 0x04040404, 0x08080808, 0x0C0C0C0C)));
+  const __m512i et = _mm512_shuffle_epi8(_mm512_i32gather_epi32(offe, data, 1), idx);
+  const __m512i eb = _mm512_shuffle_epi8(_mm512_i32gather_epi32(offe, data + 2 * stride, 1), idx);
+  const __m512i ot = _mm512_shuffle_epi8(_mm512_i32gather_epi32(offo, data, 1), idx);
+  const __m512i ob = _mm512_shuffle_epi8(_mm512_i32gather_epi32(offo, data + 2 * stride, 1), idx);
+  // Horizontal weights (64 - fxe, fxe, 64 - fxo, fxo) and vertical (fy << 9 in both words).
+  const __m512i wx = _mm512_or_si512(_mm512_or_si512(_mm512_sub_epi32(c64, fxe), _mm512_slli_epi32(fxe, 8)),
+                                     _mm512_or_si512(_mm512_slli_epi32(_mm512_sub_epi32(c64, fxo), 16), _mm512_slli_epi32(fxo, 24)));
+  const __m512i wye = _mm512_or_si512(_mm512_slli_epi32(fye, 9), _mm512_slli_epi32(fye, 25));
+  const __m512i wyo = _mm512_or_si512(_mm512_slli_epi32(fyo, 9), _mm512_slli_epi32(fyo, 25));
+  const __m512i het = _mm512_maddubs_epi16(et, wx), heb = _mm512_maddubs_epi16(eb, wx);   // (R, G1)
+  const __m512i hot = _mm512_maddubs_epi16(ot, wx), hob = _mm512_maddubs_epi16(ob, wx);   // (G2, B)
+  const __m512i ve = _mm512_add_epi16(het, _mm512_mulhrs_epi16(_mm512_sub_epi16(heb, het), wye));
+  const __m512i vo = _mm512_add_epi16(hot, _mm512_mulhrs_epi16(_mm512_sub_epi16(hob, hot), wyo));
+  const __m512i R = _mm512_srli_epi32(_mm512_add_epi32(_mm512_and_si512(ve, lowmask), _mm512_set1_epi32(32)), 6);
+  const __m512i G = _mm512_srli_epi32(
+      _mm512_add_epi32(_mm512_add_epi32(_mm512_srli_epi32(ve, 16), _mm512_and_si512(vo, lowmask)), _mm512_set1_epi32(64)), 7);
+  const __m512i B = _mm512_srli_epi32(_mm512_add_epi32(_mm512_srli_epi32(vo, 16), _mm512_set1_epi32(32)), 6);
+  const __m512i rgb0 = _mm512_or_si512(_mm512_or_si512(R, _mm512_slli_epi32(G, 8)), _mm512_slli_epi32(B, 16));
+  alignas(64) static const uint8_t kDrop[64] = {
+      0,  1,  2,  4,  5,  6,  8,  9,  10, 12, 13, 14, 16, 17, 18, 20, 21, 22, 24, 25, 26, 28,
+      29, 30, 32, 33, 34, 36, 37, 38, 40, 41, 42, 44, 45, 46, 48, 49, 50, 52, 53, 54, 56, 57,
+      58, 60, 61, 62, 0,  0,  0,  0,  0,  0,  0,  0,  0,  0,  0,  0,  0,  0,  0,  0};
+  Store48(_mm512_permutexvar_epi8(_mm512_load_si512(kDrop), rgb0), 3 * count, o);
+  return true;
+}
+
+HOVS_AVX512 inline void RgbRowInline(const uint8_t* data, ptrdiff_t stride, const RowCoords& c, int i0, int n,
+                                     uint8_t* o) {
+  for (int i = 0; i < n; i += 16) {
+    const int m = n - i < 16 ? n - i : 16;
+    __m512i x, y;
+    Coords16(c, i0 + i, m, &x, &y);
+    Rgb16(data, stride, x, y, m, o + 3 * i);
+  }
+}
+
+HOVS_AVX512 inline void GrayRowInline(const uint8_t* data, ptrdiff_t stride, const RowCoords& c, int i0, int n,
+                                      uint8_t* o) {
+  for (int i = 0; i < n; i += 16) {
+    const int m = n - i < 16 ? n - i : 16;
+    __m512i x, y;
+    Coords16(c, i0 + i, m, &x, &y);
+    Gray16(data, stride, x, y, m, o + i);
+  }
+}
+
+HOVS_AVX512 inline void BayerRowInline(const uint8_t* data, ptrdiff_t stride, const RowCoords& c, int i0, int n,
+                                       uint8_t* o) {
+  for (int i = 0; i < n; i += 16) {
+    const int m = n - i < 16 ? n - i : 16;
+    __m512i x, y;
+    Coords16(c, i0 + i, m, &x, &y);
+    if (!Bayer16(data, stride, x, y, m, o + 3 * i)) BayerRgbRowScalar(data, stride, c, i0 + i, m, o + 3 * i);
+  }
+}
+
+}  // namespace
+
+HOVS_AVX512 void BilinearRgbRow(const uint8_t* src, ptrdiff_t stride, const RowCoords& c, int i0, int n, uint8_t* out) {
+  RgbRowInline(src, stride, c, i0, n, out);
+}
+HOVS_AVX512 void BilinearGrayRow(const uint8_t* src, ptrdiff_t stride, const RowCoords& c, int i0, int n, uint8_t* out) {
+  GrayRowInline(src, stride, c, i0, n, out);
+}
+HOVS_AVX512 void BayerRgbRow(const uint8_t* src, ptrdiff_t stride, const RowCoords& c, int i0, int n, uint8_t* out) {
+  BayerRowInline(src, stride, c, i0, n, out);
+}
+
+// Interp tiles: every row's polynomial, the row written straight into the view.
+HOVS_AVX512 void BilinearRgbTile(const uint8_t* src, ptrdiff_t stride, const Tile& t, int T, int nu, int nv,
+                                 uint8_t* out, ptrdiff_t ostride) {
+  RowCoords c;
+  for (int j = 0; j < nv; ++j) {
+    c.poly = InterpRowPoly(t, T, j);
+    RgbRowInline(src, stride, c, 0, nu, out + j * ostride);
+  }
+}
+HOVS_AVX512 void BilinearGrayTile(const uint8_t* src, ptrdiff_t stride, const Tile& t, int T, int nu, int nv,
+                                  uint8_t* out, ptrdiff_t ostride) {
+  RowCoords c;
+  for (int j = 0; j < nv; ++j) {
+    c.poly = InterpRowPoly(t, T, j);
+    GrayRowInline(src, stride, c, 0, nu, out + j * ostride);
+  }
+}
+HOVS_AVX512 void BayerRgbTile(const uint8_t* src, ptrdiff_t stride, const Tile& t, int T, int nu, int nv,
+                              uint8_t* out, ptrdiff_t ostride) {
+  RowCoords c;
+  for (int j = 0; j < nv; ++j) {
+    c.poly = InterpRowPoly(t, T, j);
+    BayerRowInline(src, stride, c, 0, nu, out + j * ostride);
+  }
+}
+
+}  // namespace hovs::unwrap::kernels::avx512
