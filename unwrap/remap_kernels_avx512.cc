@@ -137,31 +137,29 @@ HOVS_AVX512 inline void Gray16(const uint8_t* data, ptrdiff_t stride, __m512i x,
 // read would pass the end of its row.
 HOVS_AVX512 inline bool Bayer16(const uint8_t* data, ptrdiff_t stride, __m512i x, __m512i y, int count, uint8_t* o) {
   const __m512i half = _mm512_set1_epi32(kHalf), m63 = _mm512_set1_epi32(63), c64 = _mm512_set1_epi32(64);
-  const __m512i one = _mm512_set1_epi32(65536), lowmask = _mm512_set1_epi32(0xFFFF), ones = _mm512_set1_epi32(1);
+  const __m512i lowmask = _mm512_set1_epi32(0xFFFF), ones = _mm512_set1_epi32(1);
   const __m512i vstride = _mm512_set1_epi32(static_cast<int>(stride));
+  // Grid positions (16.16, as BayerGridValue): the odd-column grids' is pxe - 1/2 grid cell, exactly (x is
+  // shifted before the halving by an even amount), so their fraction is fxe - 32 (mod 64) and their first tap
+  // co is ce - 1 when pxe's fraction is below 1/2, ce + 1 otherwise: the four taps start at (pxe >> 15) - 1.
+  // Rows alike.
   const __m512i pxe = _mm512_add_epi32(_mm512_srai_epi32(x, 1), half);
-  const __m512i pxo = _mm512_add_epi32(_mm512_srai_epi32(_mm512_sub_epi32(x, one), 1), half);
   const __m512i pye = _mm512_add_epi32(_mm512_srai_epi32(y, 1), half);
-  const __m512i pyo = _mm512_add_epi32(_mm512_srai_epi32(_mm512_sub_epi32(y, one), 1), half);
-  const __m512i ce = _mm512_slli_epi32(_mm512_srai_epi32(pxe, 16), 1);
-  const __m512i co = _mm512_add_epi32(_mm512_slli_epi32(_mm512_srai_epi32(pxo, 16), 1), ones);
-  const __mmask16 odd_first = _mm512_cmplt_epi32_mask(co, ce);
-  const __m512i start = _mm512_min_epi32(ce, co);
+  const __m512i start = _mm512_sub_epi32(_mm512_srai_epi32(pxe, 15), ones);
   if (_mm512_cmpgt_epi32_mask(start, _mm512_set1_epi32(static_cast<int>(stride) - 4)) != 0) return false;
+  const __m512i c32 = _mm512_set1_epi32(32), bit15 = _mm512_set1_epi32(0x8000);
   const __m512i fxe = _mm512_and_si512(_mm512_srai_epi32(pxe, 10), m63);
-  const __m512i fxo = _mm512_and_si512(_mm512_srai_epi32(pxo, 10), m63);
+  const __m512i fxo = _mm512_and_si512(_mm512_sub_epi32(fxe, c32), m63);
   const __m512i fye = _mm512_and_si512(_mm512_srai_epi32(pye, 10), m63);
-  const __m512i fyo = _mm512_and_si512(_mm512_srai_epi32(pyo, 10), m63);
-  // The odd-row grids' first row is rowe - 1 or rowe + 1 (as for the columns).
+  const __m512i fyo = _mm512_and_si512(_mm512_sub_epi32(fye, c32), m63);
   const __m512i rowe = _mm512_slli_epi32(_mm512_srai_epi32(pye, 16), 1);
-  const __m512i rowo = _mm512_add_epi32(_mm512_slli_epi32(_mm512_srai_epi32(pyo, 16), 1), ones);
   const __m512i offe = _mm512_add_epi32(_mm512_mullo_epi32(rowe, vstride), start);
-  const __m512i offo = _mm512_mask_blend_epi32(_mm512_cmplt_epi32_mask(rowo, rowe), _mm512_add_epi32(offe, vstride),
-                                               _mm512_sub_epi32(offe, vstride));
+  const __m512i offo = _mm512_mask_blend_epi32(_mm512_test_epi32_mask(pye, bit15), _mm512_sub_epi32(offe, vstride),
+                                               _mm512_add_epi32(offe, vstride));
   // Byte indices (ce, ce + 2, co, co + 2) - start inside each pixel's own dword: (1, 3, 0, 2) when co = ce - 1,
   // (0, 2, 1, 3) when co = ce + 1; plus the dword's place in its 128-bit lane.
   const __m512i idx = _mm512_add_epi8(
-      _mm512_mask_blend_epi32(odd_first, _mm512_set1_epi32(0x03010200), _mm512_set1_epi32(0x02000301)),
+      _mm512_mask_blend_epi32(_mm512_test_epi32_mask(pxe, bit15), _mm512_set1_epi32(0x02000301), _mm512_set1_epi32(0x03010200)),
       _mm512_broadcast_i32x4(_mm_setr_epi32(0, 0x04040404, 0x08080808, 0x0C0C0C0C)));
   const __m512i et = _mm512_shuffle_epi8(_mm512_i32gather_epi32(offe, data, 1), idx);
   const __m512i eb = _mm512_shuffle_epi8(_mm512_i32gather_epi32(offe, data + 2 * stride, 1), idx);
