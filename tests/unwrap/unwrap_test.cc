@@ -327,6 +327,51 @@ TEST(Remap, BayerInputGivesTheRgbResultOnSmoothContent) {
   EXPECT_LE(worst, 4);
 }
 
+TEST(Remap, EveryInstructionSetGivesTheSameViews) {
+  // Whole remaps (interp, dense and empty tiles, partial tiles at the views' edges, the per-thread bands and
+  // their streamed copy): one perspective view and a small panorama that includes the rim and the camera's own
+  // reflection, RGB, grey and Bayer input, with the kernels limited to each instruction set the CPU runs.
+  const auto rig = Rig();
+  Layout layout = PresetLayout("article");
+  layout.views.resize(1);
+  layout.views[0].width = 333, layout.views[0].height = 211;
+  ViewSpec pano;
+  pano.name = "pano";
+  pano.type = ViewProjection::kCylindrical;
+  pano.width = 517, pano.height = 150;
+  pano.elevation_min_deg = -89, pano.elevation_max_deg = 10;
+  layout.views.push_back(pano);
+  const RemapTable t = BuildRemapTable(AnyModel::Exact(rig), layout, {});
+  int dense = 0, empty = 0;
+  for (const auto& v : t.views) dense += v.dense_tiles, empty += v.empty_tiles;
+  ASSERT_GT(dense, 0);
+  ASSERT_GT(empty, 0);
+  const int W = 2750, H = 2200;
+  std::mt19937 rng(3);
+  std::vector<uint8_t> rgb(size_t(W) * H * 3), grey(size_t(W) * H);
+  for (auto& v : rgb) v = uint8_t(rng());
+  for (auto& v : grey) v = uint8_t(rng());
+  const std::vector<std::pair<ImageView, const char*>> inputs = {
+      {{rgb.data(), W, H, size_t(W) * 3, PixelFormat::kRgb8}, "rgb"},
+      {{grey.data(), W, H, size_t(W), PixelFormat::kGray8}, "grey"},
+      {{grey.data(), W, H, size_t(W), PixelFormat::kBayerRggb8}, "bayer"}};
+  Remapper remapper(t);
+  for (const auto& [input, name] : inputs) {
+    kernels::LimitIsa(kernels::Isa::kScalar);
+    std::vector<Image8> want;
+    remapper.Run(input, Interpolation::kBilinear, &want);
+    for (int i = 1; i <= static_cast<int>(kernels::DetectedIsa()); ++i) {
+      kernels::LimitIsa(static_cast<kernels::Isa>(i));
+      std::vector<Image8> got;
+      remapper.Run(input, Interpolation::kBilinear, &got);
+      ASSERT_EQ(got.size(), want.size());
+      for (size_t v = 0; v < got.size(); ++v)
+        EXPECT_TRUE(got[v].data == want[v].data) << name << ", view " << v << ", " << kernels::ToString(kernels::ActiveIsa());
+    }
+  }
+  kernels::LimitIsa(kernels::Isa::kAvx512);
+}
+
 TEST(Remap, InterpolationsAgreeOnSmoothContentAndNearestIsExactOnIntegers) {
   const auto rig = Rig();
   Layout layout;
