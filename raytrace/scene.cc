@@ -86,16 +86,19 @@ namespace {
 
 using UG = RayScene::UserGeometry;
 
-// Embree masks: for units 0..14, unit u's mirror has bit 1 + 2u and its lens face bit 2 + 2u; every other
-// geometry has bit 0. A ray leaving unit u's mirror clears the mirror's bit; a ray leaving unit u's camera
-// straight (it missed the mirror within the rim, so it cannot meet it, and it starts on the lens face) clears
-// both. Embree then does not even call those callbacks. Units from 15 on share bit 0 (LaneRay's id test stays).
-unsigned MirrorMaskBit(int unit) { return unit >= 0 && unit < 15 ? 1u << (1 + 2 * unit) : 1u; }
-unsigned LensMaskBit(int unit) { return unit >= 0 && unit < 15 ? 1u << (2 + 2 * unit) : 1u; }
+// Embree masks: for units 0..9, unit u's mirror has bit 1 + 3u, its lens face bit 2 + 3u and its mount ring bit
+// 3 + 3u; every other geometry (and those of units from 10 on) has bit 0. A ray leaving unit u's mirror clears
+// the mirror's bit; a ray leaving unit u's camera straight (it missed the mirror within the rim, so it cannot
+// meet it, and it starts on the lens face) clears both. Embree then does not even call those callbacks. Units
+// from 10 on share bit 0 (LaneRay's id test stays).
+constexpr int kMaskUnits = 10;
+unsigned MirrorMaskBit(int unit) { return unit >= 0 && unit < kMaskUnits ? 1u << (1 + 3 * unit) : 1u; }
+unsigned LensMaskBit(int unit) { return unit >= 0 && unit < kMaskUnits ? 1u << (2 + 3 * unit) : 1u; }
+unsigned MountMaskBit(int unit) { return unit >= 0 && unit < kMaskUnits ? 1u << (3 + 3 * unit) : 1u; }
 unsigned RayMask(int from_mirror, int from_camera = -1) {
   unsigned m = 0xFFFFFFFFu;
-  if (from_mirror >= 0 && from_mirror < 15) m &= ~MirrorMaskBit(from_mirror);
-  if (from_camera >= 0 && from_camera < 15) m &= ~(MirrorMaskBit(from_camera) | LensMaskBit(from_camera));
+  if (from_mirror >= 0 && from_mirror < kMaskUnits) m &= ~MirrorMaskBit(from_mirror);
+  if (from_camera >= 0 && from_camera < kMaskUnits) m &= ~(MirrorMaskBit(from_camera) | LensMaskBit(from_camera));
   return m;
 }
 
@@ -246,12 +249,18 @@ RayScene::RayScene(SceneDescription description) : desc_(std::move(description))
     rtcSetGeometryIntersectFunction(g, UserIntersect);
     rtcSetGeometryOccludedFunction(g, UserOccluded);
     const bool lens_face = ug->kind == UserGeometry::Kind::kAnnulus && ug->object_id == kCameraBodyId;
+    const bool mount = ug->kind == UserGeometry::Kind::kAnnulus && ug->object_id == kMountId;
     rtcSetGeometryMask(g, ug->kind == UserGeometry::Kind::kMirror ? MirrorMaskBit(ug->unit)
                           : lens_face                             ? LensMaskBit(ug->unit)
+                          : mount                                 ? MountMaskBit(ug->unit)
                                                                   : 1u);
     rtcCommitGeometry(g);
     const unsigned id = rtcAttachGeometry(scene_, g);
     rtcReleaseGeometry(g);
+    if (mount && ug->unit >= 0 && ug->unit < kMaskUnits) {
+      if (own_mount_.size() <= static_cast<size_t>(ug->unit)) own_mount_.resize(ug->unit + 1);
+      own_mount_[ug->unit] = {ug.get(), id};
+    }
     if (geom_to_user_.size() <= id) geom_to_user_.resize(id + 1, -1);
     geom_to_user_[id] = static_cast<int>(user_.size());
     user_.push_back(std::move(ug));
@@ -399,9 +408,15 @@ void RayScene::Trace16(int count, const Vec3d* o, const Vec3d* d, const double* 
 namespace {
 
 // Batch rays [i0, i0 + W) (fewer at the end) as one Embree packet of width W (RTCRayHit8 or RTCRayHit16).
+//
+// A unit's straight camera rays (they missed its mirror within the rim: 40 % of a frame's samples, the image
+// past the rim) end on its mount ring unless something lies in between. They meet the ring here analytically,
+// in double as the ring's callback would (the double ray, so exactly where the mirror test in double left
+// off), and go to Embree only up to that distance with the ring masked off: anything nearer still wins, and
+// the ring's callback is not called for them.
 template <int W, class RayHitW, class IntersectW>
-void IntersectBatchPacket(RTCScene scene, const RayBatch& b, int i0, unsigned* geom_ids, unsigned* prim_ids,
-                          IntersectW intersect) {
+void IntersectBatchPacket(RTCScene scene, const RayBatch& b, int i0, const std::vector<RayScene::OwnMount>& mounts,
+                          unsigned* geom_ids, unsigned* prim_ids, IntersectW intersect) {
   alignas(64) RayHitW rh;
   alignas(64) int valid[W];
   const int count = std::min(W, b.n - i0);
@@ -417,24 +432,41 @@ void IntersectBatchPacket(RTCScene scene, const RayBatch& b, int i0, unsigned* g
   };
   fill(rh.ray.org_x, b.ox), fill(rh.ray.org_y, b.oy), fill(rh.ray.org_z, b.oz);
   fill(rh.ray.dir_x, b.dx), fill(rh.ray.dir_y, b.dy), fill(rh.ray.dir_z, b.dz);
+  int mount_unit[W];
   for (int i = 0; i < W; ++i) {
     valid[i] = i < count && b.valid[k[i]] ? -1 : 0;
     SetLane(&rh, i, b.tnear[k[i]], b.from_mirror[k[i]], b.from_camera[k[i]]);
+    mount_unit[i] = -1;
+    const int u = b.from_camera[k[i]];
+    if (!valid[i] || u < 0 || static_cast<size_t>(u) >= mounts.size() || !mounts[u].geometry) continue;
+    const int j = k[i];
+    double t = 0;
+    if (!mounts[u].geometry->Intersect(Vec3d(b.ox[j], b.oy[j], b.oz[j]), Vec3d(b.dx[j], b.dy[j], b.dz[j]), b.tnear[j],
+                                       HUGE_VAL, &t, nullptr))
+      continue;
+    rh.ray.tfar[i] = static_cast<float>(t);
+    rh.ray.mask[i] &= ~MountMaskBit(u);
+    mount_unit[i] = u;
   }
   TracePacket(scene, valid, &rh, intersect);
-  for (int i = 0; i < count; ++i) geom_ids[i] = rh.hit.geomID[i], prim_ids[i] = rh.hit.primID[i];
+  for (int i = 0; i < count; ++i) {
+    geom_ids[i] = rh.hit.geomID[i], prim_ids[i] = rh.hit.primID[i];
+    if (mount_unit[i] >= 0 && geom_ids[i] == RTC_INVALID_GEOMETRY_ID)
+      geom_ids[i] = mounts[mount_unit[i]].geom_id, prim_ids[i] = 0;
+  }
 }
 
 }  // namespace
 
 void RayScene::IntersectBatch16(const RayBatch& b, int i0, unsigned* geom_ids, unsigned* prim_ids) const {
   if (native16_) {
-    IntersectBatchPacket<16, RTCRayHit16>(scene_, b, i0, geom_ids, prim_ids, rtcIntersect16);
+    IntersectBatchPacket<16, RTCRayHit16>(scene_, b, i0, own_mount_, geom_ids, prim_ids, rtcIntersect16);
     return;
   }
   // Without native 16-wide packets (no AVX-512) Embree emulates rtcIntersect16; two rtcIntersect8 are faster.
-  IntersectBatchPacket<8, RTCRayHit8>(scene_, b, i0, geom_ids, prim_ids, rtcIntersect8);
-  if (b.n - i0 > 8) IntersectBatchPacket<8, RTCRayHit8>(scene_, b, i0 + 8, geom_ids + 8, prim_ids + 8, rtcIntersect8);
+  IntersectBatchPacket<8, RTCRayHit8>(scene_, b, i0, own_mount_, geom_ids, prim_ids, rtcIntersect8);
+  if (b.n - i0 > 8)
+    IntersectBatchPacket<8, RTCRayHit8>(scene_, b, i0 + 8, own_mount_, geom_ids + 8, prim_ids + 8, rtcIntersect8);
 }
 
 void RayScene::Colours(const RayBatch& b, float* rgb) const {

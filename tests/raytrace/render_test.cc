@@ -375,6 +375,42 @@ TEST(Render, PastTheRimTheCameraSeesTheMountNotItsOwnLens) {
   }
 }
 
+TEST(Render, SomethingBetweenTheCameraAndItsMountIsSeenInFrontOfIt) {
+  // A camera ray past the rim meets the mount ring analytically and goes to Embree only up to the ring: a plate
+  // placed on that ray, 2 cm in front of the camera, must still be seen (and the ring elsewhere), on both ray
+  // paths (batched pinhole and per-sample thin lens).
+  SceneConfig cfg = BoardScene(false);
+  auto& unit_cfg = cfg.description.units[0];
+  unit_cfg.rig.camera = PinholeCamera<double>::FromPhysical(0.016, 4.54e-6 * 25, 110, 88);
+  const Rigid3d world_from_cam = unit_cfg.world_from_mirror * unit_cfg.rig.cam_from_mirror.Inverse();
+  Vec3d bearing;
+  ASSERT_TRUE(unit_cfg.rig.camera.CamFromImg(Vec2d(0, 0), &bearing));
+  const Vec3d dir = world_from_cam.Rotate(bearing);
+  raytrace::Rect plate;
+  plate.object_id = 77;
+  plate.world_from_rect = Rigid3d(Eigen::Quaterniond::FromTwoVectors(Vec3d::UnitZ(), -dir), world_from_cam * (0.02 * dir));
+  plate.width = plate.height = 0.004;
+  plate.front.kind = raytrace::Texture::Kind::kSolid;
+  plate.front.colour_a = {0.9f, 0.1f, 0.3f};
+  plate.double_sided = true;
+  cfg.description.rects.push_back(plate);
+  const RayScene scene(cfg.description);
+  const auto& unit = scene.description().units[0];
+  for (const double lens : {0.0, 1e-4}) {
+    raytrace::RenderOptions ro;
+    ro.samples = 4;
+    ro.lens_radius = lens;
+    const raytrace::Frame f = raytrace::Render(scene, raytrace::ViewCamera::Unit(0), ro);
+    const size_t corner = 0, far_corner = static_cast<size_t>(87) * f.width + 109;
+    for (int c = 0; c < 3; ++c) {
+      EXPECT_NEAR(f.rgb[3 * corner + c], plate.front.colour_a[c], 1e-6) << "lens " << lens;
+      EXPECT_FLOAT_EQ(f.rgb[3 * far_corner + c], unit.mount_colour[c]) << "lens " << lens;
+    }
+    EXPECT_EQ(f.truth.data[corner * raytrace::GroundTruth::kChannels + 7], 77.0f);
+    EXPECT_EQ(f.truth.data[far_corner * raytrace::GroundTruth::kChannels + 7], raytrace::kMountId);
+  }
+}
+
 TEST(Texture, BatchNoiseIsTheScalarNoiseToTheBit) {
   // The vectorised noise (EvalBatch) and Eval at the same points: identical. The noise spans its colour range,
   // is continuous (a 0.1 mm step changes it little) and stays defined far away (coordinates clamp).
