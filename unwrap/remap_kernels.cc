@@ -329,8 +329,7 @@ namespace {
 
 using RowKernel = void (*)(const uint8_t*, ptrdiff_t, const RowCoords&, int, int, uint8_t*);
 
-// The scalar and AVX2 tile path: row by row through a small local buffer, then copied out (measured with the
-// AVX2 kernels: about 8 % faster than writing each pixel into the view directly).
+// The scalar tile path: row by row through a small local buffer, then copied out.
 void TileByRows(RowKernel row, int bytes_per_pixel, const uint8_t* src, ptrdiff_t stride, const Tile& t, int T,
                 int nu, int nv, uint8_t* out, ptrdiff_t ostride) {
   alignas(64) uint8_t local[64 * 3 + 32];
@@ -344,20 +343,46 @@ void TileByRows(RowKernel row, int bytes_per_pixel, const uint8_t* src, ptrdiff_
 
 }  // namespace
 
+// The AVX2 tile functions: every row's polynomial, the row kernel inlined, rows written straight into out.
+#define HOVS_AVX2_TILE(Name, RowBody)                                                                    \
+  __attribute__((target("avx2"), flatten)) void Name(const uint8_t* src, ptrdiff_t stride, const Tile& t, \
+                                                     int T, int nu, int nv, uint8_t* out, ptrdiff_t ostride) { \
+    RowCoords c;                                                                                          \
+    for (int j = 0; j < nv; ++j) {                                                                        \
+      c.poly = InterpRowPoly(t, T, j);                                                                    \
+      RowBody(src, stride, c, 0, nu, out + j * ostride);                                                  \
+    }                                                                                                     \
+  }
+namespace {
+HOVS_AVX2_TILE(BilinearRgbTileAvx2, BilinearRgbRowAvx2)
+HOVS_AVX2_TILE(BilinearGrayTileAvx2, BilinearGrayRowAvx2)
+HOVS_AVX2_TILE(BayerRgbTileAvx2, BayerRgbRowAvx2)
+}  // namespace
+#undef HOVS_AVX2_TILE
+
 void BilinearRgbTile(const uint8_t* src, ptrdiff_t stride, const Tile& t, int T, int nu, int nv, uint8_t* out,
                      ptrdiff_t ostride) {
-  if (ActiveIsa() == Isa::kAvx512) return avx512::BilinearRgbTile(src, stride, t, T, nu, nv, out, ostride);
-  TileByRows(BilinearRgbRow, 3, src, stride, t, T, nu, nv, out, ostride);
+  switch (ActiveIsa()) {
+    case Isa::kAvx512: return avx512::BilinearRgbTile(src, stride, t, T, nu, nv, out, ostride);
+    case Isa::kAvx2: return BilinearRgbTileAvx2(src, stride, t, T, nu, nv, out, ostride);
+    default: return TileByRows(BilinearRgbRowScalar, 3, src, stride, t, T, nu, nv, out, ostride);
+  }
 }
 void BilinearGrayTile(const uint8_t* src, ptrdiff_t stride, const Tile& t, int T, int nu, int nv, uint8_t* out,
                       ptrdiff_t ostride) {
-  if (ActiveIsa() == Isa::kAvx512) return avx512::BilinearGrayTile(src, stride, t, T, nu, nv, out, ostride);
-  TileByRows(BilinearGrayRow, 1, src, stride, t, T, nu, nv, out, ostride);
+  switch (ActiveIsa()) {
+    case Isa::kAvx512: return avx512::BilinearGrayTile(src, stride, t, T, nu, nv, out, ostride);
+    case Isa::kAvx2: return BilinearGrayTileAvx2(src, stride, t, T, nu, nv, out, ostride);
+    default: return TileByRows(BilinearGrayRowScalar, 1, src, stride, t, T, nu, nv, out, ostride);
+  }
 }
 void BayerRgbTile(const uint8_t* src, ptrdiff_t stride, const Tile& t, int T, int nu, int nv, uint8_t* out,
                   ptrdiff_t ostride) {
-  if (ActiveIsa() == Isa::kAvx512) return avx512::BayerRgbTile(src, stride, t, T, nu, nv, out, ostride);
-  TileByRows(BayerRgbRow, 3, src, stride, t, T, nu, nv, out, ostride);
+  switch (ActiveIsa()) {
+    case Isa::kAvx512: return avx512::BayerRgbTile(src, stride, t, T, nu, nv, out, ostride);
+    case Isa::kAvx2: return BayerRgbTileAvx2(src, stride, t, T, nu, nv, out, ostride);
+    default: return TileByRows(BayerRgbRowScalar, 3, src, stride, t, T, nu, nv, out, ostride);
+  }
 }
 
 }  // namespace hovs::unwrap::kernels
