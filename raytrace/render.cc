@@ -57,6 +57,22 @@ struct RayRequest {
   Vec3d mirror_point = Vec3d::Zero();  // mirror frame
 };
 
+// Where the camera rays (from c along v, mirror frame) that missed the mirror (via[i] = 0) meet the mount ring:
+// the annulus r0 <= r <= r1 in the plane z = zr. t[i]: the distance along v, 0 where they miss the ring, -1 for
+// rays on the mirror.
+HOVS_VECTOR_CLONES
+void MountRingHits(int n, double zr, double r0, double r1, double cx, double cy, double cz,
+                   const double* __restrict vx, const double* __restrict vy, const double* __restrict vz,
+                   const double* __restrict via, double* __restrict t_out) {
+  const double r02 = r0 * r0, r12 = r1 * r1, dz = zr - cz;
+  for (int i = 0; i < n; ++i) {
+    const double w = vz[i] != 0 ? vz[i] : 1.0;
+    const double t = dz / w, px = cx + t * vx[i], py = cy + t * vy[i], r2 = px * px + py * py;
+    const bool ring = vz[i] != 0 && t > 1e-5 && r2 >= r02 && r2 <= r12;
+    t_out[i] = via[i] != 0 ? -1.0 : ring ? t : 0.0;
+  }
+}
+
 // The world rays of a batch. Where via[i] = 1: from mirror point M along the reflected direction d (both in the
 // mirror frame; d given in dx, dy, dz and replaced), mapped by world_from_mirror (column-major Rm, tm).
 // Elsewhere: straight from the camera centre c along Rc (x, y, 1), normalised (Rc: world_from_cam, column-major).
@@ -144,9 +160,26 @@ class RayMaker {
         vy[i] = R(1, 0) * mx[i] + R(1, 1) * my[i] + R(1, 2);
         vz[i] = R(2, 0) * mx[i] + R(2, 1) * my[i] + R(2, 2);
       }
+      // (GCC 12 reports the arrays as maybe uninitialised when n could be 0; both callees read only [0, n).)
+#pragma GCC diagnostic push
+#pragma GCC diagnostic ignored "-Wmaybe-uninitialized"
       reflector_->ReflectBatch(t_mirror_from_cam_, n, vx, vy, vz, Mx, My, Mz, b->dx, b->dy, b->dz, on_mirror);
+#pragma GCC diagnostic pop
+      // Camera rays past the rim: where they meet the unit's mount ring, in the mirror frame where the rim test
+      // was made (the world direction is the same vector rotated, so t is the same). RayScene traces them only
+      // up to it.
+      double on[RayBatch::kMax];
+      for (int i = 0; i < n; ++i) on[i] = on_mirror[i];
+      if (unit_->mount_outer_radius > 0) {
+        MountRingHits(n, unit_->rig.mirror.RimZ(), unit_->rig.mirror.RimRadius(), unit_->mount_outer_radius,
+                      t_mirror_from_cam_.x(), t_mirror_from_cam_.y(), t_mirror_from_cam_.z(), vx, vy, vz, on,
+                      b->mount_t);
+      } else {
+        std::fill(b->mount_t, b->mount_t + n, -1.0);
+      }
     } else {
       std::fill(on_mirror, on_mirror + n, 0);
+      std::fill(b->mount_t, b->mount_t + n, -1.0);
     }
     double via[RayBatch::kMax];
     for (int i = 0; i < n; ++i) {
@@ -166,6 +199,7 @@ class RayMaker {
     b->tnear[i] = static_cast<float>(r.tnear);
     b->from_mirror[i] = r.from_mirror;
     b->from_camera[i] = -1;
+    b->mount_t[i] = -1;
   }
 
   // The ray of image point uv. lens: a point on the unit disc (thin lens), tau: time in the exposure.

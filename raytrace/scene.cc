@@ -410,10 +410,10 @@ namespace {
 // Batch rays [i0, i0 + W) (fewer at the end) as one Embree packet of width W (RTCRayHit8 or RTCRayHit16).
 //
 // A unit's straight camera rays (they missed its mirror within the rim: 40 % of a frame's samples, the image
-// past the rim) end on its mount ring unless something lies in between. They meet the ring here analytically,
-// in double as the ring's callback would (the double ray, so exactly where the mirror test in double left
-// off), and go to Embree only up to that distance with the ring masked off: anything nearer still wins, and
-// the ring's callback is not called for them.
+// past the rim) end on its mount ring unless something lies in between. They meet the ring analytically, in
+// double (RayBatch::mount_t, from the renderer's ray set-up in the mirror frame where the rim test was made, or
+// here with the ring's own test), and go to Embree only up to that distance with the ring masked off: anything
+// nearer still wins, and the ring's callback is not called for them.
 template <int W, class RayHitW, class IntersectW>
 void IntersectBatchPacket(RTCScene scene, const RayBatch& b, int i0, const std::vector<RayScene::OwnMount>& mounts,
                           unsigned* geom_ids, unsigned* prim_ids, IntersectW intersect) {
@@ -440,10 +440,11 @@ void IntersectBatchPacket(RTCScene scene, const RayBatch& b, int i0, const std::
     const int u = b.from_camera[k[i]];
     if (!valid[i] || u < 0 || static_cast<size_t>(u) >= mounts.size() || !mounts[u].geometry) continue;
     const int j = k[i];
-    double t = 0;
-    if (!mounts[u].geometry->Intersect(Vec3d(b.ox[j], b.oy[j], b.oz[j]), Vec3d(b.dx[j], b.dy[j], b.dz[j]), b.tnear[j],
-                                       HUGE_VAL, &t, nullptr))
+    double t = b.mount_t[j];
+    if (t < 0 && !mounts[u].geometry->Intersect(Vec3d(b.ox[j], b.oy[j], b.oz[j]), Vec3d(b.dx[j], b.dy[j], b.dz[j]),
+                                                b.tnear[j], HUGE_VAL, &t, nullptr))
       continue;
+    if (t <= 0) continue;
     rh.ray.tfar[i] = static_cast<float>(t);
     rh.ray.mask[i] &= ~MountMaskBit(u);
     mount_unit[i] = u;

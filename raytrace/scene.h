@@ -93,6 +93,9 @@ struct RayBatch {
   alignas(64) float tnear[kMax];
   alignas(64) int from_mirror[kMax];                // the unit whose mirror the ray leaves, -1: none
   alignas(64) int from_camera[kMax];                // the unit whose camera it leaves past the mirror, -1: none
+  // For rays with from_camera >= 0: where the ray meets that unit's mount ring (t along d), 0 if it does not,
+  // < 0 if not computed (RayScene then computes it).
+  alignas(64) double mount_t[kMax];
   alignas(64) unsigned char valid[kMax];            // 0: no ray (outside the camera's domain): black, no hit
 };
 

@@ -457,7 +457,7 @@ TEST(Render, BatchColoursAgreeWithTheScalarTrace) {
       const Vec3d o = unit.world_from_mirror * M, dw = unit.world_from_mirror.Rotate(d);
       const int i = b.n++;
       b.ox[i] = o.x(), b.oy[i] = o.y(), b.oz[i] = o.z(), b.dx[i] = dw.x(), b.dy[i] = dw.y(), b.dz[i] = dw.z();
-      b.tnear[i] = 1e-5f, b.from_mirror[i] = 0, b.from_camera[i] = -1, b.valid[i] = 1;
+      b.tnear[i] = 1e-5f, b.from_mirror[i] = 0, b.from_camera[i] = -1, b.mount_t[i] = -1, b.valid[i] = 1;
     }
     if (b.n == 0) continue;
     scene.Colours(b, rgb.data());
