@@ -96,10 +96,11 @@ unsigned MirrorMaskBit(int unit) { return unit >= 0 && unit < kMaskUnits ? 1u <<
 unsigned LensMaskBit(int unit) { return unit >= 0 && unit < kMaskUnits ? 1u << (2 + 3 * unit) : 1u; }
 unsigned MountMaskBit(int unit) { return unit >= 0 && unit < kMaskUnits ? 1u << (3 + 3 * unit) : 1u; }
 unsigned RayMask(int from_mirror, int from_camera = -1) {
-  unsigned m = 0xFFFFFFFFu;
-  if (from_mirror >= 0 && from_mirror < kMaskUnits) m &= ~MirrorMaskBit(from_mirror);
-  if (from_camera >= 0 && from_camera < kMaskUnits) m &= ~(MirrorMaskBit(from_camera) | LensMaskBit(from_camera));
-  return m;
+  // Selects, not branches (this runs for every ray).
+  const unsigned fm = static_cast<unsigned>(from_mirror), fc = static_cast<unsigned>(from_camera);
+  const unsigned clear_m = fm < kMaskUnits ? 1u << (1 + 3 * fm) : 0u;
+  const unsigned clear_c = fc < kMaskUnits ? 3u << (1 + 3 * fc) : 0u;   // the mirror's and the lens face's bits
+  return ~(clear_m | clear_c);
 }
 
 void UserBounds(const RTCBoundsFunctionArguments* args) {
@@ -432,10 +433,21 @@ void IntersectBatchPacket(RTCScene scene, const RayBatch& b, int i0, const std::
   };
   fill(rh.ray.org_x, b.ox), fill(rh.ray.org_y, b.oy), fill(rh.ray.org_z, b.oz);
   fill(rh.ray.dir_x, b.dx), fill(rh.ray.dir_y, b.dy), fill(rh.ray.dir_z, b.dz);
+  // The other fields lane by lane in simple loops (as SetLane, without its branches).
+  for (int i = 0; i < W; ++i) valid[i] = i < count && b.valid[k[i]] ? -1 : 0;
+  for (int i = 0; i < W; ++i) {
+    rh.ray.tnear[i] = b.tnear[k[i]];
+    rh.ray.tfar[i] = std::numeric_limits<float>::infinity();
+    rh.ray.flags[i] = 0, rh.ray.time[i] = 0;
+    rh.hit.geomID[i] = RTC_INVALID_GEOMETRY_ID, rh.hit.instID[0][i] = RTC_INVALID_GEOMETRY_ID;
+  }
+  for (int i = 0; i < W; ++i) {
+    const int fm = b.from_mirror[k[i]], fc = b.from_camera[k[i]];
+    rh.ray.mask[i] = RayMask(fm, fc);
+    rh.ray.id[i] = static_cast<unsigned>(std::max(fm, -1) + 1);
+  }
   int mount_unit[W];
   for (int i = 0; i < W; ++i) {
-    valid[i] = i < count && b.valid[k[i]] ? -1 : 0;
-    SetLane(&rh, i, b.tnear[k[i]], b.from_mirror[k[i]], b.from_camera[k[i]]);
     mount_unit[i] = -1;
     const int u = b.from_camera[k[i]];
     if (!valid[i] || u < 0 || static_cast<size_t>(u) >= mounts.size() || !mounts[u].geometry) continue;
