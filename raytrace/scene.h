@@ -132,6 +132,11 @@ class RayScene {
                       const int* from_mirror = nullptr) const;
 
   struct UserGeometry;  // mirror, annulus (mount, lens face): analytic shapes, defined in scene.cc
+  // A unit's mount ring, met analytically by that unit's straight camera rays (IntersectBatch16).
+  struct OwnMount {
+    const UserGeometry* geometry = nullptr;
+    unsigned geom_id = 0;
+  };
 
  private:
   void Shade(const Vec3d& o, const Vec3d& d, unsigned geom_id, unsigned prim_id, Hit* hit, bool colour) const;
@@ -152,14 +157,6 @@ class RayScene {
   bool native16_ = false;  // the device traces 16-wide packets natively (AVX-512)
   std::vector<std::unique_ptr<UserGeometry>> user_;  // index = user geometry slot
   std::vector<int> geom_to_user_;                    // geomID -> slot in user_, or -1
- public:
-  // A unit's mount ring, met analytically by that unit's straight camera rays (IntersectBatch16).
-  struct OwnMount {
-    const UserGeometry* geometry = nullptr;
-    unsigned geom_id = 0;
-  };
-
- private:
   std::vector<OwnMount> own_mount_;  // by unit, for the units with their own Embree mask bits
 };
 

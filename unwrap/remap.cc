@@ -167,8 +167,9 @@ void WalkTile(const ViewTable& vt, const Tile& t, int T, int nu, int nv, uint8_t
   }
 }
 
-// Asks the caches for the source region an interp tile will sample (the bounding box of its nodes).
+// How many tiles ahead of the one being remapped the source is prefetched.
 constexpr int kPrefetchTiles = 2;
+
 // The image a tile samples: the frame, or the pyramid level the tile asks for (grey or RGB).
 ImageView TileSource(const ImageView& src, const std::vector<Image8>& pyramid, const Tile& t) {
   if (t.level == 0) return src;
@@ -176,6 +177,7 @@ ImageView TileSource(const ImageView& src, const std::vector<Image8>& pyramid, c
   return lv.View(lv.channels == 1 ? PixelFormat::kGray8 : PixelFormat::kRgb8);
 }
 
+// Asks the caches for the source region an interp tile will sample (the bounding box of its nodes).
 void PrefetchTile(const ImageView& src, const std::vector<Image8>& pyramid, const Tile& t) {
   if (t.kind != TileKind::kInterp || !t.inside) return;
   const ImageView im = TileSource(src, pyramid, t);
