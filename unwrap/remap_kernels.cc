@@ -343,22 +343,12 @@ void TileByRows(RowKernel row, int bytes_per_pixel, const uint8_t* src, ptrdiff_
 
 }  // namespace
 
-// The AVX2 tile functions: every row's polynomial, the row kernel inlined, rows written straight into out.
-#define HOVS_AVX2_TILE(Name, RowBody)                                                                    \
-  __attribute__((target("avx2"), flatten)) void Name(const uint8_t* src, ptrdiff_t stride, const Tile& t, \
-                                                     int T, int nu, int nv, uint8_t* out, ptrdiff_t ostride) { \
-    RowCoords c;                                                                                          \
-    for (int j = 0; j < nv; ++j) {                                                                        \
-      c.poly = InterpRowPoly(t, T, j);                                                                    \
-      RowBody(src, stride, c, 0, nu, out + j * ostride);                                                  \
-    }                                                                                                     \
-  }
+// The AVX2 tile functions (flatten: the row kernel inlined).
 namespace {
-HOVS_AVX2_TILE(BilinearRgbTileAvx2, BilinearRgbRowAvx2)
-HOVS_AVX2_TILE(BilinearGrayTileAvx2, BilinearGrayRowAvx2)
-HOVS_AVX2_TILE(BayerRgbTileAvx2, BayerRgbRowAvx2)
+HOVS_REMAP_TILE_FUNCTION(__attribute__((target("avx2"), flatten)), BilinearRgbTileAvx2, BilinearRgbRowAvx2)
+HOVS_REMAP_TILE_FUNCTION(__attribute__((target("avx2"), flatten)), BilinearGrayTileAvx2, BilinearGrayRowAvx2)
+HOVS_REMAP_TILE_FUNCTION(__attribute__((target("avx2"), flatten)), BayerRgbTileAvx2, BayerRgbRowAvx2)
 }  // namespace
-#undef HOVS_AVX2_TILE
 
 void BilinearRgbTile(const uint8_t* src, ptrdiff_t stride, const Tile& t, int T, int nu, int nv, uint8_t* out,
                      ptrdiff_t ostride) {

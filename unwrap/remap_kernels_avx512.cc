@@ -230,29 +230,8 @@ HOVS_AVX512 void BayerRgbRow(const uint8_t* src, ptrdiff_t stride, const RowCoor
 }
 
 // Interp tiles: every row's polynomial, the row written straight into the view.
-HOVS_AVX512 void BilinearRgbTile(const uint8_t* src, ptrdiff_t stride, const Tile& t, int T, int nu, int nv,
-                                 uint8_t* out, ptrdiff_t ostride) {
-  RowCoords c;
-  for (int j = 0; j < nv; ++j) {
-    c.poly = InterpRowPoly(t, T, j);
-    RgbRowInline(src, stride, c, 0, nu, out + j * ostride);
-  }
-}
-HOVS_AVX512 void BilinearGrayTile(const uint8_t* src, ptrdiff_t stride, const Tile& t, int T, int nu, int nv,
-                                  uint8_t* out, ptrdiff_t ostride) {
-  RowCoords c;
-  for (int j = 0; j < nv; ++j) {
-    c.poly = InterpRowPoly(t, T, j);
-    GrayRowInline(src, stride, c, 0, nu, out + j * ostride);
-  }
-}
-HOVS_AVX512 void BayerRgbTile(const uint8_t* src, ptrdiff_t stride, const Tile& t, int T, int nu, int nv,
-                              uint8_t* out, ptrdiff_t ostride) {
-  RowCoords c;
-  for (int j = 0; j < nv; ++j) {
-    c.poly = InterpRowPoly(t, T, j);
-    BayerRowInline(src, stride, c, 0, nu, out + j * ostride);
-  }
-}
+HOVS_REMAP_TILE_FUNCTION(HOVS_AVX512, BilinearRgbTile, RgbRowInline)
+HOVS_REMAP_TILE_FUNCTION(HOVS_AVX512, BilinearGrayTile, GrayRowInline)
+HOVS_REMAP_TILE_FUNCTION(HOVS_AVX512, BayerRgbTile, BayerRowInline)
 
 }  // namespace hovs::unwrap::kernels::avx512
