@@ -197,7 +197,9 @@ RayScene::RayScene(SceneDescription description) : desc_(std::move(description))
   rtcSetSceneBuildQuality(scene_, RTC_BUILD_QUALITY_HIGH);
 
   // Camera bodies of the units become rectangles (a box behind the lens face, along the optical axis).
+  std::vector<std::pair<size_t, size_t>> body_rects;  // by unit: [first, last) in desc_.rects
   for (size_t ui = 0; ui < desc_.units.size(); ++ui) {
+    body_rects.emplace_back(desc_.rects.size(), 0);
     const CatadioptricUnit& u = desc_.units[ui];
     u.rig.Check("unit " + u.name);
     const Rigid3d world_from_cam = u.world_from_mirror * u.rig.cam_from_mirror.Inverse();
@@ -209,6 +211,7 @@ RayScene::RayScene(SceneDescription description) : desc_(std::move(description))
       r.back = u.body_colour;
       desc_.rects.push_back(r);
     }
+    body_rects.back().second = desc_.rects.size();
   }
 
   for (const Rect& r : desc_.rects) {
@@ -300,6 +303,49 @@ RayScene::RayScene(SceneDescription description) : desc_(std::move(description))
     attach(std::move(lens));
   }
   rtcCommitScene(scene_);
+  DecideMountPaths(body_rects);
+}
+
+// A unit's straight camera rays start at its camera centre and end on its mount ring: they stay inside the
+// cone from the centre to the ring's outer circle, inside the box bounding the centre and the ring's square.
+// Anything else whose box overlaps that box (another rectangle, another unit's parts) could be in between;
+// the unit's own mirror and lens face are masked off for these rays and its camera body lies behind the lens
+// face (the rays go forward from it), so they do not count.
+void RayScene::DecideMountPaths(const std::vector<std::pair<size_t, size_t>>& body_rects) {
+  for (size_t u = 0; u < own_mount_.size(); ++u) {
+    OwnMount& m = own_mount_[u];
+    if (!m.geometry) continue;
+    const CatadioptricUnit& unit = desc_.units[u];
+    Eigen::AlignedBox3d region;
+    region.extend((unit.world_from_mirror * unit.rig.cam_from_mirror.Inverse()).translation);
+    const double r = m.geometry->r_outer;
+    for (int k = 0; k < 4; ++k)
+      region.extend(m.geometry->world_from_local * Vec3d((k & 1) ? r : -r, (k & 2) ? r : -r, 0));
+    region.extend(region.min() - Vec3d::Constant(1e-6)).extend(region.max() + Vec3d::Constant(1e-6));
+    bool clear = true;
+    for (size_t i = 0; i < desc_.rects.size() && clear; ++i) {
+      if (i >= body_rects[u].first && i < body_rects[u].second) continue;
+      const Rect& rect = desc_.rects[i];
+      Eigen::AlignedBox3d box;
+      for (int k = 0; k < 4; ++k)
+        box.extend(rect.world_from_rect * Vec3d((k & 1) ? 0.5 * rect.width : -0.5 * rect.width,
+                                                (k & 2) ? 0.5 * rect.height : -0.5 * rect.height, 0));
+      clear = !box.intersects(region);
+    }
+    for (const auto& g : user_) {
+      if (!clear) break;
+      if (g->unit == static_cast<int>(u)) continue;  // its mirror, lens face and mount ring
+      RTCBounds b;
+      g->Bounds(&b);
+      const Eigen::AlignedBox3d box(Vec3d(b.lower_x, b.lower_y, b.lower_z), Vec3d(b.upper_x, b.upper_y, b.upper_z));
+      clear = !box.intersects(region);
+    }
+    m.path_clear = clear;
+  }
+}
+
+bool RayScene::MountPathClear(int unit) const {
+  return unit >= 0 && static_cast<size_t>(unit) < own_mount_.size() && own_mount_[unit].path_clear;
 }
 
 RayScene::~RayScene() {
@@ -460,8 +506,12 @@ void IntersectBatchPacket(RTCScene scene, const RayBatch& b, int i0, const std::
     rh.ray.tfar[i] = static_cast<float>(t);
     rh.ray.mask[i] &= ~MountMaskBit(u);
     mount_unit[i] = u;
+    // Nothing can be in between (and the ray starts at the camera centre, as the path test assumes).
+    if (mounts[u].path_clear && b.mount_t[j] > 0) valid[i] = 0;
   }
-  TracePacket(scene, valid, &rh, intersect);
+  bool any = false;
+  for (int i = 0; i < W; ++i) any |= valid[i] != 0;
+  if (any) TracePacket(scene, valid, &rh, intersect);
   for (int i = 0; i < count; ++i) {
     geom_ids[i] = rh.hit.geomID[i], prim_ids[i] = rh.hit.primID[i];
     if (mount_unit[i] >= 0 && geom_ids[i] == RTC_INVALID_GEOMETRY_ID)

@@ -8,6 +8,7 @@
 #include <memory>
 #include <optional>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "core/catadioptric.h"
@@ -133,13 +134,21 @@ class RayScene {
 
   struct UserGeometry;  // mirror, annulus (mount, lens face): analytic shapes, defined in scene.cc
   // A unit's mount ring, met analytically by that unit's straight camera rays (IntersectBatch16).
+  // When nothing but the unit's own parts lies between its camera centre and its mount ring (path_clear,
+  // decided once from bounding boxes), those rays end on the ring without going to Embree at all.
   struct OwnMount {
     const UserGeometry* geometry = nullptr;
     unsigned geom_id = 0;
+    bool path_clear = false;
   };
+  // True if unit's straight camera rays (from its camera centre, past the rim) are known to meet nothing
+  // before its mount ring, so they skip Embree (see OwnMount).
+  bool MountPathClear(int unit) const;
 
  private:
   void Shade(const Vec3d& o, const Vec3d& d, unsigned geom_id, unsigned prim_id, Hit* hit, bool colour) const;
+  // Sets OwnMount::path_clear; body_rects: by unit, the range of desc_.rects holding its camera body.
+  void DecideMountPaths(const std::vector<std::pair<size_t, size_t>>& body_rects);
   // Intersects batch rays [i0, i0 + 16) (fewer at the end): rtcIntersect16 where the CPU has native 16-wide
   // packets, else two rtcIntersect8.
   void IntersectBatch16(const RayBatch& b, int i0, unsigned* geom_ids, unsigned* prim_ids) const;

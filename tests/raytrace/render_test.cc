@@ -393,8 +393,11 @@ TEST(Render, SomethingBetweenTheCameraAndItsMountIsSeenInFrontOfIt) {
   plate.front.kind = raytrace::Texture::Kind::kSolid;
   plate.front.colour_a = {0.9f, 0.1f, 0.3f};
   plate.double_sided = true;
+  // Without the plate nothing is in between: the camera rays past the rim skip Embree (RayScene::OwnMount).
+  EXPECT_TRUE(RayScene(cfg.description).MountPathClear(0));
   cfg.description.rects.push_back(plate);
   const RayScene scene(cfg.description);
+  EXPECT_FALSE(scene.MountPathClear(0));
   const auto& unit = scene.description().units[0];
   for (const double lens : {0.0, 1e-4}) {
     raytrace::RenderOptions ro;
