@@ -48,6 +48,38 @@ uint64_t SplitMix(uint64_t x) {
 }
 double Uniform(uint64_t h) { return (h >> 11) * (1.0 / 9007199254740992.0); }
 
+// The jittered image positions of a chunk of samples: sample k has the hash key key[k] (pixel * 4096 + sample
+// index), lies in the pixel with centre (x[k], y[k]) and, when stratified, in the stratum (sx[k], sy[k]) of a
+// grid of 1 / inv_grid strata per side. The same arithmetic as SplitMix and Uniform above, vectorised (the
+// 53-bit integer becomes a double through its bits, exactly as the conversion in Uniform).
+HOVS_VECTOR_CLONES
+void JitteredSamples(int m, uint64_t seed_mix, bool stratified, double inv_grid, const uint64_t* __restrict key,
+                     const double* __restrict x, const double* __restrict y, const double* __restrict sx,
+                     const double* __restrict sy, double* __restrict u, double* __restrict v) {
+  const auto mix = [](uint64_t z) {
+    z += 0x9E3779B97F4A7C15ull;
+    z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ull;
+    z = (z ^ (z >> 27)) * 0x94D049BB133111EBull;
+    return z ^ (z >> 31);
+  };
+  // q < 2^53: its low 52 bits as the mantissa of 2^52 + q_low, minus 2^52, plus the top bit's 2^52 (all exact).
+  const auto to_unit = [](uint64_t h) {
+    const uint64_t q = h >> 11;
+    double low;
+    const uint64_t bits = 0x4330000000000000ull | (q & 0xFFFFFFFFFFFFFull);
+    __builtin_memcpy(&low, &bits, sizeof low);
+    return ((low - 4503599627370496.0) + static_cast<double>(static_cast<int>(q >> 52)) * 4503599627370496.0) *
+           (1.0 / 9007199254740992.0);
+  };
+  const double g = stratified ? 1.0 : 0.0, scale = stratified ? inv_grid : 1.0;
+  for (int k = 0; k < m; ++k) {
+    const uint64_t h = mix(seed_mix ^ key[k]);
+    const double ju = to_unit(h), jv = to_unit(mix(h));
+    u[k] = x[k] + ((g * sx[k] + ju) * scale - 0.5);
+    v[k] = y[k] + ((g * sy[k] + jv) * scale - 0.5);
+  }
+}
+
 struct RayRequest {
   Vec3d origin, direction;
   double tnear = 0;
@@ -309,6 +341,16 @@ void RenderInto(const RayScene& scene, const ViewCamera& camera, const RenderOpt
   const bool stratified = grid * grid == n;
   const double inv_grid = 1.0 / grid;
   const float weight = 1.0f / n;
+  const uint64_t seed_mix = options.seed * 0x100000001B3ull;
+  // Sample s of a pixel lies in stratum (s % grid, s / grid); a chunk of samples holds per_chunk whole pixels,
+  // or 0 when a pixel has more samples than a chunk (then each chunk holds part of one pixel).
+  constexpr int kMaxBatch = RayBatch::kMax;
+  const int per_chunk = kMaxBatch / n;
+  std::vector<double> strata_x(std::max(n, kMaxBatch)), strata_y(strata_x.size());
+  for (size_t k = 0; k < strata_x.size(); ++k) {
+    const int s = static_cast<int>(k % static_cast<size_t>(n));
+    strata_x[k] = s % grid, strata_y[k] = s / grid;
+  }
   std::atomic<uint64_t> rays{0};
   std::atomic<int> done{0};
   const bool progress = options.progress && isatty(STDERR_FILENO);
@@ -320,9 +362,10 @@ void RenderInto(const RayScene& scene, const ViewCamera& camera, const RenderOpt
     const auto batch = std::make_unique<RayBatch>();
     struct Scratch {
       double u[kMax], v[kMax], Mx[kMax], My[kMax], Mz[kMax], tau[kMax];
+      double x[kMax], y[kMax];  // pixel centre of each sample
+      uint64_t key[kMax];       // its hash key: pixel * 4096 + sample index
       Vec2d disc[kMax];
       int px[kMax];
-      bool first[kMax];
       float rgb[3 * kMax];
       Hit hits[kMax];
     };
@@ -333,26 +376,26 @@ void RenderInto(const RayScene& scene, const ViewCamera& camera, const RenderOpt
       const int x0 = roi.x0 + (ti % tiles_x) * tile, y0 = roi.y0 + (ti / tiles_x) * tile;
       const int x1 = std::min(x0 + tile, roi.x1), y1 = std::min(y0 + tile, roi.y1);
       const int tw = x1 - x0, tile_px = tw * (y1 - y0);
-      // The samples of the tile, pixel by pixel, in chunks of up to kMax.
-      const long total = static_cast<long>(tile_px) * n;
-      // Sample s of pixel (x, y); counters instead of divisions (this loop runs for every sample).
-      int s = 0, sx = 0, sy = 0, x = x0, y = y0;
-      for (long j0 = 0; j0 < total; j0 += kMax) {
-        const int m = static_cast<int>(std::min<long>(kMax, total - j0));
-        for (int k = 0; k < m; ++k) {
+      // The samples of the tile, pixel by pixel, in chunks of whole pixels (of part of one pixel when it has
+      // more samples than a chunk holds).
+      int x = x0, y = y0, s0 = 0;
+      for (int p0 = 0; p0 < tile_px;) {
+        const int pixels = std::min(per_chunk, tile_px - p0), count = std::min(n - s0, kMax);
+        const int m = per_chunk > 0 ? pixels * n : count;
+        for (int q = 0, k = 0; q < (per_chunk > 0 ? pixels : 1); ++q) {
           const int px = y * f.width + x;
-          const uint64_t h = SplitMix(options.seed * 0x100000001B3ull ^ (static_cast<uint64_t>(px) * 4096 + s));
-          const double ju = Uniform(h), jv = Uniform(SplitMix(h));
-          double du, dv;
-          if (stratified) {
-            du = (sx + ju) * inv_grid - 0.5;
-            dv = (sy + jv) * inv_grid - 0.5;
-          } else {
-            du = ju - 0.5, dv = jv - 0.5;
+          const uint64_t key = static_cast<uint64_t>(px) * 4096;
+          for (int s = per_chunk > 0 ? 0 : s0; s < (per_chunk > 0 ? n : s0 + count); ++s, ++k) {
+            sc.key[k] = key + static_cast<uint64_t>(s), sc.x[k] = x, sc.y[k] = y, sc.px[k] = px;
           }
-          sc.u[k] = x + du, sc.v[k] = y + dv, sc.px[k] = px, sc.first[k] = s == 0;
-          if (lens || blur) {
-            const uint64_t h2 = SplitMix(h ^ 0xD1B54A32D192ED03ull);
+          if (per_chunk > 0 && ++x == x1) x = x0, ++y;
+        }
+        const double* stratum_x = per_chunk > 0 ? strata_x.data() : strata_x.data() + s0;
+        const double* stratum_y = per_chunk > 0 ? strata_y.data() : strata_y.data() + s0;
+        JitteredSamples(m, seed_mix, stratified, inv_grid, sc.key, sc.x, sc.y, stratum_x, stratum_y, sc.u, sc.v);
+        if (lens || blur) {
+          for (int k = 0; k < m; ++k) {
+            const uint64_t h2 = SplitMix(SplitMix(seed_mix ^ sc.key[k]) ^ 0xD1B54A32D192ED03ull);
             sc.disc[k] = Vec2d::Zero();
             if (lens) {  // uniform on the unit disc
               const double rr = std::sqrt(Uniform(h2)), phi = 2 * M_PI * Uniform(SplitMix(h2));
@@ -360,24 +403,28 @@ void RenderInto(const RayScene& scene, const ViewCamera& camera, const RenderOpt
             }
             sc.tau[k] = blur ? options.exposure_time * Uniform(SplitMix(h2 ^ 0x9E3779B97F4A7C15ull)) : 0.0;
           }
-          // Next sample: the stratum's column and row, then the next pixel of the tile.
-          if (++sx == grid) sx = 0, ++sy;
-          if (++s == n) {
-            s = sx = sy = 0;
-            if (++x == x1) x = x0, ++y;
-          }
         }
         maker.MakeBatch(m, sc.u, sc.v, lens || blur ? sc.disc : nullptr, lens || blur ? sc.tau : nullptr,
                         batch.get(), sc.Mx, sc.My, sc.Mz);
         scene.Colours(*batch, sc.rgb);
-        for (int k = 0; k < m; ++k) {
-          task_rays += batch->valid[k];
-          float* c = &f.rgb[3 * static_cast<size_t>(sc.px[k])];
-          if (sc.first[k]) {  // the pixel's first sample (0 + x = x: the same sum as zeroing first)
-            for (int ch = 0; ch < 3; ++ch) c[ch] = weight * sc.rgb[3 * k + ch];
-          } else {
-            for (int ch = 0; ch < 3; ++ch) c[ch] += weight * sc.rgb[3 * k + ch];
+        for (int k = 0; k < m; ++k) task_rays += batch->valid[k];
+        // Each pixel's samples summed in order, weighted (w r0 + w r1 + ...: the first sample starts the sum, so
+        // the frame needs no zeroing).
+        const int groups = per_chunk > 0 ? pixels : 1, group = per_chunk > 0 ? n : count;
+        for (int q = 0; q < groups; ++q) {
+          const float* r = &sc.rgb[3 * q * group];
+          float* c = &f.rgb[3 * static_cast<size_t>(sc.px[q * group])];
+          for (int ch = 0; ch < 3; ++ch) {
+            float sum = s0 == 0 ? weight * r[ch] : c[ch] + weight * r[ch];
+            for (int k = 1; k < group; ++k) sum += weight * r[3 * k + ch];
+            c[ch] = sum;
           }
+        }
+        if (per_chunk > 0) {
+          p0 += pixels;
+        } else if ((s0 += count) == n) {  // the pixel's last chunk
+          s0 = 0, ++p0;
+          if (++x == x1) x = x0, ++y;
         }
       }
       if (options.ground_truth) {
