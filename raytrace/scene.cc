@@ -5,6 +5,7 @@
 #include <limits>
 
 #include "core/error.h"
+#include "core/vector_clones.h"
 
 namespace hovs::raytrace {
 
@@ -95,7 +96,7 @@ constexpr int kMaskUnits = 10;
 unsigned MirrorMaskBit(int unit) { return unit >= 0 && unit < kMaskUnits ? 1u << (1 + 3 * unit) : 1u; }
 unsigned LensMaskBit(int unit) { return unit >= 0 && unit < kMaskUnits ? 1u << (2 + 3 * unit) : 1u; }
 unsigned MountMaskBit(int unit) { return unit >= 0 && unit < kMaskUnits ? 1u << (3 + 3 * unit) : 1u; }
-unsigned RayMask(int from_mirror, int from_camera = -1) {
+inline unsigned RayMask(int from_mirror, int from_camera = -1) {
   // Selects, not branches (this runs for every ray).
   const unsigned fm = static_cast<unsigned>(from_mirror), fc = static_cast<unsigned>(from_camera);
   const unsigned clear_m = fm < kMaskUnits ? 1u << (1 + 3 * fm) : 0u;
@@ -461,40 +462,55 @@ namespace {
 // double (RayBatch::mount_t, from the renderer's ray set-up in the mirror frame where the rim test was made, or
 // here with the ring's own test), and go to Embree only up to that distance with the ring masked off: anything
 // nearer still wins, and the ring's callback is not called for them.
+// Packet fields of w full lanes from batch arrays (already offset to the packet's first ray): the conversions
+// to float, the masks (RayMask less mask_off) and ids; tfar is infinite except where tfar_in > 0.
+HOVS_VECTOR_CLONES
+void FillPacket(int w, const double* __restrict ox, const double* __restrict oy, const double* __restrict oz,
+                const double* __restrict dx, const double* __restrict dy, const double* __restrict dz,
+                const float* __restrict tnear, const int* __restrict from_mirror, const int* __restrict from_camera,
+                const float* __restrict tfar_in, const unsigned* __restrict mask_off, float* __restrict org_x,
+                float* __restrict org_y, float* __restrict org_z, float* __restrict dir_x, float* __restrict dir_y,
+                float* __restrict dir_z, float* __restrict tnear_out, float* __restrict tfar, unsigned* __restrict mask,
+                unsigned* __restrict id, unsigned* __restrict flags, float* __restrict time, unsigned* __restrict geom,
+                unsigned* __restrict inst) {
+  for (int i = 0; i < w; ++i) {
+    org_x[i] = static_cast<float>(ox[i]), org_y[i] = static_cast<float>(oy[i]), org_z[i] = static_cast<float>(oz[i]);
+    dir_x[i] = static_cast<float>(dx[i]), dir_y[i] = static_cast<float>(dy[i]), dir_z[i] = static_cast<float>(dz[i]);
+    tnear_out[i] = tnear[i];
+    tfar[i] = tfar_in[i] > 0 ? tfar_in[i] : std::numeric_limits<float>::infinity();
+    mask[i] = RayMask(from_mirror[i], from_camera[i]) & ~mask_off[i];
+    id[i] = from_mirror[i] >= 0 ? static_cast<unsigned>(from_mirror[i]) + 1 : 0u;
+    flags[i] = 0, time[i] = 0;
+    geom[i] = RTC_INVALID_GEOMETRY_ID, inst[i] = RTC_INVALID_GEOMETRY_ID;
+  }
+}
+
+// Batch rays [i0, i0 + W) (fewer at the end) as one Embree packet of width W (RTCRayHit8 or RTCRayHit16).
+//
+// A unit's straight camera rays (they missed its mirror within the rim: 40 % of a frame's samples, the image
+// past the rim) end on its mount ring unless something lies in between. They meet the ring analytically, in
+// double (RayBatch::mount_t, from the renderer's ray set-up in the mirror frame where the rim test was made, or
+// here with the ring's own test), and go to Embree only up to that distance with the ring masked off: anything
+// nearer still wins, and the ring's callback is not called for them. Where nothing can be in between
+// (OwnMount::path_clear) they do not go to Embree at all; a packet of such rays only gets its hits.
 template <int W, class RayHitW, class IntersectW>
 void IntersectBatchPacket(RTCScene scene, const RayBatch& b, int i0, const std::vector<RayScene::OwnMount>& mounts,
                           unsigned* geom_ids, unsigned* prim_ids, IntersectW intersect) {
-  alignas(64) RayHitW rh;
   alignas(64) int valid[W];
+  alignas(64) float tfar[W];
+  alignas(64) unsigned mask_off[W];
+  int mount_unit[W];
   const int count = std::min(W, b.n - i0);
-  // Lanes past count repeat the batch's ray i0 (masked off); field by field, so the conversions vectorise.
+  // Lanes past count repeat the batch's ray i0 (masked off).
   int k[W];
   for (int i = 0; i < W; ++i) k[i] = i0 + (i < count ? i : 0);
-  const auto fill = [&](float* dst, const double* src) {
-    if (count == W) {
-      for (int i = 0; i < W; ++i) dst[i] = static_cast<float>(src[i0 + i]);
-    } else {
-      for (int i = 0; i < W; ++i) dst[i] = static_cast<float>(src[k[i]]);
-    }
-  };
-  fill(rh.ray.org_x, b.ox), fill(rh.ray.org_y, b.oy), fill(rh.ray.org_z, b.oz);
-  fill(rh.ray.dir_x, b.dx), fill(rh.ray.dir_y, b.dy), fill(rh.ray.dir_z, b.dz);
-  // The other fields lane by lane in simple loops (as SetLane, without its branches).
-  for (int i = 0; i < W; ++i) valid[i] = i < count && b.valid[k[i]] ? -1 : 0;
+  bool any_camera = false;
   for (int i = 0; i < W; ++i) {
-    rh.ray.tnear[i] = b.tnear[k[i]];
-    rh.ray.tfar[i] = std::numeric_limits<float>::infinity();
-    rh.ray.flags[i] = 0, rh.ray.time[i] = 0;
-    rh.hit.geomID[i] = RTC_INVALID_GEOMETRY_ID, rh.hit.instID[0][i] = RTC_INVALID_GEOMETRY_ID;
+    valid[i] = i < count && b.valid[k[i]] ? -1 : 0;
+    tfar[i] = 0, mask_off[i] = 0, mount_unit[i] = -1;
+    any_camera |= b.from_camera[k[i]] >= 0;
   }
-  for (int i = 0; i < W; ++i) {
-    const int fm = b.from_mirror[k[i]], fc = b.from_camera[k[i]];
-    rh.ray.mask[i] = RayMask(fm, fc);
-    rh.ray.id[i] = static_cast<unsigned>(std::max(fm, -1) + 1);
-  }
-  int mount_unit[W];
-  for (int i = 0; i < W; ++i) {
-    mount_unit[i] = -1;
+  for (int i = 0; i < W && any_camera; ++i) {
     const int u = b.from_camera[k[i]];
     if (!valid[i] || u < 0 || static_cast<size_t>(u) >= mounts.size() || !mounts[u].geometry) continue;
     const int j = k[i];
@@ -503,15 +519,40 @@ void IntersectBatchPacket(RTCScene scene, const RayBatch& b, int i0, const std::
                                                 b.tnear[j], HUGE_VAL, &t, nullptr))
       continue;
     if (t <= 0) continue;
-    rh.ray.tfar[i] = static_cast<float>(t);
-    rh.ray.mask[i] &= ~MountMaskBit(u);
+    tfar[i] = static_cast<float>(t);
+    mask_off[i] = MountMaskBit(u);
     mount_unit[i] = u;
     // Nothing can be in between (and the ray starts at the camera centre, as the path test assumes).
     if (mounts[u].path_clear && b.mount_t[j] > 0) valid[i] = 0;
   }
   bool any = false;
   for (int i = 0; i < W; ++i) any |= valid[i] != 0;
-  if (any) TracePacket(scene, valid, &rh, intersect);
+  if (!any) {
+    for (int i = 0; i < count; ++i) {
+      geom_ids[i] = mount_unit[i] >= 0 ? mounts[mount_unit[i]].geom_id : RTC_INVALID_GEOMETRY_ID;
+      prim_ids[i] = 0;
+    }
+    return;
+  }
+  alignas(64) RayHitW rh;
+  if (count == W) {
+    FillPacket(W, b.ox + i0, b.oy + i0, b.oz + i0, b.dx + i0, b.dy + i0, b.dz + i0, b.tnear + i0, b.from_mirror + i0,
+               b.from_camera + i0, tfar, mask_off, rh.ray.org_x, rh.ray.org_y, rh.ray.org_z, rh.ray.dir_x,
+               rh.ray.dir_y, rh.ray.dir_z, rh.ray.tnear, rh.ray.tfar, rh.ray.mask, rh.ray.id, rh.ray.flags,
+               rh.ray.time, rh.hit.geomID, rh.hit.instID[0]);
+  } else {
+    for (int i = 0; i < W; ++i) {
+      const int j = k[i];
+      rh.ray.org_x[i] = static_cast<float>(b.ox[j]), rh.ray.org_y[i] = static_cast<float>(b.oy[j]);
+      rh.ray.org_z[i] = static_cast<float>(b.oz[j]);
+      rh.ray.dir_x[i] = static_cast<float>(b.dx[j]), rh.ray.dir_y[i] = static_cast<float>(b.dy[j]);
+      rh.ray.dir_z[i] = static_cast<float>(b.dz[j]);
+      SetLane(&rh, i, b.tnear[j], b.from_mirror[j], b.from_camera[j]);
+      if (tfar[i] > 0) rh.ray.tfar[i] = tfar[i];
+      rh.ray.mask[i] &= ~mask_off[i];
+    }
+  }
+  TracePacket(scene, valid, &rh, intersect);
   for (int i = 0; i < count; ++i) {
     geom_ids[i] = rh.hit.geomID[i], prim_ids[i] = rh.hit.primID[i];
     if (mount_unit[i] >= 0 && geom_ids[i] == RTC_INVALID_GEOMETRY_ID)

@@ -51,7 +51,7 @@ void BM_RenderFrameReused(benchmark::State& state) {
   }
   state.counters["rays_per_s"] = benchmark::Counter(static_cast<double>(rays), benchmark::Counter::kIsRate);
 }
-BENCHMARK(BM_RenderFrameReused)->Args({4, 1})->Unit(benchmark::kMillisecond)->UseRealTime()->Iterations(3);
+BENCHMARK(BM_RenderFrameReused)->Args({4, 1})->Args({4, 0})->Unit(benchmark::kMillisecond)->UseRealTime()->Iterations(3);
 
 void BM_RawIntersect16(benchmark::State& state) {
   const hovs::raytrace::RayScene scene(Scene().description);
