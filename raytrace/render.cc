@@ -135,6 +135,24 @@ void WorldRays(int n, const double* __restrict Rm, const double* __restrict tm, 
   }
 }
 
+// PinholeCamera::NormalisedFromImgBatch without distortion, vectorised (the same operations).
+HOVS_VECTOR_CLONES
+void NormalisedPoints(int n, double fx, double fy, double cx, double cy, const double* __restrict u,
+                      const double* __restrict v, double* __restrict x, double* __restrict y) {
+  for (int i = 0; i < n; ++i) x[i] = (u[i] - cx) / fx, y[i] = (v[i] - cy) / fy;
+}
+
+// R (column-major 3 x 3) times (x, y, 1) for n points.
+HOVS_VECTOR_CLONES
+void RotateRays(int n, const double* __restrict R, const double* __restrict x, const double* __restrict y,
+                double* __restrict vx, double* __restrict vy, double* __restrict vz) {
+  for (int i = 0; i < n; ++i) {
+    vx[i] = R[0] * x[i] + R[3] * y[i] + R[6];
+    vy[i] = R[1] * x[i] + R[4] * y[i] + R[7];
+    vz[i] = R[2] * x[i] + R[5] * y[i] + R[8];
+  }
+}
+
 class RayMaker {
  public:
   RayMaker(const RayScene& scene, const ViewCamera& cam, const RenderOptions& o)
@@ -181,20 +199,20 @@ class RayMaker {
     }
     const PinholeCamera<double>& cam = unit_ ? unit_->rig.camera : cam_.pinhole;
     double mx[RayBatch::kMax], my[RayBatch::kMax];
-    cam.NormalisedFromImgBatch(n, u, v, mx, my, b->valid);
+    if (cam.distortion.IsZero()) {
+      NormalisedPoints(n, cam.fx, cam.fy, cam.cx, cam.cy, u, v, mx, my);
+      std::fill(b->valid, b->valid + n, 1);
+    } else {
+      cam.NormalisedFromImgBatch(n, u, v, mx, my, b->valid);
+    }
     unsigned char on_mirror[RayBatch::kMax];
     if (unit_) {
       // The camera rays (x, y, 1) in the mirror frame, all from the camera centre; reflected together.
       double vx[RayBatch::kMax], vy[RayBatch::kMax], vz[RayBatch::kMax];
-      const Eigen::Matrix3d& R = R_mirror_from_cam_;
-      for (int i = 0; i < n; ++i) {
-        vx[i] = R(0, 0) * mx[i] + R(0, 1) * my[i] + R(0, 2);
-        vy[i] = R(1, 0) * mx[i] + R(1, 1) * my[i] + R(1, 2);
-        vz[i] = R(2, 0) * mx[i] + R(2, 1) * my[i] + R(2, 2);
-      }
-      // (GCC 12 reports the arrays as maybe uninitialised when n could be 0; both callees read only [0, n).)
+      // (GCC 12 reports the arrays as maybe uninitialised when n could be 0; the callees read only [0, n).)
 #pragma GCC diagnostic push
 #pragma GCC diagnostic ignored "-Wmaybe-uninitialized"
+      RotateRays(n, R_mirror_from_cam_.data(), mx, my, vx, vy, vz);
       reflector_->ReflectBatch(t_mirror_from_cam_, n, vx, vy, vz, Mx, My, Mz, b->dx, b->dy, b->dz, on_mirror);
 #pragma GCC diagnostic pop
       // Camera rays past the rim: where they meet the unit's mount ring, in the mirror frame where the rim test
