@@ -3,11 +3,13 @@
 // bit-identical to theirs; this file is compiled with -ffp-contract=off so the row polynomial's multiply and add
 // are never fused.
 //
-// What differs from the AVX2 kernels is the reading: each pixel's source bytes (two 8-byte words per source row
-// for RGB, four for a Bayer mosaic, one 4-byte word per row for grey) are fetched by gathers of 8 or 16 lanes
-// instead of one scalar load per pixel and word, the offsets never leave the vector registers, and the 16 pixels
-// are put into their output order by one byte permutation (VBMI) and written with two plain stores. Row tails
-// run the same 16-lane code with the lanes past the row's end given lane 0's coordinates and a masked store.
+// What differs from the AVX2 kernels is the reading: a grey or Bayer pixel's source bytes (one 4-byte word per
+// source row) are fetched by 16-lane gathers, the offsets never leaving the vector registers; an RGB pixel's
+// (one 8-byte word per source row: its left and right taps) by plain 8-byte loads, two per 128-bit lane, which
+// for the whole six-view remap is 1.1-1.5x faster than 8-lane 64-bit gathers on AMD Zen 5 (on Zen 4 a gather of
+// 8 words and 8 loads cost about the same, 10 cycles). The 16 pixels are put into their output order by one
+// byte permutation (VBMI) and written with two plain stores. Row tails run the same 16-lane code with the lanes
+// past the row's end given lane 0's coordinates and a masked store.
 #include <immintrin.h>
 
 #include "unwrap/remap_kernels.h"
@@ -70,6 +72,18 @@ HOVS_AVX512 inline __m512i Widen(__m512i v, int half) {
   return _mm512_cvtepu32_epi64(half == 0 ? _mm512_castsi512_si256(v) : _mm512_extracti64x4_epi64(v, 1));
 }
 
+// The 8-byte words at base + offs[0..7], by plain loads (two per 128-bit lane).
+HOVS_AVX512 inline __m128i TwoWords(const uint8_t* base, const int32_t* offs) {
+  const __m128i lo = _mm_loadl_epi64(reinterpret_cast<const __m128i*>(base + offs[0]));
+  return _mm_castpd_si128(_mm_loadh_pd(_mm_castsi128_pd(lo), reinterpret_cast<const double*>(base + offs[1])));
+}
+HOVS_AVX512 inline __m512i EightWords(const uint8_t* base, const int32_t* offs) {
+  __m512i w = _mm512_castsi128_si512(TwoWords(base, offs));
+  w = _mm512_inserti32x4(w, TwoWords(base, offs + 2), 1);
+  w = _mm512_inserti32x4(w, TwoWords(base, offs + 4), 2);
+  return _mm512_inserti32x4(w, TwoWords(base, offs + 6), 3);
+}
+
 // 16 RGB pixels (bilinear) at 16.16 coordinates (x, y); the first `count` are stored at o.
 HOVS_AVX512 inline void Rgb16(const uint8_t* data, ptrdiff_t stride, __m512i x, __m512i y, int count, uint8_t* o) {
   const __m512i m63 = _mm512_set1_epi32(63), c64 = _mm512_set1_epi32(64);
@@ -86,10 +100,10 @@ HOVS_AVX512 inline void Rgb16(const uint8_t* data, ptrdiff_t stride, __m512i x, 
   const __m512i pairs = _mm512_broadcast_i32x4(_mm_setr_epi8(0, 3, 1, 4, 2, 5, -1, -1, 8, 11, 9, 12, 10, 13, -1, -1));
   const __m512i round = _mm512_set1_epi16(32);
   __m512i v[2];
+  alignas(64) int32_t offs[16];
+  _mm512_store_si512(offs, off);
   for (int h = 0; h < 2; ++h) {
-    const __m256i o8 = h == 0 ? _mm512_castsi512_si256(off) : _mm512_extracti64x4_epi64(off, 1);
-    const __m512i top = _mm512_i32gather_epi64(o8, data, 1);
-    const __m512i bot = _mm512_i32gather_epi64(o8, data + stride, 1);
+    const __m512i top = EightWords(data, offs + 8 * h), bot = EightWords(data + stride, offs + 8 * h);
     const __m512i wx = RepeatLowWord(Widen(wxd, h)), wy = RepeatLowWord(Widen(wyd, h));
     const __m512i ht = _mm512_maddubs_epi16(_mm512_shuffle_epi8(top, pairs), wx);
     const __m512i hb = _mm512_maddubs_epi16(_mm512_shuffle_epi8(bot, pairs), wx);
