@@ -153,6 +153,20 @@ void RotateRays(int n, const double* __restrict R, const double* __restrict x, c
   }
 }
 
+// Where each ray of a batch starts: via[i] = 1 on unit's mirror (on_mirror[i]), else 0 (unit's camera, or a
+// pinhole camera when unit < 0); the matching from_mirror / from_camera (-1: none) and tnear.
+HOVS_VECTOR_CLONES
+void RayOrigins(int n, const unsigned char* __restrict on_mirror, int unit, float tnear, double* __restrict via,
+                float* __restrict tnear_out, int* __restrict from_mirror, int* __restrict from_camera) {
+  for (int i = 0; i < n; ++i) {
+    const bool m = on_mirror[i] != 0;
+    via[i] = m ? 1.0 : 0.0;
+    tnear_out[i] = tnear;
+    from_mirror[i] = m ? unit : -1;
+    from_camera[i] = m ? -1 : unit;
+  }
+}
+
 class RayMaker {
  public:
   RayMaker(const RayScene& scene, const ViewCamera& cam, const RenderOptions& o)
@@ -206,6 +220,7 @@ class RayMaker {
       cam.NormalisedFromImgBatch(n, u, v, mx, my, b->valid);
     }
     unsigned char on_mirror[RayBatch::kMax];
+    double via[RayBatch::kMax];  // on_mirror as 0 / 1
     if (unit_) {
       // The camera rays (x, y, 1) in the mirror frame, all from the camera centre; reflected together.
       double vx[RayBatch::kMax], vy[RayBatch::kMax], vz[RayBatch::kMax];
@@ -218,25 +233,19 @@ class RayMaker {
       // Camera rays past the rim: where they meet the unit's mount ring, in the mirror frame where the rim test
       // was made (the world direction is the same vector rotated, so t is the same). RayScene traces them only
       // up to it.
-      double on[RayBatch::kMax];
-      for (int i = 0; i < n; ++i) on[i] = on_mirror[i];
+      // tnear 1e-5 as in Make (off the mirror, or off the lens face).
+      RayOrigins(n, on_mirror, cam_.unit, 1e-5f, via, b->tnear, b->from_mirror, b->from_camera);
       if (unit_->mount_outer_radius > 0) {
         MountRingHits(n, unit_->rig.mirror.RimZ(), unit_->rig.mirror.RimRadius(), unit_->mount_outer_radius,
-                      t_mirror_from_cam_.x(), t_mirror_from_cam_.y(), t_mirror_from_cam_.z(), vx, vy, vz, on,
+                      t_mirror_from_cam_.x(), t_mirror_from_cam_.y(), t_mirror_from_cam_.z(), vx, vy, vz, via,
                       b->mount_t);
       } else {
         std::fill(b->mount_t, b->mount_t + n, -1.0);
       }
     } else {
       std::fill(on_mirror, on_mirror + n, 0);
+      RayOrigins(n, on_mirror, -1, 0.0f, via, b->tnear, b->from_mirror, b->from_camera);
       std::fill(b->mount_t, b->mount_t + n, -1.0);
-    }
-    double via[RayBatch::kMax];
-    for (int i = 0; i < n; ++i) {
-      via[i] = on_mirror[i];
-      b->tnear[i] = unit_ ? 1e-5f : 0.0f;  // 1e-5 as in Make (off the mirror, or off the lens face)
-      b->from_mirror[i] = on_mirror[i] ? cam_.unit : -1;
-      b->from_camera[i] = on_mirror[i] || !unit_ ? -1 : cam_.unit;
     }
     WorldRays(n, R_world_from_mirror_.data(), t_world_from_mirror_.data(), R_world_from_cam_.data(),
               world_from_cam_.translation.data(), via, mx, my, Mx, My, Mz, b->dx, b->dy, b->dz, b->ox, b->oy, b->oz);
@@ -429,7 +438,15 @@ void RenderInto(const RayScene& scene, const ViewCamera& camera, const RenderOpt
         // Each pixel's samples summed in order, weighted (w r0 + w r1 + ...: the first sample starts the sum, so
         // the frame needs no zeroing).
         const int groups = per_chunk > 0 ? pixels : 1, group = per_chunk > 0 ? n : count;
-        for (int q = 0; q < groups; ++q) {
+        if (group == 4 && s0 == 0) {  // the usual 2 x 2 strata, unrolled (the same sums)
+          for (int q = 0; q < groups; ++q) {
+            const float* r = &sc.rgb[12 * q];
+            float* c = &f.rgb[3 * static_cast<size_t>(sc.px[4 * q])];
+            for (int ch = 0; ch < 3; ++ch)
+              c[ch] = weight * r[ch] + weight * r[3 + ch] + weight * r[6 + ch] + weight * r[9 + ch];
+          }
+        }
+        for (int q = 0; q < groups && !(group == 4 && s0 == 0); ++q) {
           const float* r = &sc.rgb[3 * q * group];
           float* c = &f.rgb[3 * static_cast<size_t>(sc.px[q * group])];
           for (int ch = 0; ch < 3; ++ch) {
