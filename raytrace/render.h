@@ -97,7 +97,9 @@ struct Frame {
   int width = 0, height = 0;
   PixelBuffer rgb;   // linear radiance, 3 per pixel, before the sensor model
   GroundTruth truth;        // empty if not requested
-  uint64_t rays = 0;        // rays traced through Embree
+  // Rays traced: one per valid sample and per ground-truth pixel, each the camera ray and, where it meets the
+  // mirror, its reflection; Embree or an analytic surface (the unit's own mount ring) ends it.
+  uint64_t rays = 0;
   double seconds = 0;
 };
 
