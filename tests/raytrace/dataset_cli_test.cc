@@ -208,7 +208,7 @@ TEST(CalibrateCli, CalibratesASyntheticSetAgainstGroundTruthAndRejectsBadInput) 
     EXPECT_NE(r.output.find(needle), std::string::npos) << r.output;
     EXPECT_FALSE(fs::exists(dir / "bad"));
   };
-  const std::string vmr = std::string(HOVS_SOURCE_DIR) + "/../shared/data/vmr/reference_corners.csv";
+  const std::string vmr = std::string(HOVS_SHARED_DIR) + "/data/vmr/reference_corners.csv";
   rejected("--corners " + vmr + " --size 1024by768", "expected WxH");
   rejected("--corners " + vmr + " --size 640x480", "lies outside the 640x480 image");
   rejected("--corners " + vmr + " --size 1024x768 --dataset x.json", "exactly one of --corners, --dataset and --images");

@@ -15,7 +15,7 @@ namespace fs = std::filesystem;
 TEST(Validate, ReducedPresetPassesEveryGateEndToEnd) {
   const fs::path out = test::Scratch("validate", "reduced");
   const auto r = test::Hovs("validate --preset reduced --source " + std::string(HOVS_SOURCE_DIR) + " --real " +
-                            std::string(HOVS_SOURCE_DIR) + "/../shared/data/vmr --out " + out.string());
+                            std::string(HOVS_SHARED_DIR) + "/data/vmr --out " + out.string());
   std::printf("%s\n", r.output.substr(r.output.find("hovs validate (") == std::string::npos
                                           ? 0 : r.output.find("hovs validate (")).c_str());
   EXPECT_EQ(r.exit_code, 0);
