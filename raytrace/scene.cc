@@ -455,13 +455,6 @@ void RayScene::Trace16(int count, const Vec3d* o, const Vec3d* d, const double* 
 
 namespace {
 
-// Batch rays [i0, i0 + W) (fewer at the end) as one Embree packet of width W (RTCRayHit8 or RTCRayHit16).
-//
-// A unit's straight camera rays (they missed its mirror within the rim: 40 % of a frame's samples, the image
-// past the rim) end on its mount ring unless something lies in between. They meet the ring analytically, in
-// double (RayBatch::mount_t, from the renderer's ray set-up in the mirror frame where the rim test was made, or
-// here with the ring's own test), and go to Embree only up to that distance with the ring masked off: anything
-// nearer still wins, and the ring's callback is not called for them.
 // Packet fields of w full lanes from batch arrays (already offset to the packet's first ray): the conversions
 // to float, the masks (RayMask less mask_off) and ids; tfar is infinite except where tfar_in > 0.
 HOVS_VECTOR_CLONES
