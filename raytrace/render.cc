@@ -89,9 +89,10 @@ struct RayRequest {
   Vec3d mirror_point = Vec3d::Zero();  // mirror frame
 };
 
-// Where the camera rays (from c along v, mirror frame) that missed the mirror (via[i] = 0) meet the mount ring:
-// the annulus r0 <= r <= r1 in the plane z = zr. t[i]: the distance along v, 0 where they miss the ring, -1 for
-// rays on the mirror.
+// Where the camera rays (from c along v, mirror frame; v need not be a unit vector) that missed the mirror
+// (via[i] = 0) meet the mount ring: the annulus r0 <= r <= r1 in the plane z = zr. t[i]: the distance from c
+// (along the unit direction of v, as the world ray is traced), 0 where they miss the ring, -1 for rays on the
+// mirror.
 HOVS_VECTOR_CLONES
 void MountRingHits(int n, double zr, double r0, double r1, double cx, double cy, double cz,
                    const double* __restrict vx, const double* __restrict vy, const double* __restrict vz,
@@ -100,8 +101,9 @@ void MountRingHits(int n, double zr, double r0, double r1, double cx, double cy,
   for (int i = 0; i < n; ++i) {
     const double w = vz[i] != 0 ? vz[i] : 1.0;
     const double t = dz / w, px = cx + t * vx[i], py = cy + t * vy[i], r2 = px * px + py * py;
-    const bool ring = vz[i] != 0 && t > 1e-5 && r2 >= r02 && r2 <= r12;
-    t_out[i] = via[i] != 0 ? -1.0 : ring ? t : 0.0;
+    const double distance = t * std::sqrt(vx[i] * vx[i] + vy[i] * vy[i] + vz[i] * vz[i]);
+    const bool ring = vz[i] != 0 && distance > 1e-5 && r2 >= r02 && r2 <= r12;
+    t_out[i] = via[i] != 0 ? -1.0 : ring ? distance : 0.0;
   }
 }
 
@@ -231,8 +233,8 @@ class RayMaker {
       reflector_->ReflectBatch(t_mirror_from_cam_, n, vx, vy, vz, Mx, My, Mz, b->dx, b->dy, b->dz, on_mirror);
 #pragma GCC diagnostic pop
       // Camera rays past the rim: where they meet the unit's mount ring, in the mirror frame where the rim test
-      // was made (the world direction is the same vector rotated, so t is the same). RayScene traces them only
-      // up to it.
+      // was made (the world ray is the same ray rotated and moved, so the distance along it is the same; v is
+      // not normalised, MountRingHits measures along its unit direction). RayScene traces them only up to it.
       // tnear 1e-5 as in Make (off the mirror, or off the lens face).
       RayOrigins(n, on_mirror, cam_.unit, 1e-5f, via, b->tnear, b->from_mirror, b->from_camera);
       if (unit_->mount_outer_radius > 0) {

@@ -376,9 +376,9 @@ TEST(Render, PastTheRimTheCameraSeesTheMountNotItsOwnLens) {
 }
 
 TEST(Render, SomethingBetweenTheCameraAndItsMountIsSeenInFrontOfIt) {
-  // A camera ray past the rim meets the mount ring analytically and goes to Embree only up to the ring: a plate
-  // placed on that ray, 2 cm in front of the camera, must still be seen (and the ring elsewhere), on both ray
-  // paths (batched pinhole and per-sample thin lens).
+  // A camera ray past the rim meets the mount ring analytically and goes to Embree only up to the ring: plates
+  // placed on such rays, 2 cm in front of the camera and just in front of the ring, must still be seen (and the
+  // ring elsewhere), on both ray paths (batched pinhole and per-sample thin lens).
   SceneConfig cfg = BoardScene(false);
   auto& unit_cfg = cfg.description.units[0];
   unit_cfg.rig.camera = PinholeCamera<double>::FromPhysical(0.016, 4.54e-6 * 25, 110, 88);
@@ -388,14 +388,34 @@ TEST(Render, SomethingBetweenTheCameraAndItsMountIsSeenInFrontOfIt) {
   const Vec3d dir = world_from_cam.Rotate(bearing);
   raytrace::Rect plate;
   plate.object_id = 77;
-  plate.world_from_rect = Rigid3d(Eigen::Quaterniond::FromTwoVectors(Vec3d::UnitZ(), -dir), world_from_cam * (0.02 * dir));
+  // (Plate centres sit a little off the pixel's ray, so that ray does not run along the quad's diagonal, which
+  // Embree's fast, non-robust quad test may miss.)
+  const Rigid3d off_centre = Rigid3d::Translation(Vec3d(3e-4, 1e-4, 0));
+  plate.world_from_rect =
+      Rigid3d(Eigen::Quaterniond::FromTwoVectors(Vec3d::UnitZ(), -dir), world_from_cam.translation + 0.02 * dir) *
+      off_centre;
   plate.width = plate.height = 0.004;
   plate.front.kind = raytrace::Texture::Kind::kSolid;
   plate.front.colour_a = {0.9f, 0.1f, 0.3f};
   plate.double_sided = true;
-  // Without the plate nothing is in between: the camera rays past the rim skip Embree (RayScene::OwnMount).
+  // A second plate just in front of the ring (97 % of the way along the ray of the corner pixel (0, 87)): the
+  // distance up to which such rays are traced must be measured along their unit direction.
+  ASSERT_TRUE(unit_cfg.rig.camera.CamFromImg(Vec2d(0, 87), &bearing));
+  const Rigid3d mirror_from_cam = unit_cfg.rig.cam_from_mirror.Inverse();
+  const Vec3d v = mirror_from_cam.Rotate(bearing.normalized());
+  const double to_ring = (unit_cfg.rig.mirror.RimZ() - mirror_from_cam.translation.z()) / v.z();
+  ASSERT_GT(to_ring, 0.05);
+  const Vec3d dir2 = world_from_cam.Rotate(bearing.normalized());
+  raytrace::Rect near_ring = plate;
+  near_ring.object_id = 78;
+  near_ring.world_from_rect =
+      Rigid3d(Eigen::Quaterniond::FromTwoVectors(Vec3d::UnitZ(), -dir2), world_from_cam.translation + 0.97 * to_ring * dir2) *
+      off_centre;
+  near_ring.front.colour_a = {0.2f, 0.8f, 0.4f};
+  // Without the plates nothing is in between: the camera rays past the rim skip Embree (RayScene::OwnMount).
   EXPECT_TRUE(RayScene(cfg.description).MountPathClear(0));
   cfg.description.rects.push_back(plate);
+  cfg.description.rects.push_back(near_ring);
   const RayScene scene(cfg.description);
   EXPECT_FALSE(scene.MountPathClear(0));
   const auto& unit = scene.description().units[0];
@@ -405,11 +425,14 @@ TEST(Render, SomethingBetweenTheCameraAndItsMountIsSeenInFrontOfIt) {
     ro.lens_radius = lens;
     const raytrace::Frame f = raytrace::Render(scene, raytrace::ViewCamera::Unit(0), ro);
     const size_t corner = 0, far_corner = static_cast<size_t>(87) * f.width + 109;
+    const size_t low_corner = static_cast<size_t>(87) * f.width;
     for (int c = 0; c < 3; ++c) {
       EXPECT_NEAR(f.rgb[3 * corner + c], plate.front.colour_a[c], 1e-6) << "lens " << lens;
+      EXPECT_NEAR(f.rgb[3 * low_corner + c], near_ring.front.colour_a[c], 1e-6) << "lens " << lens;
       EXPECT_FLOAT_EQ(f.rgb[3 * far_corner + c], unit.mount_colour[c]) << "lens " << lens;
     }
     EXPECT_EQ(f.truth.data[corner * raytrace::GroundTruth::kChannels + 7], 77.0f);
+    EXPECT_EQ(f.truth.data[low_corner * raytrace::GroundTruth::kChannels + 7], 78.0f);
     EXPECT_EQ(f.truth.data[far_corner * raytrace::GroundTruth::kChannels + 7], raytrace::kMountId);
   }
 }
