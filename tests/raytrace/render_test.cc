@@ -419,6 +419,14 @@ TEST(Render, SomethingBetweenTheCameraAndItsMountIsSeenInFrontOfIt) {
   const RayScene scene(cfg.description);
   EXPECT_FALSE(scene.MountPathClear(0));
   const auto& unit = scene.description().units[0];
+  {
+    // A ray through the exact centre of a rectangle runs along its quad's diagonal: still a hit (robust mode).
+    SceneConfig centred = cfg;
+    centred.description.rects.back().world_from_rect = near_ring.world_from_rect * off_centre.Inverse();
+    const raytrace::Hit h = RayScene(centred.description).Trace(world_from_cam.translation, dir2, 1e-5);
+    EXPECT_EQ(h.object_id, 78);
+    EXPECT_NEAR(h.t, 0.97 * to_ring, 1e-9);
+  }
   for (const double lens : {0.0, 1e-4}) {
     raytrace::RenderOptions ro;
     ro.samples = 4;
