@@ -610,23 +610,25 @@ void RayScene::Colours(const RayBatch& b, float* rgb) const {
       put(i, {0, 0, 0});
     }
   }
-  // The noise: one batch per rectangle, in order of first appearance.
-  bool done[RayBatch::kMax] = {};
+  // The noise: one batch per rectangle, in order of first appearance (usually one: the floor). Each pass takes
+  // the rays of the first rectangle left and keeps the others, in order, for the next.
   double s_batch[RayBatch::kMax], t_batch[RayBatch::kMax];
   int lanes[RayBatch::kMax];
   Rgb colours[RayBatch::kMax];
-  for (int a = 0; a < n_deferred; ++a) {
-    if (done[a]) continue;
-    const unsigned p = prim[deferred[a]];
-    int m = 0;
-    for (int k = a; k < n_deferred; ++k) {
+  for (int left = n_deferred; left > 0;) {
+    const unsigned p = prim[deferred[0]];
+    int m = 0, kept = 0;
+    for (int k = 0; k < left; ++k) {
       const int i = deferred[k];
-      if (done[k] || prim[i] != p) continue;
-      done[k] = true;
-      lanes[m] = i, s_batch[m] = s_at[i], t_batch[m] = t_at[i], ++m;
+      if (prim[i] == p) {
+        lanes[m] = i, s_batch[m] = s_at[i], t_batch[m] = t_at[i], ++m;
+      } else {
+        deferred[kept++] = i;
+      }
     }
     desc_.rects[p].front.EvalBatch(m, s_batch, t_batch, colours);
     for (int k = 0; k < m; ++k) put(lanes[k], colours[k]);
+    left = kept;
   }
 }
 
