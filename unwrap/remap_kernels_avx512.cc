@@ -85,7 +85,7 @@ HOVS_AVX512 inline __m512i EightWords(const uint8_t* base, const int32_t* offs) 
 }
 
 // 16 RGB pixels (bilinear) at 16.16 coordinates (x, y); the first `count` are stored at o.
-HOVS_AVX512 inline void Rgb16(const uint8_t* data, ptrdiff_t stride, __m512i x, __m512i y, int count, uint8_t* o) {
+HOVS_AVX512 inline bool Rgb16(const uint8_t* data, ptrdiff_t stride, __m512i x, __m512i y, int count, uint8_t* o) {
   const __m512i m63 = _mm512_set1_epi32(63), c64 = _mm512_set1_epi32(64);
   x = _mm512_add_epi32(x, _mm512_set1_epi32(kHalf));
   y = _mm512_add_epi32(y, _mm512_set1_epi32(kHalf));
@@ -117,10 +117,11 @@ HOVS_AVX512 inline void Rgb16(const uint8_t* data, ptrdiff_t stride, __m512i x, 
       53, 54, 8,  9,  10, 12, 13, 14, 24, 25, 26, 28, 29, 30, 40, 41, 42, 44, 45, 46, 56, 57,
       58, 60, 61, 62, 0,  0,  0,  0,  0,  0,  0,  0,  0,  0,  0,  0,  0,  0,  0,  0};
   Store48(_mm512_permutexvar_epi8(_mm512_load_si512(kOrder), packed), 3 * count, o);
+  return true;
 }
 
 // 16 grey pixels (bilinear).
-HOVS_AVX512 inline void Gray16(const uint8_t* data, ptrdiff_t stride, __m512i x, __m512i y, int count, uint8_t* o) {
+HOVS_AVX512 inline bool Gray16(const uint8_t* data, ptrdiff_t stride, __m512i x, __m512i y, int count, uint8_t* o) {
   const __m512i m63 = _mm512_set1_epi32(63), c64 = _mm512_set1_epi32(64), low16 = _mm512_set1_epi32(0xFFFF);
   x = _mm512_add_epi32(x, _mm512_set1_epi32(kHalf));
   y = _mm512_add_epi32(y, _mm512_set1_epi32(kHalf));
@@ -141,6 +142,7 @@ HOVS_AVX512 inline void Gray16(const uint8_t* data, ptrdiff_t stride, __m512i x,
   } else {
     _mm_mask_storeu_epi8(o, __mmask16((1u << count) - 1), bytes);
   }
+  return true;
 }
 
 // 16 pixels of an RGGB mosaic to RGB, bilinear on each colour grid as BayerGridValue (remap_kernels.cc). In
@@ -201,34 +203,31 @@ HOVS_AVX512 inline bool Bayer16(const uint8_t* data, ptrdiff_t stride, __m512i x
   return true;
 }
 
+// Pixels i0 .. i0 + n - 1 of a row, 16 per step: Step (Rgb16, Gray16, Bayer16) writes kBytes per pixel, and
+// where it cannot (Bayer16 near the row's end) the scalar kernel Fallback does those pixels.
+using StepFn = bool (*)(const uint8_t*, ptrdiff_t, __m512i, __m512i, int, uint8_t*);
+using RowFn = void (*)(const uint8_t*, ptrdiff_t, const RowCoords&, int, int, uint8_t*);
+template <StepFn Step, int kBytes, RowFn Fallback>
+HOVS_AVX512 inline void Row16(const uint8_t* data, ptrdiff_t stride, const RowCoords& c, int i0, int n, uint8_t* o) {
+  for (int i = 0; i < n; i += 16) {
+    const int m = n - i < 16 ? n - i : 16;
+    __m512i x, y;
+    Coords16(c, i0 + i, m, &x, &y);
+    if (!Step(data, stride, x, y, m, o + kBytes * i)) Fallback(data, stride, c, i0 + i, m, o + kBytes * i);
+  }
+}
+
 HOVS_AVX512 inline void RgbRowInline(const uint8_t* data, ptrdiff_t stride, const RowCoords& c, int i0, int n,
                                      uint8_t* o) {
-  for (int i = 0; i < n; i += 16) {
-    const int m = n - i < 16 ? n - i : 16;
-    __m512i x, y;
-    Coords16(c, i0 + i, m, &x, &y);
-    Rgb16(data, stride, x, y, m, o + 3 * i);
-  }
+  Row16<Rgb16, 3, BilinearRgbRowScalar>(data, stride, c, i0, n, o);
 }
-
 HOVS_AVX512 inline void GrayRowInline(const uint8_t* data, ptrdiff_t stride, const RowCoords& c, int i0, int n,
                                       uint8_t* o) {
-  for (int i = 0; i < n; i += 16) {
-    const int m = n - i < 16 ? n - i : 16;
-    __m512i x, y;
-    Coords16(c, i0 + i, m, &x, &y);
-    Gray16(data, stride, x, y, m, o + i);
-  }
+  Row16<Gray16, 1, BilinearGrayRowScalar>(data, stride, c, i0, n, o);
 }
-
 HOVS_AVX512 inline void BayerRowInline(const uint8_t* data, ptrdiff_t stride, const RowCoords& c, int i0, int n,
                                        uint8_t* o) {
-  for (int i = 0; i < n; i += 16) {
-    const int m = n - i < 16 ? n - i : 16;
-    __m512i x, y;
-    Coords16(c, i0 + i, m, &x, &y);
-    if (!Bayer16(data, stride, x, y, m, o + 3 * i)) BayerRgbRowScalar(data, stride, c, i0 + i, m, o + 3 * i);
-  }
+  Row16<Bayer16, 3, BayerRgbRowScalar>(data, stride, c, i0, n, o);
 }
 
 }  // namespace
