@@ -101,39 +101,33 @@ void MountRingHits(int n, double zr, double r0, double r1, double cx, double cy,
   for (int i = 0; i < n; ++i) {
     const double w = vz[i] != 0 ? vz[i] : 1.0;
     const double t = dz / w, px = cx + t * vx[i], py = cy + t * vy[i], r2 = px * px + py * py;
-    const double distance = t * std::sqrt(vx[i] * vx[i] + vy[i] * vy[i] + vz[i] * vz[i]);
-    const bool ring = vz[i] != 0 && distance > 1e-5 && r2 >= r02 && r2 <= r12;
-    t_out[i] = via[i] != 0 ? -1.0 : ring ? distance : 0.0;
+    const bool ring = vz[i] != 0 && t > 1e-5 && r2 >= r02 && r2 <= r12;   // v is unit: t is the distance
+    t_out[i] = via[i] != 0 ? -1.0 : ring ? t : 0.0;
   }
 }
 
-// The world rays of a batch. Where via[i] = 1: from mirror point M along the reflected direction d (both in the
-// mirror frame; d given in dx, dy, dz and replaced), mapped by world_from_mirror (column-major Rm, tm).
-// Elsewhere: straight from the camera centre c along Rc (x, y, 1), normalised (Rc: world_from_cam, column-major).
+// The world rays of a batch, mapped by world_from_source (column-major R, t): where via[i] = 1, from mirror point
+// M along the reflected direction d (given in dx, dy, dz); elsewhere from the camera centre c (world frame) along
+// the camera ray v (unit, source frame). d is replaced by the world direction.
 HOVS_VECTOR_CLONES
-void WorldRays(int n, const double* __restrict Rm, const double* __restrict tm, const double* __restrict Rc,
-               const double* __restrict c, const double* __restrict via, const double* __restrict x,
-               const double* __restrict y, const double* __restrict Mx, const double* __restrict My,
+void WorldRays(int n, const double* __restrict R, const double* __restrict tm, const double* __restrict c,
+               const double* __restrict via, const double* __restrict vx, const double* __restrict vy,
+               const double* __restrict vz, const double* __restrict Mx, const double* __restrict My,
                const double* __restrict Mz, double* __restrict dx, double* __restrict dy, double* __restrict dz,
                double* __restrict ox, double* __restrict oy, double* __restrict oz) {
   const double c0 = c[0], c1 = c[1], c2 = c[2];  // loaded once: a load inside a select stops if-conversion
   for (int i = 0; i < n; ++i) {
-    const double len = std::sqrt(x[i] * x[i] + y[i] * y[i] + 1.0);
-    const double sx = x[i] / len, sy = y[i] / len, sz = 1.0 / len;
-    const double cdx = Rc[0] * sx + Rc[3] * sy + Rc[6] * sz, cdy = Rc[1] * sx + Rc[4] * sy + Rc[7] * sz,
-                 cdz = Rc[2] * sx + Rc[5] * sy + Rc[8] * sz;
-    const double mdx = Rm[0] * dx[i] + Rm[3] * dy[i] + Rm[6] * dz[i], mdy = Rm[1] * dx[i] + Rm[4] * dy[i] + Rm[7] * dz[i],
-                 mdz = Rm[2] * dx[i] + Rm[5] * dy[i] + Rm[8] * dz[i];
-    const double mox = Rm[0] * Mx[i] + Rm[3] * My[i] + Rm[6] * Mz[i] + tm[0],
-                 moy = Rm[1] * Mx[i] + Rm[4] * My[i] + Rm[7] * Mz[i] + tm[1],
-                 moz = Rm[2] * Mx[i] + Rm[5] * My[i] + Rm[8] * Mz[i] + tm[2];
     // One comparison per select: GCC 12 if-converts these, not six selects on one bool.
+    const double sx = via[i] > 0.5 ? dx[i] : vx[i], sy = via[i] > 0.5 ? dy[i] : vy[i], sz = via[i] > 0.5 ? dz[i] : vz[i];
+    dx[i] = R[0] * sx + R[3] * sy + R[6] * sz;
+    dy[i] = R[1] * sx + R[4] * sy + R[7] * sz;
+    dz[i] = R[2] * sx + R[5] * sy + R[8] * sz;
+    const double mox = R[0] * Mx[i] + R[3] * My[i] + R[6] * Mz[i] + tm[0],
+                 moy = R[1] * Mx[i] + R[4] * My[i] + R[7] * Mz[i] + tm[1],
+                 moz = R[2] * Mx[i] + R[5] * My[i] + R[8] * Mz[i] + tm[2];
     ox[i] = via[i] > 0.5 ? mox : c0;
     oy[i] = via[i] > 0.5 ? moy : c1;
     oz[i] = via[i] > 0.5 ? moz : c2;
-    dx[i] = via[i] > 0.5 ? mdx : cdx;
-    dy[i] = via[i] > 0.5 ? mdy : cdy;
-    dz[i] = via[i] > 0.5 ? mdz : cdz;
   }
 }
 
@@ -144,14 +138,15 @@ void NormalisedPoints(int n, double fx, double fy, double cx, double cy, const d
   for (int i = 0; i < n; ++i) x[i] = (u[i] - cx) / fx, y[i] = (v[i] - cy) / fy;
 }
 
-// R (column-major 3 x 3) times (x, y, 1) for n points.
+// R (column-major 3 x 3) times (x, y, 1) / |(x, y, 1)| for n points: unit rays.
 HOVS_VECTOR_CLONES
 void RotateRays(int n, const double* __restrict R, const double* __restrict x, const double* __restrict y,
                 double* __restrict vx, double* __restrict vy, double* __restrict vz) {
   for (int i = 0; i < n; ++i) {
-    vx[i] = R[0] * x[i] + R[3] * y[i] + R[6];
-    vy[i] = R[1] * x[i] + R[4] * y[i] + R[7];
-    vz[i] = R[2] * x[i] + R[5] * y[i] + R[8];
+    const double s = 1.0 / std::sqrt(x[i] * x[i] + y[i] * y[i] + 1.0), sx = x[i] * s, sy = y[i] * s;
+    vx[i] = R[0] * sx + R[3] * sy + R[6] * s;
+    vy[i] = R[1] * sx + R[4] * sy + R[7] * s;
+    vz[i] = R[2] * sx + R[5] * sy + R[8] * s;
   }
 }
 
@@ -223,19 +218,17 @@ class RayMaker {
     }
     unsigned char on_mirror[RayBatch::kMax];
     double via[RayBatch::kMax];  // on_mirror as 0 / 1
-    if (unit_) {
-      // The camera rays (x, y, 1) in the mirror frame, all from the camera centre; reflected together.
-      double vx[RayBatch::kMax], vy[RayBatch::kMax], vz[RayBatch::kMax];
-      // (GCC 12 reports the arrays as maybe uninitialised when n could be 0; the callees read only [0, n).)
+    // The unit camera rays, in the mirror frame for a unit (reflected together), in the world for a pinhole.
+    double vx[RayBatch::kMax], vy[RayBatch::kMax], vz[RayBatch::kMax];
+    // (GCC 12 reports the arrays as maybe uninitialised when n could be 0; the callees read only [0, n).)
 #pragma GCC diagnostic push
 #pragma GCC diagnostic ignored "-Wmaybe-uninitialized"
+    if (unit_) {
       RotateRays(n, R_mirror_from_cam_.data(), mx, my, vx, vy, vz);
       reflector_->ReflectBatch(t_mirror_from_cam_, n, vx, vy, vz, Mx, My, Mz, b->dx, b->dy, b->dz, on_mirror);
-#pragma GCC diagnostic pop
       // Camera rays past the rim: where they meet the unit's mount ring, in the mirror frame where the rim test
-      // was made (the world ray is the same ray rotated and moved, so the distance along it is the same; v is
-      // not normalised, MountRingHits measures along its unit direction). RayScene traces them only up to it.
-      // tnear 1e-5 as in Make (off the mirror, or off the lens face).
+      // was made (the world ray is the same ray rotated and moved, so the distance along it is the same).
+      // RayScene traces them only up to it. tnear 1e-5 as in Make (off the mirror, or off the lens face).
       RayOrigins(n, on_mirror, cam_.unit, 1e-5f, via, b->tnear, b->from_mirror, b->from_camera);
       if (unit_->mount_outer_radius > 0) {
         MountRingHits(n, unit_->rig.mirror.RimZ(), unit_->rig.mirror.RimRadius(), unit_->mount_outer_radius,
@@ -244,13 +237,21 @@ class RayMaker {
       } else {
         std::fill(b->mount_t, b->mount_t + n, -1.0);
       }
+      // Both kinds of ray from the mirror frame to the world in one rotation.
+      const Vec3d cam_centre = unit_->world_from_mirror * t_mirror_from_cam_;
+      WorldRays(n, R_world_from_mirror_.data(), t_world_from_mirror_.data(), cam_centre.data(), via, vx, vy, vz, Mx,
+                My, Mz, b->dx, b->dy, b->dz, b->ox, b->oy, b->oz);
     } else {
+      RotateRays(n, R_world_from_cam_.data(), mx, my, vx, vy, vz);
       std::fill(on_mirror, on_mirror + n, 0);
       RayOrigins(n, on_mirror, -1, 0.0f, via, b->tnear, b->from_mirror, b->from_camera);
       std::fill(b->mount_t, b->mount_t + n, -1.0);
+      std::copy(vx, vx + n, b->dx), std::copy(vy, vy + n, b->dy), std::copy(vz, vz + n, b->dz);
+      std::fill(b->ox, b->ox + n, world_from_cam_.translation.x());
+      std::fill(b->oy, b->oy + n, world_from_cam_.translation.y());
+      std::fill(b->oz, b->oz + n, world_from_cam_.translation.z());
     }
-    WorldRays(n, R_world_from_mirror_.data(), t_world_from_mirror_.data(), R_world_from_cam_.data(),
-              world_from_cam_.translation.data(), via, mx, my, Mx, My, Mz, b->dx, b->dy, b->dz, b->ox, b->oy, b->oz);
+#pragma GCC diagnostic pop
   }
 
   static void Store(const RayRequest& r, int i, RayBatch* b) {
