@@ -28,7 +28,10 @@ void ReflectKernel(double cc, double ia2, double ib2, double rim2, double o0, do
     const double disc = B * B - A * C;
     const double sq = std::sqrt(disc >= 0 ? disc : 0.0);
     const double q = B >= 0 ? -(B + sq) : -(B - sq);
-    const double r0 = C / q, r1 = q / A;
+    // As IntersectSheetWith: both roots from one division; q = 0 gives no valid root either way (inv infinite,
+    // r1 = 0 * inf is NaN, t0 is set to inf below).
+    const double inv = 1.0 / (q * A);
+    const double r0 = C * A * inv, r1 = q * q * inv;
     // The smaller valid root (r0 on a tie, as the scalar loop), +inf when neither is valid (t > 0, finite, on
     // the upper sheet). Written as chains of single-comparison selects on doubles, which GCC 12 vectorises (it
     // does not vectorise && or & of comparisons here).
@@ -45,25 +48,56 @@ void ReflectKernel(double cc, double ia2, double ib2, double rim2, double o0, do
     hit = M0 * M0 + M1 * M1 <= rim2 ? hit : 0.0;
     // ReflectAt, inline.
     const double n0 = M0 * ib2, n1 = M1 * ib2, n2 = -(M2 + cc) * ia2;
-    const double k = 2 * (v0 * n0 + v1 * n1 + v2 * n2) / (n0 * n0 + n1 * n1 + n2 * n2);
+    const double nn = n0 * n0 + n1 * n1 + n2 * n2, vlen = std::sqrt(v0 * v0 + v1 * v1 + v2 * v2);
+    const double g = 1.0 / (nn * vlen);
+    const double k = 2 * (v0 * n0 + v1 * n1 + v2 * n2) * (g * vlen);
     const double w0 = v0 - k * n0, w1 = v1 - k * n1, w2 = v2 - k * n2;
-    const double inv_len = 1.0 / std::sqrt(w0 * w0 + w1 * w1 + w2 * w2);
+    const double inv_len = g * nn;
     Mx[i] = M0, My[i] = M1, Mz[i] = M2;
     dx[i] = w0 * inv_len, dy[i] = w1 * inv_len, dz[i] = w2 * inv_len;
     ok[i] = degenerate > hit ? degenerate : hit;
   }
 }
 
+// The count of rays that go up and cross the plane z = zr (from o, which lies below it) within radius^2 lim,
+// without a division: |o_xy vz + (zr - oz) v_xy|^2 <= lim vz^2.
+HOVS_VECTOR_CLONES
+int CountRimCrossings(double o0, double o1, double dz, double lim, int n, const double* __restrict vx,
+                      const double* __restrict vy, const double* __restrict vz) {
+  int count = 0;
+  for (int i = 0; i < n; ++i) {
+    const double px = o0 * vz[i] + dz * vx[i], py = o1 * vz[i] + dz * vy[i];
+    const int inside = px * px + py * py <= lim * (vz[i] * vz[i]) ? 1 : 0;
+    count += vz[i] > 0 ? inside : 0;
+  }
+  return count;
+}
+
 }  // namespace
+
+bool MirrorReflector::MissesRim(const Vec3d& o, int n, const double* vx, const double* vy, const double* vz) const {
+  const double oz = o(2) + c_;
+  const bool in_lower_nappe = oz < 0 && oz * oz * ia2_ - (o(0) * o(0) + o(1) * o(1)) * ib2_ >= 1 && o(2) < rim_z_;
+  if (!in_lower_nappe || n == 0) return !in_lower_nappe ? false : true;
+  // Ray 0 first: inside the rim usually means a block to solve, answered without the pass over all rays.
+  const double lim = rim2_ * (1 + 1e-6);
+  return CountRimCrossings(o(0), o(1), rim_z_ - o(2), lim, 1, vx, vy, vz) == 0 &&
+         CountRimCrossings(o(0), o(1), rim_z_ - o(2), lim, n, vx, vy, vz) == 0;
+}
 
 void MirrorReflector::ReflectBatch(const Vec3d& o, int n, const double* vx, const double* vy, const double* vz,
                                    double* Mx, double* My, double* Mz, double* dx, double* dy, double* dz,
                                    unsigned char* ok) const {
   // In blocks, with the lane flags as doubles (a byte array among doubles stops GCC 12's vectoriser).
-  constexpr int kBlock = 256;
+  constexpr int kBlock = 64;
   double flag[kBlock];
   for (int i0 = 0; i0 < n; i0 += kBlock) {
     const int m = std::min(kBlock, n - i0);
+    if (MissesRim(o, m, vx + i0, vy + i0, vz + i0)) {
+      for (double* a : {Mx, My, Mz, dx, dy, dz}) std::fill(a + i0, a + i0 + m, 0.0);
+      std::fill(ok + i0, ok + i0 + m, 0);
+      continue;
+    }
     ReflectKernel(c_, ia2_, ib2_, rim2_, o(0), o(1), o(2), m, vx + i0, vy + i0, vz + i0, Mx + i0, My + i0, Mz + i0,
                   dx + i0, dy + i0, dz + i0, flag);
     for (int i = 0; i < m; ++i) ok[i0 + i] = static_cast<unsigned char>(flag[i]);

@@ -105,8 +105,14 @@ struct HyperboloidMirror {
       if (ScalarPart(disc) < 0) return false;
       const T sq = sqrt(disc);
       const T q = ScalarPart(B) >= 0 ? -(B + sq) : -(B - sq);
-      if (ScalarPart(q) != 0) roots[count++] = C / q;
-      roots[count++] = q / A;
+      if (ScalarPart(q) != 0) {
+        // C / q and q / A from one division (ReflectBatch's per-ray cost is the divider's).
+        const T inv = T(1) / (q * A);
+        roots[count++] = C * A * inv;
+        roots[count++] = q * q * inv;
+      } else {
+        roots[count++] = q / A;
+      }
     }
     bool found = false;
     for (int i = 0; i < count; ++i) {
@@ -144,7 +150,8 @@ struct HyperboloidMirror {
 class MirrorReflector {
  public:
   explicit MirrorReflector(const HyperboloidMirror<double>& m)
-      : c_(m.c()), ia2_(1.0 / (m.a * m.a)), ib2_(1.0 / (m.b * m.b)), rim2_(m.RimRadius() * m.RimRadius() * (1 + 1e-12)) {}
+      : c_(m.c()), ia2_(1.0 / (m.a * m.a)), ib2_(1.0 / (m.b * m.b)), rim2_(m.RimRadius() * m.RimRadius() * (1 + 1e-12)),
+        rim_z_(m.RimZ()) {}
 
   // Ray o + t v (mirror frame, v any length): the mirror point within the rim and the unit reflected direction.
   bool Reflect(const Vec3d& o, const Vec3d& v, Vec3d* mirror_point, Vec3d* direction) const {
@@ -161,21 +168,35 @@ class MirrorReflector {
   // the compiler vectorises it (AVX2 where the CPU has it, chosen at load time). The results are bit-identical
   // to Reflect's, on every CPU (the same operations in the same order, and no fused multiply-add). ok[i] = 1
   // where ray i meets the mirror within the rim, else 0; M and d are meaningful only where ok[i] = 1.
+  // Blocks of rays that all pass the rim plane outside the rim are answered without solving: see MissesRim.
   void ReflectBatch(const Vec3d& o, int n, const double* vx, const double* vy, const double* vz, double* Mx,
                     double* My, double* Mz, double* dx, double* dy, double* dz, unsigned char* ok) const;
+
+  // True when every ray o + t v (v any length) of the n given provably misses the mirror within the rim: o lies
+  // inside the lower nappe (where the camera of any rig sits, at or near the second focus) and each ray goes down
+  // or passes the rim plane z = RimZ at least 1e-4 % outside the rim. Why that suffices: from inside the lower
+  // nappe every direction towards the upper sheet lies strictly inside its asymptotic cone (the sum of two vectors
+  // of that convex cone), so such a ray, once inside the upper nappe, never leaves it; the solid under the rim
+  // plane inside the upper nappe is convex, its boundary the mirror within the rim and the rim disc; a ray
+  // crossing the rim plane outside the disc is outside that solid there, so it never entered it from below, so it
+  // never met the mirror within the rim. Exact in real numbers; the margin covers rounding and rim2_'s 1e-12.
+  bool MissesRim(const Vec3d& o, int n, const double* vx, const double* vy, const double* vz) const;
 
   // The law of reflection at mirror point M for incoming direction v (unnormalised normal of Normal()).
   void ReflectAt(double v0, double v1, double v2, double M0, double M1, double M2, double* d0, double* d1,
                  double* d2) const {
     const double n0 = M0 * ib2_, n1 = M1 * ib2_, n2 = -(M2 + c_) * ia2_;
-    const double k = 2 * (v0 * n0 + v1 * n1 + v2 * n2) / (n0 * n0 + n1 * n1 + n2 * n2);
+    // r = v - 2 (v.n) / (n.n) n has the length of v (a reflection); 1 / (n.n) and 1 / |v| come from one division.
+    const double nn = n0 * n0 + n1 * n1 + n2 * n2, vlen = std::sqrt(v0 * v0 + v1 * v1 + v2 * v2);
+    const double g = 1.0 / (nn * vlen);
+    const double k = 2 * (v0 * n0 + v1 * n1 + v2 * n2) * (g * vlen);
     const double r0 = v0 - k * n0, r1 = v1 - k * n1, r2 = v2 - k * n2;
-    const double inv_len = 1.0 / std::sqrt(r0 * r0 + r1 * r1 + r2 * r2);
+    const double inv_len = g * nn;
     *d0 = r0 * inv_len, *d1 = r1 * inv_len, *d2 = r2 * inv_len;
   }
 
  private:
-  double c_, ia2_, ib2_, rim2_;
+  double c_, ia2_, ib2_, rim2_, rim_z_;
 };
 
 }  // namespace hovs

@@ -1,7 +1,8 @@
 // Per-point cost of the core projections (single-viewpoint closed form, law-of-reflection solve,
-// back-projection, polynomial world2cam).
+// back-projection, polynomial world2cam) and of the renderer's batched mirror reflection.
 #include <benchmark/benchmark.h>
 
+#include "core/hyperboloid.h"
 #include "core/model_fit.h"
 #include "tests/core/test_rigs.h"
 
@@ -57,5 +58,34 @@ void BM_PolynomialWorldToCamExact(benchmark::State& state) {
   state.SetItemsProcessed(state.iterations());
 }
 BENCHMARK(BM_PolynomialWorldToCamExact);
+
+// MirrorReflector::ReflectBatch on 256 unit camera rays of the reference rig, as the renderer calls it per chunk of
+// samples: a 16 x 16 pixel patch at the image centre's side within the mirror's image disc (argument 0: every ray
+// solved) or in the image corner outside the rim (argument 1: blocks answered by the rim-plane test).
+void BM_ReflectBatch256(benchmark::State& state) {
+  const auto rig = hovs::test::AlignedRig();
+  const hovs::MirrorReflector reflector(rig.mirror);
+  const Vec3d o = rig.CameraCentre();
+  constexpr int n = 256;
+  std::vector<double> vx(n), vy(n), vz(n), Mx(n), My(n), Mz(n), dx(n), dy(n), dz(n);
+  std::vector<unsigned char> ok(n);
+  const Vec2d corner = state.range(0) == 0 ? Vec2d(rig.camera.cx + 600, rig.camera.cy + 300) : Vec2d(40, 40);
+  for (int i = 0; i < n; ++i) {
+    Vec3d ray;
+    rig.camera.CamFromImg(corner + Vec2d(i % 16, i / 16), &ray);
+    const Vec3d v = rig.cam_from_mirror.Inverse().Rotate(ray.normalized());
+    vx[i] = v.x(), vy[i] = v.y(), vz[i] = v.z();
+  }
+  for (auto _ : state) {
+    reflector.ReflectBatch(o, n, vx.data(), vy.data(), vz.data(), Mx.data(), My.data(), Mz.data(), dx.data(), dy.data(),
+                           dz.data(), ok.data());
+    benchmark::DoNotOptimize(dx.data());
+  }
+  int hits = 0;
+  for (int i = 0; i < n; ++i) hits += ok[i];
+  state.counters["mirror_hits"] = hits;
+  state.SetItemsProcessed(state.iterations() * n);
+}
+BENCHMARK(BM_ReflectBatch256)->Arg(0)->Arg(1);
 
 }  // namespace

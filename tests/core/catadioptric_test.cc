@@ -145,7 +145,8 @@ TEST(Catadioptric, FastReflectorAgreesWithTheTemplatedReflection) {
 TEST(Catadioptric, BatchReflectionIsBitIdenticalToTheScalarOne) {
   // ReflectBatch (vectorised; the renderer's per-sample path) against Reflect, exactly: every decision and
   // every bit of M and d. Rays: spread past the rim, pointing away, and along the asymptotic cone where the
-  // quadratic degenerates (those lanes take the scalar code); 1001 rays, so the vector loop has a remainder.
+  // quadratic degenerates (those lanes take the scalar code); 1001 rays, so the vector loop has a remainder. The
+  // first two blocks of 64 rays all pass outside the rim, so ReflectBatch answers them without solving.
   std::mt19937 rng(5);
   std::uniform_real_distribution<double> U(-1, 1);
   for (const auto& rig : {test::AlignedRig(), test::MisalignedRig()}) {
@@ -159,10 +160,16 @@ TEST(Catadioptric, BatchReflectionIsBitIdenticalToTheScalarOne) {
       if (i % 97 == 0) {  // parallel to the asymptotic cone: A = 0
         const double phi = U(rng) * M_PI;
         vx[i] = b * std::cos(phi), vy[i] = b * std::sin(phi), vz[i] = a;
+      } else if (i < 128) {  // 27-45 degrees off the axis; the rim is about 17 degrees off it from the camera
+        const double phi = U(rng) * M_PI, r = 0.75 + 0.25 * U(rng);
+        vx[i] = r * std::cos(phi), vy[i] = r * std::sin(phi), vz[i] = 1.0;
       } else {
         vx[i] = 0.4 * U(rng), vy[i] = 0.4 * U(rng), vz[i] = i % 50 == 1 ? -1.0 : 1.0;
       }
     }
+    ASSERT_TRUE(fast.MissesRim(o, 64, vx.data(), vy.data(), vz.data()));
+    ASSERT_TRUE(fast.MissesRim(o, 64, vx.data() + 64, vy.data() + 64, vz.data() + 64));
+    ASSERT_FALSE(fast.MissesRim(o, 64, vx.data() + 128, vy.data() + 128, vz.data() + 128));
     fast.ReflectBatch(o, n, vx.data(), vy.data(), vz.data(), Mx.data(), My.data(), Mz.data(), dx.data(), dy.data(),
                       dz.data(), ok.data());
     int hits = 0, misses = 0;
@@ -184,6 +191,52 @@ TEST(Catadioptric, BatchReflectionIsBitIdenticalToTheScalarOne) {
     }
     EXPECT_GT(hits, 300);
     EXPECT_GT(misses, 100);
+  }
+}
+
+TEST(Catadioptric, RaysSkippedByTheRimPlaneTestNeverMeetTheMirror) {
+  // MissesRim lets ReflectBatch skip blocks of rays without solving; it must never skip a ray that Reflect says
+  // meets the mirror. Rays from the camera centres of the aligned and misaligned rigs and of a camera 5 mm off the
+  // focus, aimed at the rim plane at radii from 0.9 to 1.1 rim radii (and a band within 1e-5 of the rim itself);
+  // every ray that crosses within the rim must meet the mirror, and MissesRim must say so for every one outside
+  // by more than its margin.
+  std::mt19937 rng(9);
+  std::uniform_real_distribution<double> U(0, 1);
+  auto shifted = test::AlignedRig();
+  shifted.cam_from_mirror.translation += Vec3d(0.005, -0.003, 0.004);
+  for (const auto& rig : {test::AlignedRig(), test::MisalignedRig(), shifted}) {
+    const MirrorReflector fast(rig.mirror);
+    const Vec3d o = rig.CameraCentre();
+    const double r0 = rig.mirror.RimRadius(), zr = rig.mirror.RimZ();
+    int inside = 0, outside = 0, skipped = 0;
+    for (int i = 0; i < 20000; ++i) {
+      const double phi = 2 * M_PI * U(rng);
+      const double rel = i % 2 == 0 ? 0.9 + 0.2 * U(rng) : 1.0 + 1e-5 * (2 * U(rng) - 1);
+      const Vec3d target(rel * r0 * std::cos(phi), rel * r0 * std::sin(phi), zr);
+      const Vec3d v = (target - o) * (0.5 + U(rng));  // any length
+      Vec3d M, d;
+      const bool hit = fast.Reflect(o, v, &M, &d);
+      const bool skip = fast.MissesRim(o, 1, &v.x(), &v.y(), &v.z());
+      if (skip) {
+        ++skipped;
+        ASSERT_FALSE(hit) << "ray " << i << " at " << rel << " rim radii was skipped but meets the mirror";
+      }
+      if (rel < 1 - 1e-9) {
+        ++inside;
+        ASSERT_TRUE(hit) << "ray " << i << " crosses the rim plane at " << rel << " rim radii";
+      } else if (rel > 1 + 1e-6) {
+        ++outside;
+        ASSERT_TRUE(skip) << "ray " << i << " at " << rel << " rim radii";
+      }
+    }
+    EXPECT_GT(inside, 9000);
+    EXPECT_GT(outside, 4000);
+    EXPECT_GE(skipped, outside);
+    // A ray pointing down never meets the mirror; an origin outside the lower nappe is never skipped.
+    const Vec3d down(0.01, 0.0, -1.0), up(0.9, 0.0, 1.0);
+    EXPECT_TRUE(fast.MissesRim(o, 1, &down.x(), &down.y(), &down.z()));
+    const Vec3d beside(0.3, 0.0, zr - 0.01);
+    EXPECT_FALSE(fast.MissesRim(beside, 1, &up.x(), &up.y(), &up.z()));
   }
 }
 
