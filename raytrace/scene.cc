@@ -641,7 +641,20 @@ void RayScene::Geometry(const RayBatch& b, Hit* hits) const {
       h = Hit();
       const int k = i0 + i;
       if (!b.valid[k] || geom[i] == RTC_INVALID_GEOMETRY_ID) continue;
-      Shade(Vec3d(b.ox[k], b.oy[k], b.oz[k]), Vec3d(b.dx[k], b.dy[k], b.dz[k]), geom[i], prim[i], &h, false);
+      const Vec3d o(b.ox[k], b.oy[k], b.oz[k]), d(b.dx[k], b.dy[k], b.dz[k]);
+      const int u = b.from_camera[k];
+      if (u >= 0 && static_cast<size_t>(u) < own_mount_.size() && own_mount_[u].geometry && b.mount_t[k] > 0 &&
+          geom[i] == own_mount_[u].geom_id) {
+        // A straight camera ray that ended on its own mount ring: the ring's distance is already known (the
+        // renderer's analytic test, in double); Shade would solve it again.
+        const UserGeometry& g = *own_mount_[u].geometry;
+        const Vec3d n = g.R_world_from_local.col(2);
+        h.hit = true, h.object_id = g.object_id, h.unit = g.unit, h.t = b.mount_t[k], h.point = o + h.t * d;
+        h.normal = d.dot(n) < 0 ? n : Vec3d(-n);
+        h.colour = g.colour;
+        continue;
+      }
+      Shade(o, d, geom[i], prim[i], &h, false);
     }
   }
 }

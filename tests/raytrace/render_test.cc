@@ -370,6 +370,22 @@ TEST(Render, PastTheRimTheCameraSeesTheMountNotItsOwnLens) {
       // The ground truth (pixel centre, no lens): the mount, beyond the camera, not the lens face.
       EXPECT_EQ(f.truth.data[p * raytrace::GroundTruth::kChannels + 7], raytrace::kMountId);
       EXPECT_EQ(f.truth.data[p * raytrace::GroundTruth::kChannels + 8], 0.0f) << "not a mirror pixel";
+      // Its point lies on the ring (the rim plane, between the rim and the ring's outer radius), on the pixel's
+      // straight camera ray, at the recorded range from the viewpoint; its normal is the mirror axis, facing the
+      // camera.
+      const float* g = &f.truth.data[p * raytrace::GroundTruth::kChannels];
+      const Vec3d P(g[1], g[2], g[3]), N(g[4], g[5], g[6]);
+      const Vec3d Pm = unit.world_from_mirror.Inverse() * P;
+      EXPECT_NEAR(Pm.z(), unit.rig.mirror.RimZ(), 1e-6);
+      EXPECT_GE(Pm.head<2>().norm(), unit.rig.mirror.RimRadius() - 1e-6);
+      EXPECT_LE(Pm.head<2>().norm(), unit.mount_outer_radius + 1e-6);
+      Vec2d uv;
+      ASSERT_TRUE(unit.rig.camera.ImgFromCam(unit.rig.cam_from_mirror * Pm, &uv));
+      EXPECT_NEAR(uv.x(), x, 1e-3);
+      EXPECT_NEAR(uv.y(), y, 1e-3);
+      EXPECT_NEAR(g[0], (P - unit.world_from_mirror.translation).norm(), 1e-6);
+      EXPECT_NEAR(std::abs(N.dot(unit.world_from_mirror.Rotate(Vec3d(0, 0, 1)))), 1.0, 1e-6);
+      EXPECT_GT(N.dot(unit.world_from_mirror * unit.rig.CameraCentre() - P), 0) << "the normal faces the camera";
     }
     EXPECT_EQ(past_rim, 4);
   }
