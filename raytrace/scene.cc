@@ -482,7 +482,7 @@ void FillPacket(int w, const double* __restrict ox, const double* __restrict oy,
   }
 }
 
-// Batch rays [i0, i0 + W) (fewer at the end) as one Embree packet of width W (RTCRayHit8 or RTCRayHit16).
+// The Embree lanes of a whole batch, set up once before its packets are traced.
 //
 // A unit's straight camera rays (they missed its mirror within the rim: 40 % of a frame's samples, the image
 // past the rim) end on its mount ring unless something lies in between. They meet the ring analytically, in
@@ -490,90 +490,124 @@ void FillPacket(int w, const double* __restrict ox, const double* __restrict oy,
 // here with the ring's own test), and go to Embree only up to that distance with the ring masked off: anything
 // nearer still wins, and the ring's callback is not called for them. Where nothing can be in between
 // (OwnMount::path_clear) they do not go to Embree at all; a packet of such rays only gets its hits.
-template <int W, class RayHitW, class IntersectW>
-void IntersectBatchPacket(RTCScene scene, const RayBatch& b, int i0, const std::vector<RayScene::OwnMount>& mounts,
-                          unsigned* geom_ids, unsigned* prim_ids, IntersectW intersect) {
-  alignas(64) int valid[W];
-  alignas(64) float tfar[W];
-  alignas(64) unsigned mask_off[W];
-  int mount_unit[W];
-  const int count = std::min(W, b.n - i0);
-  // Lanes past count repeat the batch's ray i0 (masked off).
-  int k[W];
-  for (int i = 0; i < W; ++i) k[i] = i0 + (i < count ? i : 0);
-  bool any_camera = false;
-  for (int i = 0; i < W; ++i) {
-    valid[i] = i < count && b.valid[k[i]] ? -1 : 0;
-    tfar[i] = 0, mask_off[i] = 0, mount_unit[i] = -1;
-    any_camera |= b.from_camera[k[i]] >= 0;
+struct BatchLanes {
+  alignas(64) int valid[RayBatch::kMax];         // -1: traced by Embree, 0: not
+  alignas(64) float tfar[RayBatch::kMax];        // > 0: traced only up to here (the ring's distance)
+  alignas(64) unsigned mask_off[RayBatch::kMax]; // Embree mask bits cleared (the ring's)
+  alignas(64) int mount_unit[RayBatch::kMax];    // the unit whose ring ends the ray where Embree finds nothing
+};
+
+// The common case of PrepareLanes without branches: every straight camera ray of the batch leaves unit U's
+// camera with its ring distance computed.
+HOVS_VECTOR_CLONES
+void RingLanes(int n, const unsigned char* __restrict bvalid, const int* __restrict from_camera,
+               const double* __restrict mount_t, int U, unsigned bit, int clear, int* __restrict valid,
+               float* __restrict tfar, unsigned* __restrict mask_off, int* __restrict mount_unit) {
+  for (int i = 0; i < n; ++i) {
+    const double t = mount_t[i];
+    const int ring = bvalid[i] != 0 && from_camera[i] >= 0 && from_camera[i] == U && t > 0 ? 1 : 0;
+    tfar[i] = ring ? static_cast<float>(t) : 0.0f;
+    mask_off[i] = ring ? bit : 0u;
+    mount_unit[i] = ring ? U : -1;
+    valid[i] = bvalid[i] == 0 || (ring & clear) ? 0 : -1;   // nothing in between: no Embree for this lane
   }
-  for (int i = 0; i < W && any_camera; ++i) {
-    const int u = b.from_camera[k[i]];
-    if (!valid[i] || u < 0 || static_cast<size_t>(u) >= mounts.size() || !mounts[u].geometry) continue;
-    const int j = k[i];
+}
+
+void PrepareLanes(const RayBatch& b, const std::vector<RayScene::OwnMount>& mounts, BatchLanes* L) {
+  const int n = b.n;
+  int U = -1;
+  for (int i = 0; i < n && U < 0; ++i) U = b.from_camera[i];
+  bool uniform = U >= 0 && static_cast<size_t>(U) < mounts.size() && mounts[U].geometry != nullptr;
+  for (int i = 0; i < n && uniform; ++i) uniform = b.from_camera[i] < 0 || (b.from_camera[i] == U && b.mount_t[i] >= 0);
+  if (uniform || U < 0) {   // U < 0: no straight camera ray at all (no lane is a ring lane)
+    RingLanes(n, b.valid, b.from_camera, b.mount_t, U, U >= 0 ? MountMaskBit(U) : 0u,
+              U >= 0 && mounts[U].path_clear ? 1 : 0, L->valid, L->tfar, L->mask_off, L->mount_unit);
+    return;
+  }
+  for (int j = 0; j < n; ++j) {
+    L->valid[j] = b.valid[j] ? -1 : 0;
+    L->tfar[j] = 0, L->mask_off[j] = 0, L->mount_unit[j] = -1;
+    const int u = b.from_camera[j];
+    if (!b.valid[j] || u < 0 || static_cast<size_t>(u) >= mounts.size() || !mounts[u].geometry) continue;
     double t = b.mount_t[j];
     if (t < 0 && !mounts[u].geometry->Intersect(Vec3d(b.ox[j], b.oy[j], b.oz[j]), Vec3d(b.dx[j], b.dy[j], b.dz[j]),
                                                 b.tnear[j], HUGE_VAL, &t, nullptr))
       continue;
     if (t <= 0) continue;
-    tfar[i] = static_cast<float>(t);
-    mask_off[i] = MountMaskBit(u);
-    mount_unit[i] = u;
+    L->tfar[j] = static_cast<float>(t);
+    L->mask_off[j] = MountMaskBit(u);
+    L->mount_unit[j] = u;
     // Nothing can be in between (and the ray starts at the camera centre, as the path test assumes).
-    if (mounts[u].path_clear && b.mount_t[j] > 0) valid[i] = 0;
+    if (mounts[u].path_clear && b.mount_t[j] > 0) L->valid[j] = 0;
   }
-  bool any = false;
-  for (int i = 0; i < W; ++i) any |= valid[i] != 0;
+}
+
+// Batch rays [i0, i0 + W) (fewer at the end) as one Embree packet of width W (RTCRayHit8 or RTCRayHit16).
+template <int W, class RayHitW, class IntersectW>
+void TracePacketOfBatch(RTCScene scene, const RayBatch& b, const BatchLanes& L, int i0,
+                        const std::vector<RayScene::OwnMount>& mounts, unsigned* geom_ids, unsigned* prim_ids,
+                        IntersectW intersect) {
+  const int count = std::min(W, b.n - i0);
+  int any = 0;
+  for (int i = 0; i < count; ++i) any |= L.valid[i0 + i];
   if (!any) {
     for (int i = 0; i < count; ++i) {
-      geom_ids[i] = mount_unit[i] >= 0 ? mounts[mount_unit[i]].geom_id : RTC_INVALID_GEOMETRY_ID;
+      const int u = L.mount_unit[i0 + i];
+      geom_ids[i] = u >= 0 ? mounts[u].geom_id : RTC_INVALID_GEOMETRY_ID;
       prim_ids[i] = 0;
     }
     return;
   }
   alignas(64) RayHitW rh;
+  alignas(64) int partial_valid[W];
+  const int* valid = L.valid + i0;   // 64-byte aligned for W = 16 (i0 a multiple of 16), 32-byte for W = 8
   if (count == W) {
     FillPacket(W, b.ox + i0, b.oy + i0, b.oz + i0, b.dx + i0, b.dy + i0, b.dz + i0, b.tnear + i0, b.from_mirror + i0,
-               b.from_camera + i0, tfar, mask_off, rh.ray.org_x, rh.ray.org_y, rh.ray.org_z, rh.ray.dir_x,
-               rh.ray.dir_y, rh.ray.dir_z, rh.ray.tnear, rh.ray.tfar, rh.ray.mask, rh.ray.id, rh.ray.flags,
-               rh.ray.time, rh.hit.geomID, rh.hit.instID[0]);
+               b.from_camera + i0, L.tfar + i0, L.mask_off + i0, rh.ray.org_x, rh.ray.org_y, rh.ray.org_z,
+               rh.ray.dir_x, rh.ray.dir_y, rh.ray.dir_z, rh.ray.tnear, rh.ray.tfar, rh.ray.mask, rh.ray.id,
+               rh.ray.flags, rh.ray.time, rh.hit.geomID, rh.hit.instID[0]);
   } else {
+    // Lanes past count repeat the batch's ray i0, masked off.
     for (int i = 0; i < W; ++i) {
-      const int j = k[i];
+      const int j = i0 + (i < count ? i : 0);
+      partial_valid[i] = i < count ? L.valid[j] : 0;
       rh.ray.org_x[i] = static_cast<float>(b.ox[j]), rh.ray.org_y[i] = static_cast<float>(b.oy[j]);
       rh.ray.org_z[i] = static_cast<float>(b.oz[j]);
       rh.ray.dir_x[i] = static_cast<float>(b.dx[j]), rh.ray.dir_y[i] = static_cast<float>(b.dy[j]);
       rh.ray.dir_z[i] = static_cast<float>(b.dz[j]);
       SetLane(&rh, i, b.tnear[j], b.from_mirror[j], b.from_camera[j]);
-      if (tfar[i] > 0) rh.ray.tfar[i] = tfar[i];
-      rh.ray.mask[i] &= ~mask_off[i];
+      if (L.tfar[j] > 0) rh.ray.tfar[i] = L.tfar[j];
+      rh.ray.mask[i] &= ~L.mask_off[j];
     }
+    valid = partial_valid;
   }
   TracePacket(scene, valid, &rh, intersect);
   for (int i = 0; i < count; ++i) {
+    const int u = L.mount_unit[i0 + i];
     geom_ids[i] = rh.hit.geomID[i], prim_ids[i] = rh.hit.primID[i];
-    if (mount_unit[i] >= 0 && geom_ids[i] == RTC_INVALID_GEOMETRY_ID)
-      geom_ids[i] = mounts[mount_unit[i]].geom_id, prim_ids[i] = 0;
+    if (u >= 0 && geom_ids[i] == RTC_INVALID_GEOMETRY_ID) geom_ids[i] = mounts[u].geom_id, prim_ids[i] = 0;
   }
 }
 
 }  // namespace
 
-void RayScene::IntersectBatch16(const RayBatch& b, int i0, unsigned* geom_ids, unsigned* prim_ids) const {
-  if (native16_) {
-    IntersectBatchPacket<16, RTCRayHit16>(scene_, b, i0, own_mount_, geom_ids, prim_ids, rtcIntersect16);
-    return;
+void RayScene::IntersectBatch(const RayBatch& b, unsigned* geom_ids, unsigned* prim_ids) const {
+  BatchLanes lanes;
+  PrepareLanes(b, own_mount_, &lanes);
+  for (int i0 = 0; i0 < b.n; i0 += native16_ ? 16 : 8) {
+    if (native16_) {
+      TracePacketOfBatch<16, RTCRayHit16>(scene_, b, lanes, i0, own_mount_, geom_ids + i0, prim_ids + i0, rtcIntersect16);
+    } else {
+      // Without native 16-wide packets (no AVX-512) Embree emulates rtcIntersect16; rtcIntersect8 is faster.
+      TracePacketOfBatch<8, RTCRayHit8>(scene_, b, lanes, i0, own_mount_, geom_ids + i0, prim_ids + i0, rtcIntersect8);
+    }
   }
-  // Without native 16-wide packets (no AVX-512) Embree emulates rtcIntersect16; two rtcIntersect8 are faster.
-  IntersectBatchPacket<8, RTCRayHit8>(scene_, b, i0, own_mount_, geom_ids, prim_ids, rtcIntersect8);
-  if (b.n - i0 > 8)
-    IntersectBatchPacket<8, RTCRayHit8>(scene_, b, i0 + 8, own_mount_, geom_ids + 8, prim_ids + 8, rtcIntersect8);
 }
 
 void RayScene::Colours(const RayBatch& b, float* rgb) const {
   const int n = b.n;
   unsigned geom[RayBatch::kMax], prim[RayBatch::kMax];
-  for (int i0 = 0; i0 < n; i0 += 16) IntersectBatch16(b, i0, geom + i0, prim + i0);
+  IntersectBatch(b, geom, prim);
   // Rectangle hits with a noise texture are collected per rectangle and evaluated together.
   int deferred[RayBatch::kMax], n_deferred = 0;
   const auto put = [&](int i, const Rgb& c) { rgb[3 * i] = c[0], rgb[3 * i + 1] = c[1], rgb[3 * i + 2] = c[2]; };
@@ -633,29 +667,26 @@ void RayScene::Colours(const RayBatch& b, float* rgb) const {
 }
 
 void RayScene::Geometry(const RayBatch& b, Hit* hits) const {
-  unsigned geom[16], prim[16];
-  for (int i0 = 0; i0 < b.n; i0 += 16) {
-    IntersectBatch16(b, i0, geom, prim);
-    for (int i = 0; i < std::min(16, b.n - i0); ++i) {
-      Hit& h = hits[i0 + i];
-      h = Hit();
-      const int k = i0 + i;
-      if (!b.valid[k] || geom[i] == RTC_INVALID_GEOMETRY_ID) continue;
-      const Vec3d o(b.ox[k], b.oy[k], b.oz[k]), d(b.dx[k], b.dy[k], b.dz[k]);
-      const int u = b.from_camera[k];
-      if (u >= 0 && static_cast<size_t>(u) < own_mount_.size() && own_mount_[u].geometry && b.mount_t[k] > 0 &&
-          geom[i] == own_mount_[u].geom_id) {
-        // A straight camera ray that ended on its own mount ring: the ring's distance is already known (the
-        // renderer's analytic test, in double); Shade would solve it again.
-        const UserGeometry& g = *own_mount_[u].geometry;
-        const Vec3d n = g.R_world_from_local.col(2);
-        h.hit = true, h.object_id = g.object_id, h.unit = g.unit, h.t = b.mount_t[k], h.point = o + h.t * d;
-        h.normal = d.dot(n) < 0 ? n : Vec3d(-n);
-        h.colour = g.colour;
-        continue;
-      }
-      Shade(o, d, geom[i], prim[i], &h, false);
+  unsigned geom[RayBatch::kMax], prim[RayBatch::kMax];
+  IntersectBatch(b, geom, prim);
+  for (int k = 0; k < b.n; ++k) {
+    Hit& h = hits[k];
+    h = Hit();
+    if (!b.valid[k] || geom[k] == RTC_INVALID_GEOMETRY_ID) continue;
+    const Vec3d o(b.ox[k], b.oy[k], b.oz[k]), d(b.dx[k], b.dy[k], b.dz[k]);
+    const int u = b.from_camera[k];
+    if (u >= 0 && static_cast<size_t>(u) < own_mount_.size() && own_mount_[u].geometry && b.mount_t[k] > 0 &&
+        geom[k] == own_mount_[u].geom_id) {
+      // A straight camera ray that ended on its own mount ring: the ring's distance is already known (the
+      // renderer's analytic test, in double); Shade would solve it again.
+      const UserGeometry& g = *own_mount_[u].geometry;
+      const Vec3d n = g.R_world_from_local.col(2);
+      h.hit = true, h.object_id = g.object_id, h.unit = g.unit, h.t = b.mount_t[k], h.point = o + h.t * d;
+      h.normal = d.dot(n) < 0 ? n : Vec3d(-n);
+      h.colour = g.colour;
+      continue;
     }
+    Shade(o, d, geom[k], prim[k], &h, false);
   }
 }
 

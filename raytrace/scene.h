@@ -133,7 +133,7 @@ class RayScene {
                       const int* from_mirror = nullptr) const;
 
   struct UserGeometry;  // mirror, annulus (mount, lens face): analytic shapes, defined in scene.cc
-  // A unit's mount ring, met analytically by that unit's straight camera rays (IntersectBatch16).
+  // A unit's mount ring, met analytically by that unit's straight camera rays (IntersectBatch).
   // When nothing but the unit's own parts lies between its camera centre and its mount ring (path_clear,
   // decided once from bounding boxes), those rays end on the ring without going to Embree at all.
   struct OwnMount {
@@ -149,9 +149,9 @@ class RayScene {
   void Shade(const Vec3d& o, const Vec3d& d, unsigned geom_id, unsigned prim_id, Hit* hit, bool colour) const;
   // Sets OwnMount::path_clear; body_rects: by unit, the range of desc_.rects holding its camera body.
   void DecideMountPaths(const std::vector<std::pair<size_t, size_t>>& body_rects);
-  // Intersects batch rays [i0, i0 + 16) (fewer at the end): rtcIntersect16 where the CPU has native 16-wide
-  // packets, else two rtcIntersect8.
-  void IntersectBatch16(const RayBatch& b, int i0, unsigned* geom_ids, unsigned* prim_ids) const;
+  // Intersects the rays of a batch: their Embree lanes set up once, then packets of 16 (rtcIntersect16) where
+  // the CPU has native 16-wide packets, else of 8 (rtcIntersect8).
+  void IntersectBatch(const RayBatch& b, unsigned* geom_ids, unsigned* prim_ids) const;
 
   // A rectangle's frame for shading: centre, unit normal and in-plane axes in the world.
   struct RectFrame {
