@@ -100,13 +100,18 @@ void MirrorReflector::ReflectBatch(const Vec3d& o, int n, const double* vx, cons
     }
     ReflectKernel(c_, ia2_, ib2_, rim2_, o(0), o(1), o(2), m, vx + i0, vy + i0, vz + i0, Mx + i0, My + i0, Mz + i0,
                   dx + i0, dy + i0, dz + i0, flag);
-    for (int i = 0; i < m; ++i) ok[i0 + i] = static_cast<unsigned char>(flag[i]);
-  }
-  for (int i = 0; i < n; ++i) {
-    if (ok[i] != 2) continue;
-    Vec3d M = Vec3d::Zero(), d = Vec3d::Zero();
-    ok[i] = Reflect(o, Vec3d(vx[i], vy[i], vz[i]), &M, &d) ? 1 : 0;
-    Mx[i] = M(0), My[i] = M(1), Mz[i] = M(2), dx[i] = d(0), dy[i] = d(1), dz[i] = d(2);
+    double most = 0;
+    for (int i = 0; i < m; ++i) {
+      ok[i0 + i] = static_cast<unsigned char>(flag[i]);
+      most = flag[i] > most ? flag[i] : most;
+    }
+    if (most < 2) continue;
+    for (int i = i0; i < i0 + m; ++i) {   // degenerate lanes (flag 2): the scalar solve
+      if (ok[i] != 2) continue;
+      Vec3d M = Vec3d::Zero(), d = Vec3d::Zero();
+      ok[i] = Reflect(o, Vec3d(vx[i], vy[i], vz[i]), &M, &d) ? 1 : 0;
+      Mx[i] = M(0), My[i] = M(1), Mz[i] = M(2), dx[i] = d(0), dy[i] = d(1), dz[i] = d(2);
+    }
   }
 }
 
