@@ -412,11 +412,13 @@ void RenderInto(const RayScene& scene, const ViewCamera& camera, const RenderOpt
       for (int p0 = 0; p0 < tile_px;) {
         const int pixels = std::min(per_chunk, tile_px - p0), count = std::min(n - s0, kMax);
         const int m = per_chunk > 0 ? pixels * n : count;
+        const int s_begin = per_chunk > 0 ? 0 : s0, s_end = per_chunk > 0 ? n : s0 + count;
         for (int q = 0, k = 0; q < (per_chunk > 0 ? pixels : 1); ++q) {
           const int px = y * f.width + x;
           const uint64_t key = static_cast<uint64_t>(px) * 4096;
-          for (int s = per_chunk > 0 ? 0 : s0; s < (per_chunk > 0 ? n : s0 + count); ++s, ++k) {
-            sc.key[k] = key + static_cast<uint64_t>(s), sc.x[k] = x, sc.y[k] = y, sc.px[k] = px;
+          const double xd = x, yd = y;
+          for (int s = s_begin; s < s_end; ++s, ++k) {
+            sc.key[k] = key + static_cast<uint64_t>(s), sc.x[k] = xd, sc.y[k] = yd, sc.px[k] = px;
           }
           if (per_chunk > 0 && ++x == x1) x = x0, ++y;
         }

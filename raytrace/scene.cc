@@ -503,13 +503,16 @@ HOVS_VECTOR_CLONES
 void RingLanes(int n, const unsigned char* __restrict bvalid, const int* __restrict from_camera,
                const double* __restrict mount_t, int U, unsigned bit, int clear, int* __restrict valid,
                float* __restrict tfar, unsigned* __restrict mask_off, int* __restrict mount_unit) {
+  const int match = U >= 0 ? U : -1000;   // no unit: no lane is a ring lane
+  // As 0 / 1 arithmetic, not selects: GCC 12 vectorises the selects here only with a branch per vector.
   for (int i = 0; i < n; ++i) {
     const double t = mount_t[i];
-    const int ring = bvalid[i] != 0 && from_camera[i] >= 0 && from_camera[i] == U && t > 0 ? 1 : 0;
-    tfar[i] = ring ? static_cast<float>(t) : 0.0f;
-    mask_off[i] = ring ? bit : 0u;
-    mount_unit[i] = ring ? U : -1;
-    valid[i] = bvalid[i] == 0 || (ring & clear) ? 0 : -1;   // nothing in between: no Embree for this lane
+    const int live = bvalid[i] != 0;
+    const int ring = live & (from_camera[i] == match) & (t > 0);
+    tfar[i] = static_cast<float>(t) * static_cast<float>(ring);   // 0 (or -0) where not a ring lane
+    mask_off[i] = bit & static_cast<unsigned>(-ring);
+    mount_unit[i] = (U + 1) * ring - 1;
+    valid[i] = -(live & (1 - (ring & clear)));   // nothing in between: no Embree for this lane
   }
 }
 
