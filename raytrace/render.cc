@@ -4,6 +4,7 @@
 #include <tbb/parallel_for.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <atomic>
 #include <memory>
 #include <optional>
@@ -230,7 +231,8 @@ class RayMaker {
       // was made (the world ray is the same ray rotated and moved, so the distance along it is the same).
       // RayScene traces them only up to it. tnear 1e-5 as in Make (off the mirror, or off the lens face).
       RayOrigins(n, on_mirror, cam_.unit, 1e-5f, via, b->tnear, b->from_mirror, b->from_camera);
-      if (unit_->mount_outer_radius > 0) {
+      // (A batch whose rays all meet the mirror, most of them, has no straight ray: no ring test.)
+      if (unit_->mount_outer_radius > 0 && std::find(on_mirror, on_mirror + n, 0) != on_mirror + n) {
         MountRingHits(n, unit_->rig.mirror.RimZ(), unit_->rig.mirror.RimRadius(), unit_->mount_outer_radius,
                       t_mirror_from_cam_.x(), t_mirror_from_cam_.y(), t_mirror_from_cam_.z(), vx, vy, vz, via,
                       b->mount_t);
