@@ -78,7 +78,8 @@ int CountRimCrossings(double o0, double o1, double dz, double lim, int n, const 
 bool MirrorReflector::MissesRim(const Vec3d& o, int n, const double* vx, const double* vy, const double* vz) const {
   const double oz = o(2) + c_;
   const bool in_lower_nappe = oz < 0 && oz * oz * ia2_ - (o(0) * o(0) + o(1) * o(1)) * ib2_ >= 1 && o(2) < rim_z_;
-  if (!in_lower_nappe || n == 0) return !in_lower_nappe ? false : true;
+  if (!in_lower_nappe) return false;
+  if (n == 0) return true;
   // Ray 0 first: inside the rim usually means a block to solve, answered without the pass over all rays.
   const double lim = rim2_ * (1 + 1e-6);
   return CountRimCrossings(o(0), o(1), rim_z_ - o(2), lim, 1, vx, vy, vz) == 0 &&

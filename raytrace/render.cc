@@ -240,9 +240,8 @@ class RayMaker {
         std::fill(b->mount_t, b->mount_t + n, -1.0);
       }
       // Both kinds of ray from the mirror frame to the world in one rotation.
-      const Vec3d cam_centre = unit_->world_from_mirror * t_mirror_from_cam_;
-      WorldRays(n, R_world_from_mirror_.data(), t_world_from_mirror_.data(), cam_centre.data(), via, vx, vy, vz, Mx,
-                My, Mz, b->dx, b->dy, b->dz, b->ox, b->oy, b->oz);
+      WorldRays(n, R_world_from_mirror_.data(), t_world_from_mirror_.data(), world_from_cam_.translation.data(), via,
+                vx, vy, vz, Mx, My, Mz, b->dx, b->dy, b->dz, b->ox, b->oy, b->oz);
     } else {
       RotateRays(n, R_world_from_cam_.data(), mx, my, vx, vy, vz);
       std::fill(on_mirror, on_mirror + n, 0);
