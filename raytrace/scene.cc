@@ -385,15 +385,18 @@ void RayScene::Shade(const Vec3d& o, const Vec3d& d, unsigned geom_id, unsigned 
     // Embree's float ray and the double ray disagree at a silhouette: take the float distance.
     n = Vec3d(0, 0, 1);
   }
+  UserHit(g, o, d, t, n, h);
+  (void)prim_id;
+}
+
+void RayScene::UserHit(const UserGeometry& g, const Vec3d& o, const Vec3d& d, double t, const Vec3d& n, Hit* h) {
   h->hit = true;
   h->object_id = g.object_id;
   h->unit = g.unit;
   h->t = t;
   h->point = o + t * d;
-  const bool front = d.dot(n) < 0;
-  h->normal = front ? n : Vec3d(-n);
+  h->normal = d.dot(n) < 0 ? n : Vec3d(-n);
   h->colour = g.kind == UserGeometry::Kind::kMirror ? g.back_colour : g.colour;
-  (void)prim_id;
 }
 
 namespace {
@@ -681,12 +684,9 @@ void RayScene::Geometry(const RayBatch& b, Hit* hits) const {
     if (u >= 0 && static_cast<size_t>(u) < own_mount_.size() && own_mount_[u].geometry && b.mount_t[k] > 0 &&
         geom[k] == own_mount_[u].geom_id) {
       // A straight camera ray that ended on its own mount ring: the ring's distance is already known (the
-      // renderer's analytic test, in double); Shade would solve it again.
+      // renderer's analytic test, in double); Shade would solve it again. The ring's normal is its local z.
       const UserGeometry& g = *own_mount_[u].geometry;
-      const Vec3d n = g.R_world_from_local.col(2);
-      h.hit = true, h.object_id = g.object_id, h.unit = g.unit, h.t = b.mount_t[k], h.point = o + h.t * d;
-      h.normal = d.dot(n) < 0 ? n : Vec3d(-n);
-      h.colour = g.colour;
+      UserHit(g, o, d, b.mount_t[k], g.R_world_from_local.col(2), &h);
       continue;
     }
     Shade(o, d, geom[k], prim[k], &h, false);

@@ -147,6 +147,8 @@ class RayScene {
 
  private:
   void Shade(const Vec3d& o, const Vec3d& d, unsigned geom_id, unsigned prim_id, Hit* hit, bool colour) const;
+  // A hit on analytic geometry g at distance t along o + t d, with g's normal n there (any side).
+  static void UserHit(const UserGeometry& g, const Vec3d& o, const Vec3d& d, double t, const Vec3d& n, Hit* h);
   // Sets OwnMount::path_clear; body_rects: by unit, the range of desc_.rects holding its camera body.
   void DecideMountPaths(const std::vector<std::pair<size_t, size_t>>& body_rects);
   // Intersects the rays of a batch: their Embree lanes set up once, then packets of 16 (rtcIntersect16) where
