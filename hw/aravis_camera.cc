@@ -1,7 +1,12 @@
 // The Aravis 0.8 camera source.
 #include <arv.h>
+#include <arpa/inet.h>
+#include <dirent.h>
+#include <netinet/in.h>
+#include <sys/socket.h>
 
 #include <chrono>
+#include <cstdlib>
 #include <cstring>
 
 #include "core/error.h"
@@ -40,6 +45,36 @@ void Check(GError* err, const std::string& camera, const std::string& what) {
   const std::string msg = err->message ? err->message : "unknown error";
   g_error_free(err);
   throw Error("camera " + camera, what + ": " + msg);
+}
+
+// Aravis 0.8 sizes a stream socket's receive buffer only when the first packet of the first frame arrives
+// (arvgvstream.c: _find_frame_data calls _update_socket); until then the socket has the system default
+// (net.core.rmem_default, 208 kB on Debian 12), so a camera whose first frame arrives faster than the stream
+// thread reads it (the simulator on a loopback, a 10 GbE camera) loses packets of that frame: the loopback
+// test lost its first 688 x 550 frame on every run, with UDP RcvbufErrors in /proc/net/snmp rising during that
+// frame only. So the stream's UDP socket (the one bound to its port among this process's descriptors) is sized
+// before acquisition starts. Returns how many sockets were sized (0: not found, and the first frame may be lost
+// as before).
+int PresizeStreamSocket(uint16_t port, int bytes) {
+  DIR* dir = opendir("/proc/self/fd");
+  if (!dir) return 0;
+  int sized = 0;
+  while (const dirent* e = readdir(dir)) {
+    char* end = nullptr;
+    const long fd = std::strtol(e->d_name, &end, 10);
+    if (end == e->d_name || *end != '\0' || fd == dirfd(dir)) continue;
+    sockaddr_in a{};
+    socklen_t len = sizeof(a);
+    int type = 0;
+    socklen_t type_len = sizeof(type);
+    if (getsockname(static_cast<int>(fd), reinterpret_cast<sockaddr*>(&a), &len) != 0 || a.sin_family != AF_INET ||
+        ntohs(a.sin_port) != port)
+      continue;
+    if (getsockopt(static_cast<int>(fd), SOL_SOCKET, SO_TYPE, &type, &type_len) != 0 || type != SOCK_DGRAM) continue;
+    if (setsockopt(static_cast<int>(fd), SOL_SOCKET, SO_RCVBUF, &bytes, sizeof(bytes)) == 0) ++sized;
+  }
+  closedir(dir);
+  return sized;
 }
 
 const char* StatusName(ArvBufferStatus s) {
@@ -189,6 +224,7 @@ class AravisCamera : public CameraSource {
       else g_error_free(err), err = nullptr;
     }
     j["features"] = applied_features_;
+    if (stream_ && ARV_IS_GV_STREAM(stream_)) j["stream_socket_presized"] = socket_presized_;
     return j;
   }
 
@@ -210,6 +246,11 @@ class AravisCamera : public CameraSource {
       const guint payload = arv_camera_get_payload(camera_, &err);
       Check(err, id_, "payload size");
       for (int k = 0; k < settings_.buffers; ++k) arv_stream_push_buffer(stream_, arv_buffer_new(payload, nullptr));
+      // The size Aravis itself will give the socket at the first frame (fixed, or the payload when automatic).
+      if (ARV_IS_GV_STREAM(stream_))
+        socket_presized_ = PresizeStreamSocket(arv_gv_stream_get_port(ARV_GV_STREAM(stream_)),
+                                               settings_.socket_buffer_bytes > 0 ? settings_.socket_buffer_bytes
+                                                                                 : static_cast<int>(payload)) > 0;
     }
     arv_camera_start_acquisition(camera_, &err);
     Check(err, id_, "start acquisition");
@@ -279,6 +320,7 @@ class AravisCamera : public CameraSource {
   ArvCamera* camera_ = nullptr;
   ArvStream* stream_ = nullptr;
   bool running_ = false;
+  bool socket_presized_ = false;   // the stream socket sized before the first frame (PresizeStreamSocket)
   uint64_t incomplete_ = 0;
   std::map<std::string, std::string> applied_features_;
 };

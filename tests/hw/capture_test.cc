@@ -36,17 +36,21 @@ TEST(GigECapture, FramesCrossTheProtocolByteForByte) {
   EXPECT_EQ(info["serial"], "HOVS-SIM-1");
   EXPECT_EQ(info["region"], nlohmann::json({0, 0, 688, 550}));
   cam->Start();
+  // The stream socket is sized before the first frame: Aravis 0.8 sizes it only when that frame's first packet
+  // arrives, and with the system's default buffer the simulator's first frame (a burst on the loopback) lost
+  // packets on every run (hw/aravis_camera.cc, PresizeStreamSocket).
+  EXPECT_EQ(cam->Info()["stream_socket_presized"], true);
   int complete = 0;
   uint64_t last_ns = 0;
   for (int k = 0; k < 12; ++k) {
     const auto f = cam->Grab(3.0);
     ASSERT_TRUE(f.has_value()) << "no frame within 3 s";
-    // A frame can arrive incomplete: the simulator may start its first frame before the receiver is ready, and
-    // on this loopback (UDP, a simulator without packet resend) a packet is now and then lost: about one run in
-    // three of this test on a 2-core CI VM had one such frame, "timeout", even with a 2 s frame retention, so the
-    // packets never came. Such a frame must be reported incomplete, never passed on as good, and counted; every
-    // frame reported complete must be the frame that was sent, byte for byte.
+    // The first frame must arrive whole (it did not before the socket was sized in advance). A later frame may
+    // still be lost if the receiving thread stalls for long on a loaded machine (UDP; the simulator does not
+    // resend): such a frame must be reported incomplete, never passed on as good, and counted, and at most one
+    // may be. Every frame reported complete must be the frame that was sent, byte for byte.
     if (!f->complete) {
+      ASSERT_GT(k, 0) << "the first frame arrived incomplete: " << f->status;
       EXPECT_NE(f->status, "success") << "frame " << k;
       continue;
     }
@@ -58,7 +62,7 @@ TEST(GigECapture, FramesCrossTheProtocolByteForByte) {
     ++complete;
   }
   cam->Stop();
-  EXPECT_GE(complete, 10) << "more than two of twelve frames incomplete on a loopback";
+  EXPECT_GE(complete, 11) << "more than one of twelve frames incomplete on a loopback";
   const auto st = cam->Stats();
   EXPECT_GE(st.completed, static_cast<uint64_t>(complete));   // the stream may complete more before Stop
   EXPECT_EQ(st.incomplete_seen, static_cast<uint64_t>(12 - complete));
@@ -110,7 +114,6 @@ TEST(GigECapture, TwoCamerasOnTwoLoopbackAddressesArePairedByTimestamp) {
     for (int c = 0; c < 2; ++c) {
       auto f = (c == 0 ? cl : cr)->Grab(3.0);
       ASSERT_TRUE(f.has_value());
-      if (k == 0 && !f->complete) continue;  // see FramesCrossTheProtocolByteForByte
       ASSERT_TRUE(f->complete) << f->status;
       EXPECT_EQ(f->data, (c == 0 ? left : right).ServedFrame(FakeGigECamera::Stamp(f->data)));
       for (const auto& [a, b] : pairer.Add(c, std::move(*f))) {
