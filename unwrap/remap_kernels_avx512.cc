@@ -15,8 +15,10 @@
 #include "unwrap/remap_kernels.h"
 
 // GCC 12's AVX-512 headers start many intrinsics from _mm512_undefined_*(), which -Wmaybe-uninitialized reports
-// at every inlined use (a known false alarm of the headers, not of this file).
+// at every inlined use (a known false alarm of the headers, not of this file; -Wuninitialized for the same from
+// _mm512_reduce_*).
 #pragma GCC diagnostic ignored "-Wmaybe-uninitialized"
+#pragma GCC diagnostic ignored "-Wuninitialized"
 
 #define HOVS_AVX512 __attribute__((target("avx512f,avx512bw,avx512vl,avx512dq,avx512vbmi")))
 
@@ -145,42 +147,17 @@ HOVS_AVX512 inline bool Gray16(const uint8_t* data, ptrdiff_t stride, __m512i x,
   return true;
 }
 
-// 16 pixels of an RGGB mosaic to RGB, bilinear on each colour grid as BayerGridValue (remap_kernels.cc). In
-// mosaic columns, a pixel's even-column grids (R, G2) are sampled at columns ce, ce + 2 and its odd-column grids
-// (G1, B) at co, co + 2 with co = ce - 1 or ce + 1 (the odd grids sit half a grid cell from the even ones), so
-// the four taps of a row lie in the 4 bytes from min(ce, co): one 32-bit gather per mosaic row, four rows
-// (two of the even-row grids, two of the odd-row grids). Returns false (nothing written) when a pixel's 4-byte
-// read would pass the end of its row.
-HOVS_AVX512 inline bool Bayer16(const uint8_t* data, ptrdiff_t stride, __m512i x, __m512i y, int count, uint8_t* o) {
-  const __m512i half = _mm512_set1_epi32(kHalf), m63 = _mm512_set1_epi32(63), c64 = _mm512_set1_epi32(64);
-  const __m512i lowmask = _mm512_set1_epi32(0xFFFF), ones = _mm512_set1_epi32(1);
-  const __m512i vstride = _mm512_set1_epi32(static_cast<int>(stride));
-  // Grid positions (16.16, as BayerGridValue): the odd-column grids' is pxe - 1/2 grid cell, exactly (x is
-  // shifted before the halving by an even amount), so their fraction is fxe - 32 (mod 64) and their first tap
-  // co is ce - 1 when pxe's fraction is below 1/2, ce + 1 otherwise: the four taps start at (pxe >> 15) - 1.
-  // Rows alike.
-  const __m512i pxe = _mm512_add_epi32(_mm512_srai_epi32(x, 1), half);
-  const __m512i pye = _mm512_add_epi32(_mm512_srai_epi32(y, 1), half);
-  const __m512i start = _mm512_sub_epi32(_mm512_srai_epi32(pxe, 15), ones);
-  if (_mm512_cmpgt_epi32_mask(start, _mm512_set1_epi32(static_cast<int>(stride) - 4)) != 0) return false;
-  const __m512i c32 = _mm512_set1_epi32(32), bit15 = _mm512_set1_epi32(0x8000);
+// The colour of 16 pixels from their mosaic taps (et, eb: the even-row grids' two tap rows, ot, ob: the odd-row
+// grids'; per pixel 4 bytes: the even-column grid's taps (ce, ce + 2), then the odd-column grid's (co, co + 2)),
+// pxe and pye the even grids' 16.16 positions; the first `count` are stored at o.
+HOVS_AVX512 inline void BayerCombine(__m512i pxe, __m512i pye, __m512i et, __m512i eb, __m512i ot, __m512i ob, int count,
+                                     uint8_t* o) {
+  const __m512i m63 = _mm512_set1_epi32(63), c64 = _mm512_set1_epi32(64), c32 = _mm512_set1_epi32(32);
+  const __m512i lowmask = _mm512_set1_epi32(0xFFFF);
   const __m512i fxe = _mm512_and_si512(_mm512_srai_epi32(pxe, 10), m63);
   const __m512i fxo = _mm512_and_si512(_mm512_sub_epi32(fxe, c32), m63);
   const __m512i fye = _mm512_and_si512(_mm512_srai_epi32(pye, 10), m63);
   const __m512i fyo = _mm512_and_si512(_mm512_sub_epi32(fye, c32), m63);
-  const __m512i rowe = _mm512_slli_epi32(_mm512_srai_epi32(pye, 16), 1);
-  const __m512i offe = _mm512_add_epi32(_mm512_mullo_epi32(rowe, vstride), start);
-  const __m512i offo = _mm512_mask_blend_epi32(_mm512_test_epi32_mask(pye, bit15), _mm512_sub_epi32(offe, vstride),
-                                               _mm512_add_epi32(offe, vstride));
-  // Byte indices (ce, ce + 2, co, co + 2) - start inside each pixel's own dword: (1, 3, 0, 2) when co = ce - 1,
-  // (0, 2, 1, 3) when co = ce + 1; plus the dword's place in its 128-bit lane.
-  const __m512i idx = _mm512_add_epi8(
-      _mm512_mask_blend_epi32(_mm512_test_epi32_mask(pxe, bit15), _mm512_set1_epi32(0x02000301), _mm512_set1_epi32(0x03010200)),
-      _mm512_broadcast_i32x4(_mm_setr_epi32(0, 0x04040404, 0x08080808, 0x0C0C0C0C)));
-  const __m512i et = _mm512_shuffle_epi8(_mm512_i32gather_epi32(offe, data, 1), idx);
-  const __m512i eb = _mm512_shuffle_epi8(_mm512_i32gather_epi32(offe, data + 2 * stride, 1), idx);
-  const __m512i ot = _mm512_shuffle_epi8(_mm512_i32gather_epi32(offo, data, 1), idx);
-  const __m512i ob = _mm512_shuffle_epi8(_mm512_i32gather_epi32(offo, data + 2 * stride, 1), idx);
   // Horizontal weights (64 - fxe, fxe, 64 - fxo, fxo) and vertical (fy << 9 in both words).
   const __m512i wx = _mm512_or_si512(_mm512_or_si512(_mm512_sub_epi32(c64, fxe), _mm512_slli_epi32(fxe, 8)),
                                      _mm512_or_si512(_mm512_slli_epi32(_mm512_sub_epi32(c64, fxo), 16), _mm512_slli_epi32(fxo, 24)));
@@ -200,7 +177,77 @@ HOVS_AVX512 inline bool Bayer16(const uint8_t* data, ptrdiff_t stride, __m512i x
       29, 30, 32, 33, 34, 36, 37, 38, 40, 41, 42, 44, 45, 46, 48, 49, 50, 52, 53, 54, 56, 57,
       58, 60, 61, 62, 0,  0,  0,  0,  0,  0,  0,  0,  0,  0,  0,  0,  0,  0,  0,  0};
   Store48(_mm512_permutexvar_epi8(_mm512_load_si512(kDrop), rgb0), 3 * count, o);
+}
+
+// 16 pixels of an RGGB mosaic to RGB, bilinear on each colour grid as BayerGridValue (remap_kernels.cc). In
+// mosaic columns, a pixel's even-column grids (R, G2) are sampled at columns ce, ce + 2 and its odd-column grids
+// (G1, B) at co, co + 2 with co = ce - 1 or ce + 1 (the odd grids sit half a grid cell from the even ones), so
+// the four taps of a row lie in the 4 bytes from min(ce, co): one 32-bit gather per mosaic row, four rows
+// (two of the even-row grids, two of the odd-row grids). Returns false (nothing written) when a pixel's 4-byte
+// read would pass the end of its row.
+HOVS_AVX512 inline bool Bayer16(const uint8_t* data, ptrdiff_t stride, __m512i x, __m512i y, int count, uint8_t* o) {
+  const __m512i half = _mm512_set1_epi32(kHalf), ones = _mm512_set1_epi32(1);
+  const __m512i vstride = _mm512_set1_epi32(static_cast<int>(stride));
+  // Grid positions (16.16, as BayerGridValue): the odd-column grids' is pxe - 1/2 grid cell, exactly (x is
+  // shifted before the halving by an even amount), so their fraction is fxe - 32 (mod 64) and their first tap
+  // co is ce - 1 when pxe's fraction is below 1/2, ce + 1 otherwise: the four taps start at (pxe >> 15) - 1.
+  // Rows alike.
+  const __m512i pxe = _mm512_add_epi32(_mm512_srai_epi32(x, 1), half);
+  const __m512i pye = _mm512_add_epi32(_mm512_srai_epi32(y, 1), half);
+  const __m512i start = _mm512_sub_epi32(_mm512_srai_epi32(pxe, 15), ones);
+  if (_mm512_cmpgt_epi32_mask(start, _mm512_set1_epi32(static_cast<int>(stride) - 4)) != 0) return false;
+  const __m512i bit15 = _mm512_set1_epi32(0x8000);
+  const __m512i rowe = _mm512_slli_epi32(_mm512_srai_epi32(pye, 16), 1);
+  const __m512i offe = _mm512_add_epi32(_mm512_mullo_epi32(rowe, vstride), start);
+  const __m512i offo = _mm512_mask_blend_epi32(_mm512_test_epi32_mask(pye, bit15), _mm512_sub_epi32(offe, vstride),
+                                               _mm512_add_epi32(offe, vstride));
+  // Byte indices (ce, ce + 2, co, co + 2) - start inside each pixel's own dword: (1, 3, 0, 2) when co = ce - 1,
+  // (0, 2, 1, 3) when co = ce + 1; plus the dword's place in its 128-bit lane.
+  const __m512i idx = _mm512_add_epi8(
+      _mm512_mask_blend_epi32(_mm512_test_epi32_mask(pxe, bit15), _mm512_set1_epi32(0x02000301), _mm512_set1_epi32(0x03010200)),
+      _mm512_broadcast_i32x4(_mm_setr_epi32(0, 0x04040404, 0x08080808, 0x0C0C0C0C)));
+  const __m512i et = _mm512_shuffle_epi8(_mm512_i32gather_epi32(offe, data, 1), idx);
+  const __m512i eb = _mm512_shuffle_epi8(_mm512_i32gather_epi32(offe, data + 2 * stride, 1), idx);
+  const __m512i ot = _mm512_shuffle_epi8(_mm512_i32gather_epi32(offo, data, 1), idx);
+  const __m512i ob = _mm512_shuffle_epi8(_mm512_i32gather_epi32(offo, data + 2 * stride, 1), idx);
+  BayerCombine(pxe, pye, et, eb, ot, ob, count, o);
   return true;
+}
+
+// 16 pixels of an RGGB mosaic to RGB as Bayer16, reading a pair-interleaved copy of the mosaic region instead of
+// the mosaic: pair row k of the patch holds mosaic rows r0 + k and r0 + k + 1 byte by byte (byte 2 j + s is
+// row r0 + k + s, column c0 + j), so a pixel's four tap rows (ra .. ra + 3, ra = min(even grid row, odd grid
+// row)) and four tap columns (start .. start + 3) are two 8-byte words, at pair rows ra - r0 and ra - r0 + 2:
+// 32 plain loads per 16 pixels instead of four 16-lane gathers (64 elements). origin = (c0 + 1, r0 + 1).
+// Bit-identical to Bayer16: the same taps reach BayerCombine in the same byte order.
+HOVS_AVX512 inline void PatchBayer16(const uint8_t* patch, ptrdiff_t pstride, __m512i origin_c, __m512i origin_r,
+                                     __m512i x, __m512i y, int count, uint8_t* o) {
+  const __m512i half = _mm512_set1_epi32(kHalf), bit15 = _mm512_set1_epi32(0x8000);
+  const __m512i pxe = _mm512_add_epi32(_mm512_srai_epi32(x, 1), half);
+  const __m512i pye = _mm512_add_epi32(_mm512_srai_epi32(y, 1), half);
+  const __m512i col = _mm512_sub_epi32(_mm512_srai_epi32(pxe, 15), origin_c);   // start - c0
+  const __m512i row = _mm512_sub_epi32(_mm512_srai_epi32(pye, 15), origin_r);   // ra - r0
+  alignas(64) int32_t offs[16];
+  _mm512_store_si512(offs, _mm512_add_epi32(_mm512_mullo_epi32(row, _mm512_set1_epi32(static_cast<int>(pstride))),
+                                            _mm512_add_epi32(col, col)));
+  // Pixel p's word is bytes 8p .. 8p + 7 of (t0, t1) (pixels 0-7 in t0, 8-15 in t1), rows ra, ra + 1 ...
+  const __m512i t0 = EightWords(patch, offs), t1 = EightWords(patch, offs + 8);
+  // ... and of (b0, b1), rows ra + 2, ra + 3.
+  const __m512i b0 = EightWords(patch + 2 * pstride, offs), b1 = EightWords(patch + 2 * pstride, offs + 8);
+  // Byte k of the even grids' dword is column start + (1, 3, 0, 2)[k] (co = ce - 1) or (0, 2, 1, 3)[k]
+  // (co = ce + 1), as Bayer16's idx, of the even grid's row: ra + 1 when pye's bit 15 is clear (the odd grid
+  // then lies a row above), ra when it is set; the odd grids' the other row of the pair. Index 8p + 2c + s into
+  // the two-register table (bit 6 picks t1 / b1).
+  const __m512i cols = _mm512_mask_blend_epi32(_mm512_test_epi32_mask(pxe, bit15), _mm512_set1_epi32(0x04000602),
+                                               _mm512_set1_epi32(0x06020400));
+  const __m512i base = _mm512_setr_epi32(0, 0x08080808, 0x10101010, 0x18181818, 0x20202020, 0x28282828, 0x30303030,
+                                         0x38383838, 0x40404040, 0x48484848, 0x50505050, 0x58585858, 0x60606060,
+                                         0x68686868, 0x70707070, 0x78787878);
+  const __m512i sel = _mm512_maskz_mov_epi32(_mm512_testn_epi32_mask(pye, bit15), _mm512_set1_epi32(0x01010101));
+  const __m512i idx_e = _mm512_add_epi8(_mm512_add_epi8(base, cols), sel);
+  const __m512i idx_o = _mm512_xor_si512(idx_e, _mm512_set1_epi32(0x01010101));
+  BayerCombine(pxe, pye, _mm512_permutex2var_epi8(t0, idx_e, t1), _mm512_permutex2var_epi8(b0, idx_e, b1),
+               _mm512_permutex2var_epi8(t0, idx_o, t1), _mm512_permutex2var_epi8(b0, idx_o, b1), count, o);
 }
 
 // Pixels i0 .. i0 + n - 1 of a row, 16 per step: Step (Rgb16, Gray16, Bayer16) writes kBytes per pixel, and
@@ -245,6 +292,59 @@ HOVS_AVX512 void BayerRgbRow(const uint8_t* src, ptrdiff_t stride, const RowCoor
 // Interp tiles: every row's polynomial, the row written straight into the view.
 HOVS_REMAP_TILE_FUNCTION(HOVS_AVX512, BilinearRgbTile, RgbRowInline)
 HOVS_REMAP_TILE_FUNCTION(HOVS_AVX512, BilinearGrayTile, GrayRowInline)
-HOVS_REMAP_TILE_FUNCTION(HOVS_AVX512, BayerRgbTile, BayerRowInline)
+
+// Bayer interp tiles: every pixel's coordinates first, with the mosaic region their taps read (rows ra .. ra + 3,
+// columns start .. start + 3 of every pixel: only bytes Bayer16 would read); that region copied into a
+// pair-interleaved patch (in L1); then the pixels from the patch (PatchBayer16). A region wider or taller than
+// the patch holds, or one reaching a row's last 3 bytes (where Bayer16 hands pixels to the scalar kernel), goes
+// row by row through Bayer16 instead.
+constexpr int kPatchColumns = 128, kPatchPairRows = 128;
+HOVS_AVX512 void BayerRgbTile(const uint8_t* src, ptrdiff_t stride, const Tile& t, int T, int nu, int nv,
+                              uint8_t* out, ptrdiff_t ostride) {
+  constexpr int kRow = 64 + 16;   // coordinates per tile row stored (T <= 64, a step may fill 16 past nu)
+  alignas(64) int32_t xs[64 * kRow], ys[64 * kRow];
+  const __m512i half = _mm512_set1_epi32(kHalf);
+  __m512i cmin = _mm512_set1_epi32(INT32_MAX), cmax = _mm512_set1_epi32(INT32_MIN), rmin = cmin, rmax = cmax;
+  RowCoords c;
+  for (int j = 0; j < nv; ++j) {
+    c.poly = InterpRowPoly(t, T, j);
+    for (int i = 0; i < nu; i += 16) {
+      __m512i x, y;
+      Coords16(c, i, nu - i < 16 ? nu - i : 16, &x, &y);   // lanes past nu repeat lane 0
+      _mm512_store_si512(xs + j * kRow + i, x);
+      _mm512_store_si512(ys + j * kRow + i, y);
+      const __m512i col = _mm512_srai_epi32(_mm512_add_epi32(_mm512_srai_epi32(x, 1), half), 15);   // start + 1
+      const __m512i row = _mm512_srai_epi32(_mm512_add_epi32(_mm512_srai_epi32(y, 1), half), 15);   // ra + 1
+      cmin = _mm512_min_epi32(cmin, col), cmax = _mm512_max_epi32(cmax, col);
+      rmin = _mm512_min_epi32(rmin, row), rmax = _mm512_max_epi32(rmax, row);
+    }
+  }
+  const int c0 = _mm512_reduce_min_epi32(cmin) - 1, c1 = _mm512_reduce_max_epi32(cmax) + 2;   // columns c0 .. c1
+  const int r0 = _mm512_reduce_min_epi32(rmin) - 1, r1 = _mm512_reduce_max_epi32(rmax) + 2;   // rows r0 .. r1
+  const int width = c1 - c0 + 1, pairs = r1 - r0;
+  if (c1 > stride - 1 || width > kPatchColumns || pairs > kPatchPairRows) {
+    for (int j = 0; j < nv; ++j) {
+      c.poly = InterpRowPoly(t, T, j);
+      BayerRowInline(src, stride, c, 0, nu, out + j * ostride);
+    }
+    return;
+  }
+  const ptrdiff_t pstride = width <= 32 ? 64 : width <= 64 ? 128 : 256;
+  alignas(64) uint8_t patch[kPatchPairRows * 2 * kPatchColumns];
+  for (int k = 0; k < pairs; ++k) {
+    const uint8_t* a = src + (r0 + k) * stride + c0;
+    for (int cc = 0; cc < width; cc += 32) {
+      const __mmask32 m = width - cc >= 32 ? __mmask32(0xFFFFFFFFu) : __mmask32((1u << (width - cc)) - 1);
+      const __m512i top = _mm512_cvtepu8_epi16(_mm256_maskz_loadu_epi8(m, a + cc));
+      const __m512i bottom = _mm512_cvtepu8_epi16(_mm256_maskz_loadu_epi8(m, a + stride + cc));
+      _mm512_store_si512(patch + k * pstride + 2 * cc, _mm512_or_si512(top, _mm512_slli_epi16(bottom, 8)));
+    }
+  }
+  const __m512i origin_c = _mm512_set1_epi32(c0 + 1), origin_r = _mm512_set1_epi32(r0 + 1);
+  for (int j = 0; j < nv; ++j)
+    for (int i = 0; i < nu; i += 16)
+      PatchBayer16(patch, pstride, origin_c, origin_r, _mm512_load_si512(xs + j * kRow + i),
+                   _mm512_load_si512(ys + j * kRow + i), nu - i < 16 ? nu - i : 16, out + j * ostride + 3 * i);
+}
 
 }  // namespace hovs::unwrap::kernels::avx512

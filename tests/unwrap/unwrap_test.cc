@@ -241,15 +241,18 @@ TEST(Kernels, VectorAndScalarAgreeBitForBit) {
       ++compared;
     }
     // Whole tiles (partial ones too): a rotated, scaled, slightly curved patch well inside the image, written
-    // into a larger output with a row stride, against the scalar rows of the same polynomials.
-    for (int trial = 0; trial < 6; ++trial) {
-      const int T = 32, nu = trial % 3 == 0 ? 32 : 9 + 5 * trial, nv = trial % 2 ? 32 : 7 + trial;
+    // into a larger output with a row stride, against the scalar rows of the same polynomials. Trials 6 and 7
+    // take the AVX-512 Bayer tile's other path (row by row from the mosaic): a footprint wider than its patch
+    // (4 source columns per output pixel), and one whose taps reach a row's last 3 bytes.
+    for (int trial = 0; trial < 8; ++trial) {
+      const int T = 32, nu = trial % 3 == 0 || trial == 7 ? 32 : 9 + 5 * trial, nv = trial % 2 ? 32 : 7 + trial;
+      const float xscale = trial == 6 ? 4.f : 1.f, x0 = trial == 7 ? w - 42.f : 60.f + trial;
       Tile t;
       t.kind = TileKind::kInterp;
       for (int r = 0; r < 3; ++r)
         for (int q = 0; q < 3; ++q) {
           const float u = 16.f * q, v = 16.f * r;
-          t.x[3 * r + q] = 60 + 1.3f * u - 0.4f * v + 0.01f * u * v + trial;
+          t.x[3 * r + q] = x0 + xscale * (1.3f * u - 0.4f * v + 0.01f * u * v);
           t.y[3 * r + q] = 50 + 0.5f * u + 1.1f * v - 0.006f * u * u + 0.7f * trial;
         }
       const ptrdiff_t os = 3 * 40;
