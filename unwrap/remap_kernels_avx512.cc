@@ -218,8 +218,8 @@ HOVS_AVX512 inline bool Bayer16(const uint8_t* data, ptrdiff_t stride, __m512i x
 // the mosaic: pair row k of the patch holds mosaic rows r0 + k and r0 + k + 1 byte by byte (byte 2 j + s is
 // row r0 + k + s, column c0 + j), so a pixel's four tap rows (ra .. ra + 3, ra = min(even grid row, odd grid
 // row)) and four tap columns (start .. start + 3) are two 8-byte words, at pair rows ra - r0 and ra - r0 + 2:
-// 32 plain loads per 16 pixels instead of four 16-lane gathers (64 elements). origin = (c0 + 1, r0 + 1).
-// Bit-identical to Bayer16: the same taps reach BayerCombine in the same byte order.
+// 32 plain loads per 16 pixels instead of four 16-lane gathers (64 elements). origin: the patch's first column
+// and row, plus one. Bit-identical to Bayer16: the same taps reach BayerCombine in the same byte order.
 HOVS_AVX512 inline void PatchBayer16(const uint8_t* patch, ptrdiff_t pstride, __m512i origin_c, __m512i origin_r,
                                      __m512i x, __m512i y, int count, uint8_t* o) {
   const __m512i half = _mm512_set1_epi32(kHalf), bit15 = _mm512_set1_epi32(0x8000);
@@ -289,62 +289,126 @@ HOVS_AVX512 void BayerRgbRow(const uint8_t* src, ptrdiff_t stride, const RowCoor
   BayerRowInline(src, stride, c, i0, n, out);
 }
 
-// Interp tiles: every row's polynomial, the row written straight into the view.
-HOVS_REMAP_TILE_FUNCTION(HOVS_AVX512, BilinearRgbTile, RgbRowInline)
+// Interp tiles. The grey tile: every row's polynomial, the row written straight into the view.
 HOVS_REMAP_TILE_FUNCTION(HOVS_AVX512, BilinearGrayTile, GrayRowInline)
 
-// Bayer interp tiles: every pixel's coordinates first, with the mosaic region their taps read (rows ra .. ra + 3,
-// columns start .. start + 3 of every pixel: only bytes Bayer16 would read); that region copied into a
-// pair-interleaved patch (in L1); then the pixels from the patch (PatchBayer16). A region wider or taller than
-// the patch holds, or one reaching a row's last 3 bytes (where Bayer16 hands pixels to the scalar kernel), goes
-// row by row through Bayer16 instead.
-constexpr int kPatchColumns = 128, kPatchPairRows = 128;
-HOVS_AVX512 void BayerRgbTile(const uint8_t* src, ptrdiff_t stride, const Tile& t, int T, int nu, int nv,
-                              uint8_t* out, ptrdiff_t ostride) {
-  constexpr int kRow = 64 + 16;   // coordinates per tile row stored (T <= 64, a step may fill 16 past nu)
+// The RGB and Bayer tiles in three passes: (1) every pixel's coordinates, kept, with the source region the
+// pixels' reads cover (only bytes the row kernels would read); (2) that region copied into a patch, 64-byte
+// aligned rows (it stays in L1); (3) the pixels from the patch. Reading the frame directly, each 16-pixel step's
+// 32 loads or four gathers wait on L2 and beyond (the reads follow curves across the frame); from the patch,
+// six RGB views take about 17 % less time and Bayer about 27 % (session 12, Zen 4). A region larger than the
+// patch holds goes row by row through the direct kernels instead.
+namespace {
+
+constexpr int kPatchRowBytes = 256, kPatchRows = 128;   // 32 kB
+
+struct TilePass {
+  static constexpr int kRow = 64 + 16;   // coordinates kept per tile row (T <= 64; a step may fill 16 past nu)
   alignas(64) int32_t xs[64 * kRow], ys[64 * kRow];
-  const __m512i half = _mm512_set1_epi32(kHalf);
-  __m512i cmin = _mm512_set1_epi32(INT32_MAX), cmax = _mm512_set1_epi32(INT32_MIN), rmin = cmin, rmax = cmax;
-  RowCoords c;
-  for (int j = 0; j < nv; ++j) {
-    c.poly = InterpRowPoly(t, T, j);
-    for (int i = 0; i < nu; i += 16) {
-      __m512i x, y;
-      Coords16(c, i, nu - i < 16 ? nu - i : 16, &x, &y);   // lanes past nu repeat lane 0
-      _mm512_store_si512(xs + j * kRow + i, x);
-      _mm512_store_si512(ys + j * kRow + i, y);
-      const __m512i col = _mm512_srai_epi32(_mm512_add_epi32(_mm512_srai_epi32(x, 1), half), 15);   // start + 1
-      const __m512i row = _mm512_srai_epi32(_mm512_add_epi32(_mm512_srai_epi32(y, 1), half), 15);   // ra + 1
-      cmin = _mm512_min_epi32(cmin, col), cmax = _mm512_max_epi32(cmax, col);
-      rmin = _mm512_min_epi32(rmin, row), rmax = _mm512_max_epi32(rmax, row);
-    }
-  }
-  const int c0 = _mm512_reduce_min_epi32(cmin) - 1, c1 = _mm512_reduce_max_epi32(cmax) + 2;   // columns c0 .. c1
-  const int r0 = _mm512_reduce_min_epi32(rmin) - 1, r1 = _mm512_reduce_max_epi32(rmax) + 2;   // rows r0 .. r1
-  const int width = c1 - c0 + 1, pairs = r1 - r0;
-  if (c1 > stride - 1 || width > kPatchColumns || pairs > kPatchPairRows) {
+  alignas(64) uint8_t patch[kPatchRows * kPatchRowBytes];
+  int c0 = 0, c1 = 0, r0 = 0, r1 = 0;   // the range of the source cells over the tile's pixels
+
+  // Pass 1. Cells: the RGB kernel's tap (x + 1/2 of 1/64 px) >> 16, or for a mosaic (kBayer) the start of
+  // Bayer16's taps plus one, ((x >> 1) + 1/128 grid px) >> 15 (rows alike). Lanes past nu repeat lane 0.
+  template <bool kBayer>
+  HOVS_AVX512 void Coordinates(const Tile& t, int T, int nu, int nv) {
+    const __m512i half = _mm512_set1_epi32(kHalf);
+    __m512i cmin = _mm512_set1_epi32(INT32_MAX), cmax = _mm512_set1_epi32(INT32_MIN), rmin = cmin, rmax = cmax;
+    RowCoords c;
     for (int j = 0; j < nv; ++j) {
       c.poly = InterpRowPoly(t, T, j);
-      BayerRowInline(src, stride, c, 0, nu, out + j * ostride);
+      for (int i = 0; i < nu; i += 16) {
+        __m512i x, y;
+        Coords16(c, i, nu - i < 16 ? nu - i : 16, &x, &y);
+        _mm512_store_si512(xs + j * kRow + i, x);
+        _mm512_store_si512(ys + j * kRow + i, y);
+        const __m512i col = kBayer ? _mm512_srai_epi32(_mm512_add_epi32(_mm512_srai_epi32(x, 1), half), 15)
+                                   : _mm512_srai_epi32(_mm512_add_epi32(x, half), 16);
+        const __m512i row = kBayer ? _mm512_srai_epi32(_mm512_add_epi32(_mm512_srai_epi32(y, 1), half), 15)
+                                   : _mm512_srai_epi32(_mm512_add_epi32(y, half), 16);
+        cmin = _mm512_min_epi32(cmin, col), cmax = _mm512_max_epi32(cmax, col);
+        rmin = _mm512_min_epi32(rmin, row), rmax = _mm512_max_epi32(rmax, row);
+      }
     }
-    return;
+    c0 = _mm512_reduce_min_epi32(cmin), c1 = _mm512_reduce_max_epi32(cmax);
+    r0 = _mm512_reduce_min_epi32(rmin), r1 = _mm512_reduce_max_epi32(rmax);
   }
-  const ptrdiff_t pstride = width <= 32 ? 64 : width <= 64 ? 128 : 256;
-  alignas(64) uint8_t patch[kPatchPairRows * 2 * kPatchColumns];
+  HOVS_AVX512 __m512i X(int j, int i) const { return _mm512_load_si512(xs + j * kRow + i); }
+  HOVS_AVX512 __m512i Y(int j, int i) const { return _mm512_load_si512(ys + j * kRow + i); }
+};
+
+// Pass 2 for RGB: rows `first` .. first + rows - 1, bytes `from` .. from + bytes - 1 of each, at pstride.
+HOVS_AVX512 inline void CopyPatch(const uint8_t* src, ptrdiff_t stride, int first, int rows, ptrdiff_t from, int bytes,
+                                  uint8_t* patch, ptrdiff_t pstride) {
+  for (int k = 0; k < rows; ++k) {
+    const uint8_t* a = src + (first + k) * stride + from;
+    for (int b = 0; b < bytes; b += 64) {
+      const __mmask64 m = bytes - b >= 64 ? ~__mmask64(0) : (__mmask64(1) << (bytes - b)) - 1;
+      _mm512_store_si512(patch + k * pstride + b, _mm512_maskz_loadu_epi8(m, a + b));
+    }
+  }
+}
+
+// Pass 2 for Bayer: pair row k holds mosaic rows first + k and first + k + 1 byte by byte (byte 2 j + s: row
+// first + k + s, column from + j), columns from .. from + columns - 1 (see PatchBayer16).
+HOVS_AVX512 inline void CopyPairPatch(const uint8_t* src, ptrdiff_t stride, int first, int pairs, ptrdiff_t from,
+                                      int columns, uint8_t* patch, ptrdiff_t pstride) {
   for (int k = 0; k < pairs; ++k) {
-    const uint8_t* a = src + (r0 + k) * stride + c0;
-    for (int cc = 0; cc < width; cc += 32) {
-      const __mmask32 m = width - cc >= 32 ? __mmask32(0xFFFFFFFFu) : __mmask32((1u << (width - cc)) - 1);
+    const uint8_t* a = src + (first + k) * stride + from;
+    for (int cc = 0; cc < columns; cc += 32) {
+      const __mmask32 m = columns - cc >= 32 ? __mmask32(0xFFFFFFFFu) : __mmask32((1u << (columns - cc)) - 1);
       const __m512i top = _mm512_cvtepu8_epi16(_mm256_maskz_loadu_epi8(m, a + cc));
       const __m512i bottom = _mm512_cvtepu8_epi16(_mm256_maskz_loadu_epi8(m, a + stride + cc));
       _mm512_store_si512(patch + k * pstride + 2 * cc, _mm512_or_si512(top, _mm512_slli_epi16(bottom, 8)));
     }
   }
-  const __m512i origin_c = _mm512_set1_epi32(c0 + 1), origin_r = _mm512_set1_epi32(r0 + 1);
+}
+
+HOVS_AVX512 inline ptrdiff_t PatchStride(int bytes) { return (bytes + 63) & ~63; }
+
+}  // namespace
+
+// RGB: a pixel reads 8 bytes from 3 x its tap column in its tap row and the row below, so the region is columns
+// c0 .. c1 + 1 (plus 2 bytes), rows r0 .. r1 + 1. Coordinates move by whole pixels only: the same weights.
+HOVS_AVX512 void BilinearRgbTile(const uint8_t* src, ptrdiff_t stride, const Tile& t, int T, int nu, int nv,
+                                 uint8_t* out, ptrdiff_t ostride) {
+  TilePass p;
+  p.Coordinates<false>(t, T, nu, nv);
+  const int bytes = 3 * (p.c1 - p.c0) + 8, rows = p.r1 - p.r0 + 2;
+  if (bytes > kPatchRowBytes || rows > kPatchRows) {
+    for (int j = 0; j < nv; ++j)
+      RgbRowInline(src, stride, RowCoords{p.xs + j * TilePass::kRow, p.ys + j * TilePass::kRow, {}}, 0, nu, out + j * ostride);
+    return;
+  }
+  const ptrdiff_t pstride = PatchStride(bytes);
+  CopyPatch(src, stride, p.r0, rows, 3 * ptrdiff_t(p.c0), bytes, p.patch, pstride);
+  const __m512i dx = _mm512_set1_epi32(p.c0 * 65536), dy = _mm512_set1_epi32(p.r0 * 65536);
   for (int j = 0; j < nv; ++j)
     for (int i = 0; i < nu; i += 16)
-      PatchBayer16(patch, pstride, origin_c, origin_r, _mm512_load_si512(xs + j * kRow + i),
-                   _mm512_load_si512(ys + j * kRow + i), nu - i < 16 ? nu - i : 16, out + j * ostride + 3 * i);
+      Rgb16(p.patch, pstride, _mm512_sub_epi32(p.X(j, i), dx), _mm512_sub_epi32(p.Y(j, i), dy), nu - i < 16 ? nu - i : 16,
+            out + j * ostride + 3 * i);
+}
+
+// Bayer: a pixel's taps are rows ra .. ra + 3 and columns start .. start + 3 (cells minus one), so the region
+// is columns c0 - 1 .. c1 + 2 and rows r0 - 1 .. r1 + 2, as pair rows r0 - 1 .. r1 + 1. One reaching a row's
+// last 3 bytes (where Bayer16 hands pixels to the scalar kernel) goes row by row too.
+HOVS_AVX512 void BayerRgbTile(const uint8_t* src, ptrdiff_t stride, const Tile& t, int T, int nu, int nv,
+                              uint8_t* out, ptrdiff_t ostride) {
+  TilePass p;
+  p.Coordinates<true>(t, T, nu, nv);
+  const int columns = p.c1 - p.c0 + 4, pairs = p.r1 - p.r0 + 3;
+  if (p.c1 + 2 > stride - 1 || 2 * columns > kPatchRowBytes || pairs > kPatchRows) {
+    for (int j = 0; j < nv; ++j)
+      BayerRowInline(src, stride, RowCoords{p.xs + j * TilePass::kRow, p.ys + j * TilePass::kRow, {}}, 0, nu, out + j * ostride);
+    return;
+  }
+  const ptrdiff_t pstride = PatchStride(2 * columns);
+  CopyPairPatch(src, stride, p.r0 - 1, pairs, p.c0 - 1, columns, p.patch, pstride);
+  const __m512i origin_c = _mm512_set1_epi32(p.c0), origin_r = _mm512_set1_epi32(p.r0);
+  for (int j = 0; j < nv; ++j)
+    for (int i = 0; i < nu; i += 16)
+      PatchBayer16(p.patch, pstride, origin_c, origin_r, p.X(j, i), p.Y(j, i), nu - i < 16 ? nu - i : 16,
+                   out + j * ostride + 3 * i);
 }
 
 }  // namespace hovs::unwrap::kernels::avx512
