@@ -1,7 +1,7 @@
 // Panoramic expansion speed: the article's six 1200 x 700 views from one 2750 x 2200 frame (target: median at
 // most 3 ms on the 2-core machine), beside cv::remap with the same maps (the table's own per-pixel
 // coordinates, converted to OpenCV's fixed-point CV_16SC2 maps) in the same run (target: at least 2x faster).
-// RGB input and raw RGGB Bayer input (OpenCV: cvtColor demosaic, then remap).
+// RGB input, raw RGGB Bayer input (OpenCV: cvtColor demosaic, then remap) and grey input (Mono8 cameras).
 #include <benchmark/benchmark.h>
 #include <opencv2/core.hpp>
 #include <opencv2/imgproc.hpp>
@@ -56,19 +56,21 @@ const CvMaps& Maps() {
   return maps;
 }
 
-// Arguments: input (0 RGB, 1 Bayer), kernels (2 the widest this CPU runs, 1 AVX2 at most).
+// Arguments: input (0 RGB, 1 Bayer, 2 grey), kernels (2 the widest this CPU runs, 1 AVX2 at most).
 void BM_HovsSixViews(benchmark::State& state) {
-  const bool bayer = state.range(0) != 0;
+  const bool bayer = state.range(0) == 1, grey = state.range(0) == 2;
   const auto isa = static_cast<unwrap::kernels::Isa>(state.range(1));
   if (isa == unwrap::kernels::Isa::kAvx2 && unwrap::kernels::DetectedIsa() != unwrap::kernels::Isa::kAvx512) {
     state.SkipWithError("AVX2 is already this CPU's widest kernel set (see the other run)");
     return;
   }
   unwrap::kernels::LimitIsa(isa);
-  const cv::Mat frame = Frame(bayer ? CV_8UC1 : CV_8UC3);
+  const cv::Mat frame = Frame(bayer || grey ? CV_8UC1 : CV_8UC3);
   unwrap::Remapper remapper(Table());
   const unwrap::ImageView src{frame.data, frame.cols, frame.rows, frame.step,
-                              bayer ? unwrap::PixelFormat::kBayerRggb8 : unwrap::PixelFormat::kRgb8};
+                              bayer  ? unwrap::PixelFormat::kBayerRggb8
+                              : grey ? unwrap::PixelFormat::kGray8
+                                     : unwrap::PixelFormat::kRgb8};
   std::vector<unwrap::Image8> out;
   for (auto _ : state) {
     remapper.Run(src, unwrap::Interpolation::kBilinear, &out);
@@ -86,14 +88,15 @@ void BM_HovsSixViews(benchmark::State& state) {
   state.counters["dense_tiles"] = dense;
   state.counters["empty_tiles"] = empty;
   state.counters["pyramid_tiles"] = minified;
-  state.SetLabel(std::string(bayer ? "bayer_rggb8 -> rgb, " : "rgb8, ") + unwrap::kernels::ToString(unwrap::kernels::ActiveIsa()));
+  state.SetLabel(std::string(bayer ? "bayer_rggb8 -> rgb, " : grey ? "gray8, " : "rgb8, ") +
+                 unwrap::kernels::ToString(unwrap::kernels::ActiveIsa()));
   unwrap::kernels::LimitIsa(unwrap::kernels::Isa::kAvx512);
 }
-BENCHMARK(BM_HovsSixViews)->Args({0, 2})->Args({1, 2})->Args({0, 1})->Args({1, 1})->Unit(benchmark::kMillisecond)->UseRealTime()->MinTime(2.0);
+BENCHMARK(BM_HovsSixViews)->Args({0, 2})->Args({1, 2})->Args({2, 2})->Args({0, 1})->Args({1, 1})->Args({2, 1})->Unit(benchmark::kMillisecond)->UseRealTime()->MinTime(2.0);
 
 void BM_OpenCvRemapSixViews(benchmark::State& state) {
-  const bool bayer = state.range(0) != 0;
-  const cv::Mat frame = Frame(bayer ? CV_8UC1 : CV_8UC3);
+  const bool bayer = state.range(0) == 1, grey = state.range(0) == 2;
+  const cv::Mat frame = Frame(bayer || grey ? CV_8UC1 : CV_8UC3);
   const auto& maps = Maps();
   std::vector<cv::Mat> out(maps.m1.size());
   cv::Mat rgb;
@@ -107,9 +110,9 @@ void BM_OpenCvRemapSixViews(benchmark::State& state) {
       cv::remap(*src, out[v], maps.m1[v], maps.m2[v], cv::INTER_LINEAR, cv::BORDER_CONSTANT);
     benchmark::DoNotOptimize(out[0].data);
   }
-  state.SetLabel(bayer ? "cvtColor BayerRG2RGB + remap" : "remap CV_16SC2");
+  state.SetLabel(bayer ? "cvtColor BayerRG2RGB + remap" : grey ? "remap CV_16SC2, grey" : "remap CV_16SC2");
 }
-BENCHMARK(BM_OpenCvRemapSixViews)->Arg(0)->Arg(1)->Unit(benchmark::kMillisecond)->UseRealTime()->MinTime(2.0);
+BENCHMARK(BM_OpenCvRemapSixViews)->Arg(0)->Arg(1)->Arg(2)->Unit(benchmark::kMillisecond)->UseRealTime()->MinTime(2.0);
 
 void BM_BuildArticleTable(benchmark::State& state) {
   const auto rig = CatadioptricCamera<double>::Aligned(
