@@ -376,8 +376,7 @@ struct TilePass {
   // Bayer16's taps plus one, ((x >> 1) + 1/128 grid px) >> 15 (rows alike). Lanes past nu repeat lane 0.
   template <bool kBayer>
   HOVS_AVX512 void Coordinates(const Tile& t, int T, int nu, int nv) {
-    const __m512i half = _mm512_set1_epi32(kHalf);
-    __m512i cmin = _mm512_set1_epi32(INT32_MAX), cmax = _mm512_set1_epi32(INT32_MIN), rmin = cmin, rmax = cmax;
+    __m512i xmin = _mm512_set1_epi32(INT32_MAX), xmax = _mm512_set1_epi32(INT32_MIN), ymin = xmin, ymax = xmax;
     alignas(64) RowPolys16 polys[4];
     for (int j0 = 0; j0 < nv; j0 += 16) InterpRowPolys16(t, T, j0, &polys[j0 / 16]);
     RowCoords c;
@@ -388,16 +387,14 @@ struct TilePass {
         Coords16(c, i, nu - i < 16 ? nu - i : 16, &x, &y);
         _mm512_store_si512(xs + j * kRow + i, x);
         _mm512_store_si512(ys + j * kRow + i, y);
-        const __m512i col = kBayer ? _mm512_srai_epi32(_mm512_add_epi32(_mm512_srai_epi32(x, 1), half), 15)
-                                   : _mm512_srai_epi32(_mm512_add_epi32(x, half), 16);
-        const __m512i row = kBayer ? _mm512_srai_epi32(_mm512_add_epi32(_mm512_srai_epi32(y, 1), half), 15)
-                                   : _mm512_srai_epi32(_mm512_add_epi32(y, half), 16);
-        cmin = _mm512_min_epi32(cmin, col), cmax = _mm512_max_epi32(cmax, col);
-        rmin = _mm512_min_epi32(rmin, row), rmax = _mm512_max_epi32(rmax, row);
+        xmin = _mm512_min_epi32(xmin, x), xmax = _mm512_max_epi32(xmax, x);
+        ymin = _mm512_min_epi32(ymin, y), ymax = _mm512_max_epi32(ymax, y);
       }
     }
-    c0 = _mm512_reduce_min_epi32(cmin), c1 = _mm512_reduce_max_epi32(cmax);
-    r0 = _mm512_reduce_min_epi32(rmin), r1 = _mm512_reduce_max_epi32(rmax);
+    // The cells are non-decreasing in the coordinates: the cells of the extreme coordinates are the extreme cells.
+    const auto cell = [](int32_t v) { return kBayer ? ((v >> 1) + kHalf) >> 15 : (v + kHalf) >> 16; };
+    c0 = cell(_mm512_reduce_min_epi32(xmin)), c1 = cell(_mm512_reduce_max_epi32(xmax));
+    r0 = cell(_mm512_reduce_min_epi32(ymin)), r1 = cell(_mm512_reduce_max_epi32(ymax));
   }
   HOVS_AVX512 __m512i X(int j, int i) const { return _mm512_load_si512(xs + j * kRow + i); }
   HOVS_AVX512 __m512i Y(int j, int i) const { return _mm512_load_si512(ys + j * kRow + i); }
