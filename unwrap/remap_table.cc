@@ -46,7 +46,7 @@ class Reader {
   }
   void Bytes(void* out, size_t n, const char* what) {
     HOVS_REQUIRE(pos_ + n <= d_.size(), where_, "truncated mapping file (reading ", what, ")");
-    std::memcpy(out, d_.data() + pos_, n);
+    if (n > 0) std::memcpy(out, d_.data() + pos_, n);   // an empty table's data() may be null
     pos_ += n;
   }
   size_t pos() const { return pos_; }
