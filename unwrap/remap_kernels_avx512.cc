@@ -125,17 +125,10 @@ HOVS_AVX512 inline bool Rgb16(const uint8_t* data, ptrdiff_t stride, __m512i x, 
   return true;
 }
 
-// 16 grey pixels (bilinear).
-HOVS_AVX512 inline bool Gray16(const uint8_t* data, ptrdiff_t stride, __m512i x, __m512i y, int count, uint8_t* o) {
-  const __m512i m63 = _mm512_set1_epi32(63), c64 = _mm512_set1_epi32(64), low16 = _mm512_set1_epi32(0xFFFF);
-  x = _mm512_add_epi32(x, _mm512_set1_epi32(kHalf));
-  y = _mm512_add_epi32(y, _mm512_set1_epi32(kHalf));
-  const __m512i fx = _mm512_and_si512(_mm512_srai_epi32(x, 10), m63);
-  const __m512i fy = _mm512_and_si512(_mm512_srai_epi32(y, 10), m63);
-  const __m512i off = _mm512_add_epi32(_mm512_mullo_epi32(_mm512_srai_epi32(y, 16), _mm512_set1_epi32(static_cast<int>(stride))),
-                                       _mm512_srai_epi32(x, 16));
-  const __m512i t = _mm512_and_si512(_mm512_i32gather_epi32(off, data, 1), low16);   // p0 p1 0 0
-  const __m512i b = _mm512_and_si512(_mm512_i32gather_epi32(off, data + stride, 1), low16);
+// The value of 16 grey pixels from their taps (t: top row, b: bottom row, per dword the bytes p0 p1 0 0) and
+// fractions fx, fy (1/64 px); the first `count` are stored at o.
+HOVS_AVX512 inline void GrayCombine(__m512i fx, __m512i fy, __m512i t, __m512i b, int count, uint8_t* o) {
+  const __m512i c64 = _mm512_set1_epi32(64);
   const __m512i wx = _mm512_or_si512(_mm512_slli_epi32(fx, 8), _mm512_sub_epi32(c64, fx));
   const __m512i ht = _mm512_maddubs_epi16(t, wx), hb = _mm512_maddubs_epi16(b, wx);
   const __m512i wy = _mm512_or_si512(_mm512_slli_epi32(fy, 16), _mm512_sub_epi32(c64, fy));
@@ -147,6 +140,20 @@ HOVS_AVX512 inline bool Gray16(const uint8_t* data, ptrdiff_t stride, __m512i x,
   } else {
     _mm_mask_storeu_epi8(o, __mmask16((1u << count) - 1), bytes);
   }
+}
+
+// 16 grey pixels (bilinear).
+HOVS_AVX512 inline bool Gray16(const uint8_t* data, ptrdiff_t stride, __m512i x, __m512i y, int count, uint8_t* o) {
+  const __m512i m63 = _mm512_set1_epi32(63), low16 = _mm512_set1_epi32(0xFFFF);
+  x = _mm512_add_epi32(x, _mm512_set1_epi32(kHalf));
+  y = _mm512_add_epi32(y, _mm512_set1_epi32(kHalf));
+  const __m512i fx = _mm512_and_si512(_mm512_srai_epi32(x, 10), m63);
+  const __m512i fy = _mm512_and_si512(_mm512_srai_epi32(y, 10), m63);
+  const __m512i off = _mm512_add_epi32(_mm512_mullo_epi32(_mm512_srai_epi32(y, 16), _mm512_set1_epi32(static_cast<int>(stride))),
+                                       _mm512_srai_epi32(x, 16));
+  const __m512i t = _mm512_and_si512(_mm512_i32gather_epi32(off, data, 1), low16);   // p0 p1 0 0
+  const __m512i b = _mm512_and_si512(_mm512_i32gather_epi32(off, data + stride, 1), low16);
+  GrayCombine(fx, fy, t, b, count, o);
   return true;
 }
 
@@ -185,7 +192,7 @@ HOVS_AVX512 inline void BayerCombine(__m512i pxe, __m512i pye, __m512i et, __m51
 // 16 grey pixels as Gray16 from a pair-interleaved patch (see CopyPairPatch): a pixel's four taps are the 4 bytes
 // at twice its column in its row's pair row, one gather per 16 pixels instead of two. Bit-identical to Gray16.
 HOVS_AVX512 inline void PatchGray16(const uint8_t* patch, ptrdiff_t pstride, __m512i x, __m512i y, int count, uint8_t* o) {
-  const __m512i m63 = _mm512_set1_epi32(63), c64 = _mm512_set1_epi32(64);
+  const __m512i m63 = _mm512_set1_epi32(63);
   x = _mm512_add_epi32(x, _mm512_set1_epi32(kHalf));
   y = _mm512_add_epi32(y, _mm512_set1_epi32(kHalf));
   const __m512i fx = _mm512_and_si512(_mm512_srai_epi32(x, 10), m63);
@@ -198,17 +205,7 @@ HOVS_AVX512 inline void PatchGray16(const uint8_t* patch, ptrdiff_t pstride, __m
   const __m512i lane = _mm512_broadcast_i32x4(_mm_setr_epi32(0, 0x04040404, 0x08080808, 0x0C0C0C0C));
   const __m512i t = _mm512_shuffle_epi8(g, _mm512_add_epi8(_mm512_set1_epi32(int(0x80800200u)), lane));
   const __m512i b = _mm512_shuffle_epi8(g, _mm512_add_epi8(_mm512_set1_epi32(int(0x80800301u)), lane));
-  const __m512i wx = _mm512_or_si512(_mm512_slli_epi32(fx, 8), _mm512_sub_epi32(c64, fx));
-  const __m512i ht = _mm512_maddubs_epi16(t, wx), hb = _mm512_maddubs_epi16(b, wx);
-  const __m512i wy = _mm512_or_si512(_mm512_slli_epi32(fy, 16), _mm512_sub_epi32(c64, fy));
-  __m512i r = _mm512_madd_epi16(_mm512_or_si512(ht, _mm512_slli_epi32(hb, 16)), wy);
-  r = _mm512_srli_epi32(_mm512_add_epi32(r, _mm512_set1_epi32(1 << 11)), 12);
-  const __m128i bytes = _mm512_cvtepi32_epi8(r);
-  if (count == 16) {
-    _mm_storeu_si128(reinterpret_cast<__m128i*>(o), bytes);
-  } else {
-    _mm_mask_storeu_epi8(o, __mmask16((1u << count) - 1), bytes);
-  }
+  GrayCombine(fx, fy, t, b, count, o);
 }
 
 // 16 pixels of an RGGB mosaic to RGB, bilinear on each colour grid as BayerGridValue (remap_kernels.cc). In
