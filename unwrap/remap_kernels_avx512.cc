@@ -3,16 +3,16 @@
 // bit-identical to theirs; this file is compiled with -ffp-contract=off so the row polynomial's multiply and add
 // are never fused.
 //
-// What differs from the AVX2 kernels is the reading. Interp tiles (nearly all of a view) first copy the source
-// region their pixels read into a small patch that stays in L1 (see BilinearRgbTile below): RGB as it is, grey
-// and Bayer with two source rows interleaved byte by byte, so that a grey pixel's four taps are one 4-byte word
-// (one 16-lane gather per 16 pixels) and a Bayer pixel's sixteen taps two 8-byte words (plain loads, two per
-// 128-bit lane, put in order by two-source byte permutations) instead of four gathers from the mosaic. An RGB
-// pixel reads one 8-byte word per source row (its left and right taps), also by plain loads. The row kernels
-// (Row16 below; dense tiles and regions too large for a patch) read the frame itself: grey and Bayer by 16-lane
-// gathers, RGB by the same plain loads. The 16 pixels are put into their output order by one byte permutation
-// (VBMI) and written with two plain stores. Row tails run the same 16-lane code with the lanes past the row's end
-// given lane 0's coordinates and a masked store.
+// What differs from the AVX2 kernels is mostly the reading. Interp tiles (nearly all of a view) first copy the
+// source region their pixels read into a small patch that stays in L1 (see BilinearRgbTile below; the AVX2 grey
+// and Bayer tiles do the same, remap_kernels.cc): RGB as it is, grey and Bayer with two source rows interleaved
+// byte by byte, so that a grey pixel's four taps are one 4-byte word (one 16-lane gather per 16 pixels) and a
+// Bayer pixel's sixteen taps two 8-byte words (plain loads, two per 128-bit lane, put in order by two-source byte
+// permutations) instead of four gathers from the mosaic. An RGB pixel reads one 8-byte word per source row (its
+// left and right taps), also by plain loads. The row kernels (Row16 below; dense tiles and regions too large for
+// a patch) read the frame itself: grey and Bayer by 16-lane gathers, RGB by the same plain loads. The 16 pixels
+// are put into their output order by one byte permutation (VBMI) and written with two plain stores. Row tails run
+// the same 16-lane code with the lanes past the row's end given lane 0's coordinates and a masked store.
 #include <immintrin.h>
 
 #include "unwrap/remap_kernels.h"
