@@ -497,7 +497,8 @@ struct BatchLanes {
   alignas(64) int valid[RayBatch::kMax];         // -1: traced by Embree, 0: not
   alignas(64) float tfar[RayBatch::kMax];        // > 0: traced only up to here (the ring's distance)
   alignas(64) unsigned mask_off[RayBatch::kMax]; // Embree mask bits cleared (the ring's)
-  alignas(64) int mount_unit[RayBatch::kMax];    // the unit whose ring ends the ray where Embree finds nothing
+  alignas(64) unsigned mount_geom[RayBatch::kMax];  // the ring that ends the ray where Embree finds nothing, or
+                                                    // RTC_INVALID_GEOMETRY_ID
 };
 
 // The common case of PrepareLanes without branches: every straight camera ray of the batch leaves unit U's
@@ -505,7 +506,7 @@ struct BatchLanes {
 HOVS_VECTOR_CLONES
 void RingLanes(int n, const unsigned char* __restrict bvalid, const int* __restrict from_camera,
                const double* __restrict mount_t, int U, unsigned bit, int clear, int* __restrict valid,
-               float* __restrict tfar, unsigned* __restrict mask_off, int* __restrict mount_unit) {
+               float* __restrict tfar, unsigned* __restrict mask_off, unsigned ring_geom, unsigned* __restrict mount_geom) {
   const int match = U >= 0 ? U : -1000;   // no unit: no lane is a ring lane
   // As 0 / 1 arithmetic, not selects: GCC 12 vectorises the selects here only with a branch per vector.
   for (int i = 0; i < n; ++i) {
@@ -514,25 +515,37 @@ void RingLanes(int n, const unsigned char* __restrict bvalid, const int* __restr
     const int ring = live & (from_camera[i] == match) & (t > 0);
     tfar[i] = static_cast<float>(t) * static_cast<float>(ring);   // 0 (or -0) where not a ring lane
     mask_off[i] = bit & static_cast<unsigned>(-ring);
-    mount_unit[i] = (U + 1) * ring - 1;
+    mount_geom[i] = ring_geom | static_cast<unsigned>(ring - 1);   // ring ? ring_geom : RTC_INVALID_GEOMETRY_ID
     valid[i] = -(live & (1 - (ring & clear)));   // nothing in between: no Embree for this lane
   }
 }
 
+// The unit of a batch's straight camera rays (the largest from_camera; -1: none) and whether every straight ray
+// is that unit's with its ring distance computed (uniform): one pass without branches.
+HOVS_VECTOR_CLONES
+int CameraLanes(int n, const int* __restrict from_camera, const double* __restrict mount_t, bool* uniform) {
+  int U = -1;
+  for (int i = 0; i < n; ++i) U = std::max(U, from_camera[i]);
+  int odd = 0;
+  for (int i = 0; i < n; ++i) odd |= (from_camera[i] >= 0) & ((from_camera[i] != U) | !(mount_t[i] >= 0));
+  *uniform = odd == 0;
+  return U;
+}
+
 void PrepareLanes(const RayBatch& b, const std::vector<RayScene::OwnMount>& mounts, BatchLanes* L) {
   const int n = b.n;
-  int U = -1;
-  for (int i = 0; i < n && U < 0; ++i) U = b.from_camera[i];
-  bool uniform = U >= 0 && static_cast<size_t>(U) < mounts.size() && mounts[U].geometry != nullptr;
-  for (int i = 0; i < n && uniform; ++i) uniform = b.from_camera[i] < 0 || (b.from_camera[i] == U && b.mount_t[i] >= 0);
+  bool uniform = false;
+  const int U = CameraLanes(n, b.from_camera, b.mount_t, &uniform);
+  uniform = uniform && U >= 0 && static_cast<size_t>(U) < mounts.size() && mounts[U].geometry != nullptr;
   if (uniform || U < 0) {   // U < 0: no straight camera ray at all (no lane is a ring lane)
     RingLanes(n, b.valid, b.from_camera, b.mount_t, U, U >= 0 ? MountMaskBit(U) : 0u,
-              U >= 0 && mounts[U].path_clear ? 1 : 0, L->valid, L->tfar, L->mask_off, L->mount_unit);
+              U >= 0 && mounts[U].path_clear ? 1 : 0, L->valid, L->tfar, L->mask_off,
+              U >= 0 ? mounts[U].geom_id : RTC_INVALID_GEOMETRY_ID, L->mount_geom);
     return;
   }
   for (int j = 0; j < n; ++j) {
     L->valid[j] = b.valid[j] ? -1 : 0;
-    L->tfar[j] = 0, L->mask_off[j] = 0, L->mount_unit[j] = -1;
+    L->tfar[j] = 0, L->mask_off[j] = 0, L->mount_geom[j] = RTC_INVALID_GEOMETRY_ID;
     const int u = b.from_camera[j];
     if (!b.valid[j] || u < 0 || static_cast<size_t>(u) >= mounts.size() || !mounts[u].geometry) continue;
     double t = b.mount_t[j];
@@ -542,7 +555,7 @@ void PrepareLanes(const RayBatch& b, const std::vector<RayScene::OwnMount>& moun
     if (t <= 0) continue;
     L->tfar[j] = static_cast<float>(t);
     L->mask_off[j] = MountMaskBit(u);
-    L->mount_unit[j] = u;
+    L->mount_geom[j] = mounts[u].geom_id;
     // Nothing can be in between (and the ray starts at the camera centre, as the path test assumes).
     if (mounts[u].path_clear && b.mount_t[j] > 0) L->valid[j] = 0;
   }
@@ -550,18 +563,13 @@ void PrepareLanes(const RayBatch& b, const std::vector<RayScene::OwnMount>& moun
 
 // Batch rays [i0, i0 + W) (fewer at the end) as one Embree packet of width W (RTCRayHit8 or RTCRayHit16).
 template <int W, class RayHitW, class IntersectW>
-void TracePacketOfBatch(RTCScene scene, const RayBatch& b, const BatchLanes& L, int i0,
-                        const std::vector<RayScene::OwnMount>& mounts, unsigned* geom_ids, unsigned* prim_ids,
-                        IntersectW intersect) {
+void TracePacketOfBatch(RTCScene scene, const RayBatch& b, const BatchLanes& L, int i0, unsigned* geom_ids,
+                        unsigned* prim_ids, IntersectW intersect) {
   const int count = std::min(W, b.n - i0);
   int any = 0;
   for (int i = 0; i < count; ++i) any |= L.valid[i0 + i];
   if (!any) {
-    for (int i = 0; i < count; ++i) {
-      const int u = L.mount_unit[i0 + i];
-      geom_ids[i] = u >= 0 ? mounts[u].geom_id : RTC_INVALID_GEOMETRY_ID;
-      prim_ids[i] = 0;
-    }
+    for (int i = 0; i < count; ++i) geom_ids[i] = L.mount_geom[i0 + i], prim_ids[i] = 0;
     return;
   }
   alignas(64) RayHitW rh;
@@ -588,10 +596,11 @@ void TracePacketOfBatch(RTCScene scene, const RayBatch& b, const BatchLanes& L, 
     valid = partial_valid;
   }
   TracePacket(scene, valid, &rh, intersect);
+  // A lane Embree found nothing for ends on its ring, if it has one (prim 0; a miss's prim is never read).
   for (int i = 0; i < count; ++i) {
-    const int u = L.mount_unit[i0 + i];
-    geom_ids[i] = rh.hit.geomID[i], prim_ids[i] = rh.hit.primID[i];
-    if (u >= 0 && geom_ids[i] == RTC_INVALID_GEOMETRY_ID) geom_ids[i] = mounts[u].geom_id, prim_ids[i] = 0;
+    const bool miss = rh.hit.geomID[i] == RTC_INVALID_GEOMETRY_ID;
+    geom_ids[i] = miss ? L.mount_geom[i0 + i] : rh.hit.geomID[i];
+    prim_ids[i] = miss ? 0u : rh.hit.primID[i];
   }
 }
 
@@ -602,53 +611,104 @@ void RayScene::IntersectBatch(const RayBatch& b, unsigned* geom_ids, unsigned* p
   PrepareLanes(b, own_mount_, &lanes);
   for (int i0 = 0; i0 < b.n; i0 += native16_ ? 16 : 8) {
     if (native16_) {
-      TracePacketOfBatch<16, RTCRayHit16>(scene_, b, lanes, i0, own_mount_, geom_ids + i0, prim_ids + i0, rtcIntersect16);
+      TracePacketOfBatch<16, RTCRayHit16>(scene_, b, lanes, i0, geom_ids + i0, prim_ids + i0, rtcIntersect16);
     } else {
       // Without native 16-wide packets (no AVX-512) Embree emulates rtcIntersect16; rtcIntersect8 is faster.
-      TracePacketOfBatch<8, RTCRayHit8>(scene_, b, lanes, i0, own_mount_, geom_ids + i0, prim_ids + i0, rtcIntersect8);
+      TracePacketOfBatch<8, RTCRayHit8>(scene_, b, lanes, i0, geom_ids + i0, prim_ids + i0, rtcIntersect8);
     }
   }
 }
+
+namespace {
+
+// Where rays [0, m) meet a rectangle's plane, in its (s, t) coordinates, and d.n (the operations of the scalar
+// Eigen expressions o + ((c - o).n / d.n) d - c, axis_x.X, axis_y.X: 3-vector dot products sum left to right).
+// f: the rectangle's centre, normal, axis_x, axis_y.
+HOVS_VECTOR_CLONES
+void RectPlaneHits(int m, const double* __restrict ox, const double* __restrict oy, const double* __restrict oz,
+                   const double* __restrict dx, const double* __restrict dy, const double* __restrict dz,
+                   const double* __restrict f, double* __restrict denom, double* __restrict s, double* __restrict t) {
+  const double cx = f[0], cy = f[1], cz = f[2], nx = f[3], ny = f[4], nz = f[5];
+  const double ax = f[6], ay = f[7], az = f[8], bx = f[9], by = f[10], bz = f[11];
+  for (int i = 0; i < m; ++i) {
+    const double dn = dx[i] * nx + dy[i] * ny + dz[i] * nz;
+    const double k = ((cx - ox[i]) * nx + (cy - oy[i]) * ny + (cz - oz[i]) * nz) / dn;
+    const double X0 = ox[i] + k * dx[i] - cx, X1 = oy[i] + k * dy[i] - cy, X2 = oz[i] + k * dz[i] - cz;
+    denom[i] = dn;
+    s[i] = ax * X0 + ay * X1 + az * X2;
+    t[i] = bx * X0 + by * X1 + bz * X2;
+  }
+}
+
+// The sky colour (Sky::Eval) of rays [0, m) from their directions' z, into rgb (3 floats per ray).
+HOVS_VECTOR_CLONES
+void SkyColours(int m, const double* __restrict dz, const float* __restrict horizon, const float* __restrict zenith,
+                const float* __restrict nadir, float* __restrict rgb) {
+  for (int i = 0; i < m; ++i) {
+    const double z = std::clamp(dz[i], -1.0, 1.0);
+    const bool up = z >= 0;
+    const float f = static_cast<float>(std::sqrt(up ? z : -z));
+    for (int c = 0; c < 3; ++c) {
+      const float a = horizon[c], e = up ? zenith[c] : nadir[c];
+      rgb[3 * i + c] = a + f * (e - a);
+    }
+  }
+}
+
+}  // namespace
 
 void RayScene::Colours(const RayBatch& b, float* rgb) const {
   const int n = b.n;
   unsigned geom[RayBatch::kMax], prim[RayBatch::kMax];
   IntersectBatch(b, geom, prim);
-  // Rectangle hits with a noise texture are collected per rectangle and evaluated together.
+  // Runs of consecutive lanes on the sky, or on one rectangle, are evaluated together (vectorised); rectangle
+  // hits with a noise texture are collected per rectangle and evaluated together.
   int deferred[RayBatch::kMax], n_deferred = 0;
   const auto put = [&](int i, const Rgb& c) { rgb[3 * i] = c[0], rgb[3 * i + 1] = c[1], rgb[3 * i + 2] = c[2]; };
-  double s_at[RayBatch::kMax], t_at[RayBatch::kMax];
-  for (int i = 0; i < n; ++i) {
+  alignas(64) double s_at[RayBatch::kMax], t_at[RayBatch::kMax], denom[RayBatch::kMax];
+  for (int i = 0; i < n;) {
+    const unsigned g = geom[i];
     if (!b.valid[i]) {
-      put(i, {0, 0, 0});
+      put(i++, {0, 0, 0});
       continue;
     }
-    const unsigned g = geom[i];
-    const Vec3d d(b.dx[i], b.dy[i], b.dz[i]);
+    int j = i + 1;   // the run of lanes like lane i
     if (g == RTC_INVALID_GEOMETRY_ID) {
-      put(i, desc_.sky.Eval(d));
+      while (j < n && b.valid[j] && geom[j] == g) ++j;
+      SkyColours(j - i, b.dz + i, desc_.sky.horizon.data(), desc_.sky.zenith.data(), desc_.sky.nadir.data(), rgb + 3 * i);
     } else if (g == rect_geom_) {
-      const Rect& r = desc_.rects[prim[i]];
-      const RectFrame& fr = rect_frames_[prim[i]];
-      const double denom = d.dot(fr.normal);
-      if (denom == 0 || (denom > 0 && !r.double_sided)) {  // edge-on: no hit (as Shade)
-        put(i, denom == 0 ? Rgb{0, 0, 0} : r.back);
-        continue;
-      }
-      const Vec3d o(b.ox[i], b.oy[i], b.oz[i]);
-      const Vec3d X = o + ((fr.centre - o).dot(fr.normal) / denom) * d - fr.centre;
-      s_at[i] = fr.axis_x.dot(X), t_at[i] = fr.axis_y.dot(X);
-      if (r.front.kind == Texture::Kind::kNoise) {
-        deferred[n_deferred++] = i;
+      const unsigned p = prim[i];
+      while (j < n && b.valid[j] && geom[j] == g && prim[j] == p) ++j;
+      const RectFrame& fr = rect_frames_[p];
+      const double f[12] = {fr.centre.x(), fr.centre.y(), fr.centre.z(), fr.normal.x(), fr.normal.y(), fr.normal.z(),
+                            fr.axis_x.x(), fr.axis_x.y(), fr.axis_x.z(), fr.axis_y.x(), fr.axis_y.y(), fr.axis_y.z()};
+      RectPlaneHits(j - i, b.ox + i, b.oy + i, b.oz + i, b.dx + i, b.dy + i, b.dz + i, f, denom + i, s_at + i, t_at + i);
+      const Rect& r = desc_.rects[p];
+      const bool noise = r.front.kind == Texture::Kind::kNoise, double_sided = r.double_sided;
+      // Edge-on: no hit (as Shade); the back of a single-sided rectangle: its back colour.
+      const auto seen = [&](int k) { return !(denom[k] == 0 || (denom[k] > 0 && !double_sided)); };
+      int nd = n_deferred, front = 0;
+      if (noise) {
+        for (int k = i; k < j; ++k) {   // without branches: the lane is kept when seen
+          const int keep = seen(k);
+          deferred[nd] = k, nd += keep, front += keep;
+        }
+        n_deferred = nd;
       } else {
-        put(i, r.front.Eval(s_at[i], t_at[i]));
+        for (int k = i; k < j; ++k)
+          if (seen(k)) put(k, r.front.Eval(s_at[k], t_at[k])), ++front;
       }
+      if (front < j - i)
+        for (int k = i; k < j; ++k)
+          if (!seen(k)) put(k, denom[k] == 0 ? Rgb{0, 0, 0} : r.back);
     } else if (g < geom_to_user_.size() && geom_to_user_[g] >= 0) {
       const UserGeometry& u = *user_[geom_to_user_[g]];
       put(i, u.kind == UserGeometry::Kind::kMirror ? u.back_colour : u.colour);
+      j = i + 1;
     } else {
       put(i, {0, 0, 0});
     }
+    i = j;
   }
   // The noise: one batch per rectangle, in order of first appearance (usually one: the floor). Each pass takes
   // the rays of the first rectangle left and keeps the others, in order, for the next.
