@@ -640,6 +640,22 @@ void RectPlaneHits(int m, const double* __restrict ox, const double* __restrict 
   }
 }
 
+// Where rays [0, m) meet a rectangle's plane: d.n, the distance t and the point o + t d (Shade's operations).
+// f: the rectangle's centre, normal.
+HOVS_VECTOR_CLONES
+void RectPlanePoints(int m, const double* __restrict ox, const double* __restrict oy, const double* __restrict oz,
+                     const double* __restrict dx, const double* __restrict dy, const double* __restrict dz,
+                     const double* __restrict f, double* __restrict denom, double* __restrict t, double* __restrict px,
+                     double* __restrict py, double* __restrict pz) {
+  const double cx = f[0], cy = f[1], cz = f[2], nx = f[3], ny = f[4], nz = f[5];
+  for (int i = 0; i < m; ++i) {
+    const double dn = dx[i] * nx + dy[i] * ny + dz[i] * nz;
+    const double k = ((cx - ox[i]) * nx + (cy - oy[i]) * ny + (cz - oz[i]) * nz) / dn;
+    denom[i] = dn, t[i] = k;
+    px[i] = ox[i] + k * dx[i], py[i] = oy[i] + k * dy[i], pz[i] = oz[i] + k * dz[i];
+  }
+}
+
 // The sky colour (Sky::Eval) of rays [0, m) from their directions' z, into rgb (3 floats per ray).
 HOVS_VECTOR_CLONES
 void SkyColours(int m, const double* __restrict dz, const float* __restrict horizon, const float* __restrict zenith,
@@ -735,7 +751,30 @@ void RayScene::Colours(const RayBatch& b, float* rgb) const {
 void RayScene::Geometry(const RayBatch& b, Hit* hits) const {
   unsigned geom[RayBatch::kMax], prim[RayBatch::kMax];
   IntersectBatch(b, geom, prim);
-  for (int k = 0; k < b.n; ++k) {
+  alignas(64) double denom[RayBatch::kMax], t[RayBatch::kMax], px[RayBatch::kMax], py[RayBatch::kMax], pz[RayBatch::kMax];
+  for (int i = 0; i < b.n;) {
+    if (b.valid[i] && geom[i] == rect_geom_) {
+      // A run of consecutive lanes on one rectangle: their plane points in one vectorised pass (as Shade).
+      const unsigned p = prim[i];
+      int j = i + 1;
+      while (j < b.n && b.valid[j] && geom[j] == rect_geom_ && prim[j] == p) ++j;
+      const RectFrame& fr = rect_frames_[p];
+      const double f[6] = {fr.centre.x(), fr.centre.y(), fr.centre.z(), fr.normal.x(), fr.normal.y(), fr.normal.z()};
+      RectPlanePoints(j - i, b.ox + i, b.oy + i, b.oz + i, b.dx + i, b.dy + i, b.dz + i, f, denom + i, t + i, px + i,
+                      py + i, pz + i);
+      const int id = desc_.rects[p].object_id;
+      for (int k = i; k < j; ++k) {
+        Hit& h = hits[k];
+        h = Hit();
+        if (denom[k] == 0) continue;
+        h.hit = true, h.object_id = id, h.t = t[k];
+        h.point = Vec3d(px[k], py[k], pz[k]);
+        h.normal = denom[k] < 0 ? fr.normal : Vec3d(-fr.normal);
+      }
+      i = j;
+      continue;
+    }
+    const int k = i++;
     Hit& h = hits[k];
     h = Hit();
     if (!b.valid[k] || geom[k] == RTC_INVALID_GEOMETRY_ID) continue;

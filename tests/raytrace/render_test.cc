@@ -129,7 +129,7 @@ TEST(Render, CornersFoundInANoiseFreeRenderMatchTheGroundTruth) {
   }
 }
 
-TEST(Render, RangeAndPointChannelsOfAPlaneAreAnalytic) {
+TEST(Render, RangePointAndNormalChannelsOfAPlaneAreAnalytic) {
   const SceneConfig cfg = BoardScene(false);
   const RayScene scene(cfg.description);
   const auto corners = scenes::BoardCornerTruth(scene, cfg.boards[0], 0);
@@ -141,7 +141,7 @@ TEST(Render, RangeAndPointChannelsOfAPlaneAreAnalytic) {
   const auto& board = cfg.boards[0];
   const Vec3d n = board.world_from_board.Rotate(Vec3d(0, 0, 1)), c = board.world_from_board.translation;
   int checked = 0;
-  double worst_rel = 0, worst_point = 0;
+  double worst_rel = 0, worst_point = 0, worst_normal = 0;
   for (int y = ro.region.y0; y < ro.region.y1; ++y)
     for (int x = ro.region.x0; x < ro.region.x1; ++x) {
       const float* g = &f.truth.data[(static_cast<size_t>(y) * f.width + x) * raytrace::GroundTruth::kChannels];
@@ -153,12 +153,15 @@ TEST(Render, RangeAndPointChannelsOfAPlaneAreAnalytic) {
       const double range = (X - unit.world_from_mirror.translation).norm();
       worst_rel = std::max(worst_rel, std::abs(g[0] - range) / range);
       worst_point = std::max(worst_point, (Vec3d(g[1], g[2], g[3]) - X).norm());
+      const Vec3d facing = dw.dot(n) < 0 ? n : Vec3d(-n);   // the normal channel faces the ray
+      worst_normal = std::max(worst_normal, (Vec3d(g[4], g[5], g[6]) - facing).norm());
       EXPECT_EQ(g[8], 1.0f);
       ++checked;
     }
   EXPECT_GT(checked, 2000);
   EXPECT_LT(worst_rel, 1e-6);
   EXPECT_LT(worst_point, 1e-6);
+  EXPECT_LT(worst_normal, 1e-6);
 }
 
 TEST(Render, MirrorMaskIsTheCoreMask) {
