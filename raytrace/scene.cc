@@ -221,7 +221,10 @@ RayScene::RayScene(SceneDescription description) : desc_(std::move(description))
 
   for (const Rect& r : desc_.rects) {
     const Eigen::Matrix3d R = r.world_from_rect.rotation.toRotationMatrix();
-    rect_frames_.push_back({r.world_from_rect.translation, R.col(2), R.col(0), R.col(1)});
+    RectFrame fr{r.world_from_rect.translation, R.col(2), R.col(0), R.col(1), {}};
+    for (int c = 0; c < 3; ++c)
+      fr.flat[c] = fr.centre(c), fr.flat[3 + c] = fr.normal(c), fr.flat[6 + c] = fr.axis_x(c), fr.flat[9 + c] = fr.axis_y(c);
+    rect_frames_.push_back(fr);
   }
 
   // All rectangles: one quad mesh; primID = index into rects.
@@ -621,38 +624,28 @@ void RayScene::IntersectBatch(const RayBatch& b, unsigned* geom_ids, unsigned* p
 
 namespace {
 
-// Where rays [0, m) meet a rectangle's plane, in its (s, t) coordinates, and d.n (the operations of the scalar
-// Eigen expressions o + ((c - o).n / d.n) d - c, axis_x.X, axis_y.X: 3-vector dot products sum left to right).
-// f: the rectangle's centre, normal, axis_x, axis_y.
+// Where batch rays i0 .. i0 + m - 1 meet a rectangle's plane, into the same lanes of out: d.n, the distance k
+// along d, the point p = o + k d and its (s, t) on the rectangle, axis_x.(p - c) and axis_y.(p - c): the
+// operations of the scalar Eigen expressions (Shade; 3-vector dot products sum left to right). f: the
+// rectangle's centre c, normal, axis_x, axis_y (RectFrame::flat).
+struct RectPlaneRuns {
+  alignas(64) double denom[RayBatch::kMax], k[RayBatch::kMax], px[RayBatch::kMax], py[RayBatch::kMax],
+      pz[RayBatch::kMax], s[RayBatch::kMax], t[RayBatch::kMax];
+};
 HOVS_VECTOR_CLONES
-void RectPlaneHits(int m, const double* __restrict ox, const double* __restrict oy, const double* __restrict oz,
+void RectPlaneHits(int i0, int m, const double* __restrict ox, const double* __restrict oy, const double* __restrict oz,
                    const double* __restrict dx, const double* __restrict dy, const double* __restrict dz,
-                   const double* __restrict f, double* __restrict denom, double* __restrict s, double* __restrict t) {
+                   const double* __restrict f, RectPlaneRuns* __restrict out) {
   const double cx = f[0], cy = f[1], cz = f[2], nx = f[3], ny = f[4], nz = f[5];
   const double ax = f[6], ay = f[7], az = f[8], bx = f[9], by = f[10], bz = f[11];
-  for (int i = 0; i < m; ++i) {
+  for (int i = i0; i < i0 + m; ++i) {
     const double dn = dx[i] * nx + dy[i] * ny + dz[i] * nz;
     const double k = ((cx - ox[i]) * nx + (cy - oy[i]) * ny + (cz - oz[i]) * nz) / dn;
-    const double X0 = ox[i] + k * dx[i] - cx, X1 = oy[i] + k * dy[i] - cy, X2 = oz[i] + k * dz[i] - cz;
-    denom[i] = dn;
-    s[i] = ax * X0 + ay * X1 + az * X2;
-    t[i] = bx * X0 + by * X1 + bz * X2;
-  }
-}
-
-// Where rays [0, m) meet a rectangle's plane: d.n, the distance t and the point o + t d (Shade's operations).
-// f: the rectangle's centre, normal.
-HOVS_VECTOR_CLONES
-void RectPlanePoints(int m, const double* __restrict ox, const double* __restrict oy, const double* __restrict oz,
-                     const double* __restrict dx, const double* __restrict dy, const double* __restrict dz,
-                     const double* __restrict f, double* __restrict denom, double* __restrict t, double* __restrict px,
-                     double* __restrict py, double* __restrict pz) {
-  const double cx = f[0], cy = f[1], cz = f[2], nx = f[3], ny = f[4], nz = f[5];
-  for (int i = 0; i < m; ++i) {
-    const double dn = dx[i] * nx + dy[i] * ny + dz[i] * nz;
-    const double k = ((cx - ox[i]) * nx + (cy - oy[i]) * ny + (cz - oz[i]) * nz) / dn;
-    denom[i] = dn, t[i] = k;
-    px[i] = ox[i] + k * dx[i], py[i] = oy[i] + k * dy[i], pz[i] = oz[i] + k * dz[i];
+    const double px = ox[i] + k * dx[i], py = oy[i] + k * dy[i], pz = oz[i] + k * dz[i];
+    const double X0 = px - cx, X1 = py - cy, X2 = pz - cz;
+    out->denom[i] = dn, out->k[i] = k, out->px[i] = px, out->py[i] = py, out->pz[i] = pz;
+    out->s[i] = ax * X0 + ay * X1 + az * X2;
+    out->t[i] = bx * X0 + by * X1 + bz * X2;
   }
 }
 
@@ -681,7 +674,8 @@ void RayScene::Colours(const RayBatch& b, float* rgb) const {
   // hits with a noise texture are collected per rectangle and evaluated together.
   int deferred[RayBatch::kMax], n_deferred = 0;
   const auto put = [&](int i, const Rgb& c) { rgb[3 * i] = c[0], rgb[3 * i + 1] = c[1], rgb[3 * i + 2] = c[2]; };
-  alignas(64) double s_at[RayBatch::kMax], t_at[RayBatch::kMax], denom[RayBatch::kMax];
+  RectPlaneRuns planes;
+  const double *s_at = planes.s, *t_at = planes.t, *denom = planes.denom;
   for (int i = 0; i < n;) {
     const unsigned g = geom[i];
     if (!b.valid[i]) {
@@ -696,9 +690,7 @@ void RayScene::Colours(const RayBatch& b, float* rgb) const {
       const unsigned p = prim[i];
       while (j < n && b.valid[j] && geom[j] == g && prim[j] == p) ++j;
       const RectFrame& fr = rect_frames_[p];
-      const double f[12] = {fr.centre.x(), fr.centre.y(), fr.centre.z(), fr.normal.x(), fr.normal.y(), fr.normal.z(),
-                            fr.axis_x.x(), fr.axis_x.y(), fr.axis_x.z(), fr.axis_y.x(), fr.axis_y.y(), fr.axis_y.z()};
-      RectPlaneHits(j - i, b.ox + i, b.oy + i, b.oz + i, b.dx + i, b.dy + i, b.dz + i, f, denom + i, s_at + i, t_at + i);
+      RectPlaneHits(i, j - i, b.ox, b.oy, b.oz, b.dx, b.dy, b.dz, fr.flat, &planes);
       const Rect& r = desc_.rects[p];
       const bool noise = r.front.kind == Texture::Kind::kNoise, double_sided = r.double_sided;
       // Edge-on: no hit (as Shade); the back of a single-sided rectangle: its back colour.
@@ -751,7 +743,7 @@ void RayScene::Colours(const RayBatch& b, float* rgb) const {
 void RayScene::Geometry(const RayBatch& b, Hit* hits) const {
   unsigned geom[RayBatch::kMax], prim[RayBatch::kMax];
   IntersectBatch(b, geom, prim);
-  alignas(64) double denom[RayBatch::kMax], t[RayBatch::kMax], px[RayBatch::kMax], py[RayBatch::kMax], pz[RayBatch::kMax];
+  RectPlaneRuns planes;
   for (int i = 0; i < b.n;) {
     if (b.valid[i] && geom[i] == rect_geom_) {
       // A run of consecutive lanes on one rectangle: their plane points in one vectorised pass (as Shade).
@@ -759,17 +751,15 @@ void RayScene::Geometry(const RayBatch& b, Hit* hits) const {
       int j = i + 1;
       while (j < b.n && b.valid[j] && geom[j] == rect_geom_ && prim[j] == p) ++j;
       const RectFrame& fr = rect_frames_[p];
-      const double f[6] = {fr.centre.x(), fr.centre.y(), fr.centre.z(), fr.normal.x(), fr.normal.y(), fr.normal.z()};
-      RectPlanePoints(j - i, b.ox + i, b.oy + i, b.oz + i, b.dx + i, b.dy + i, b.dz + i, f, denom + i, t + i, px + i,
-                      py + i, pz + i);
+      RectPlaneHits(i, j - i, b.ox, b.oy, b.oz, b.dx, b.dy, b.dz, fr.flat, &planes);
       const int id = desc_.rects[p].object_id;
       for (int k = i; k < j; ++k) {
         Hit& h = hits[k];
         h = Hit();
-        if (denom[k] == 0) continue;
-        h.hit = true, h.object_id = id, h.t = t[k];
-        h.point = Vec3d(px[k], py[k], pz[k]);
-        h.normal = denom[k] < 0 ? fr.normal : Vec3d(-fr.normal);
+        if (planes.denom[k] == 0) continue;
+        h.hit = true, h.object_id = id, h.t = planes.k[k];
+        h.point = Vec3d(planes.px[k], planes.py[k], planes.pz[k]);
+        h.normal = planes.denom[k] < 0 ? fr.normal : Vec3d(-fr.normal);
       }
       i = j;
       continue;

@@ -158,6 +158,7 @@ class RayScene {
   // A rectangle's frame for shading: centre, unit normal and in-plane axes in the world.
   struct RectFrame {
     Vec3d centre, normal, axis_x, axis_y;
+    double flat[12];  // the four vectors in this order, as the vectorised plane hits take them
   };
   std::vector<RectFrame> rect_frames_;
 
