@@ -6,14 +6,14 @@
 #include <opencv2/imgproc.hpp>
 
 #include "depth/stereo.h"
+#include "tests/core/test_rigs.h"
 
 namespace {
 
 using namespace hovs;
 
 void BM_DenseDepth(benchmark::State& state) {
-  const auto rig0 = CatadioptricCamera<double>::Aligned(
-      {0.048, 0.044, 0.080}, PinholeCamera<double>::FromPhysical(0.016, 4.54e-6, 2750, 2200), 0.010);
+  const auto rig0 = test::AlignedRig();
   const depth::StereoRig rig{AnyModel::Exact(rig0), AnyModel::Exact(rig0), Rigid3d::Translation(Vec3d(-0.64, 0, 0))};
   depth::RectifyOptions ro;   // 2048 x 512
   const depth::Rectification r = depth::Rectify(rig, ro);

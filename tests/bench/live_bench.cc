@@ -18,19 +18,11 @@
 #include "unwrap/layout.h"
 #include "unwrap/remap.h"
 #include "unwrap/remap_table.h"
+#include "tests/bench/article_table.h"
 
 namespace {
 
 using namespace hovs;
-
-const unwrap::RemapTable& Table() {
-  static const unwrap::RemapTable table = [] {
-    const auto rig = CatadioptricCamera<double>::Aligned(
-        {0.048, 0.044, 0.080}, PinholeCamera<double>::FromPhysical(0.016, 4.54e-6, 2750, 2200), 0.010);
-    return unwrap::BuildRemapTable(AnyModel::Exact(rig), unwrap::PresetLayout("article"), {});
-  }();
-  return table;
-}
 
 // A raw RGGB mosaic with texture (smoothed noise per colour plane).
 hw::FakeFrame BayerFrame(uint32_t seed) {
@@ -45,7 +37,7 @@ hw::FakeFrame BayerFrame(uint32_t seed) {
 
 void BM_LiveExpansion(benchmark::State& state) {
   const auto frame = BayerFrame(1);
-  unwrap::Remapper remapper(Table());
+  unwrap::Remapper remapper(test::ArticleTable());
   std::vector<unwrap::Image8> views;
   for (auto _ : state) {
     remapper.Run({frame.data.data(), frame.width, frame.height, size_t(frame.width), unwrap::PixelFormat::kBayerRggb8},
@@ -70,7 +62,7 @@ void BM_LiveCamera(benchmark::State& state) {
     state.SkipWithError(e.what());
     return;
   }
-  unwrap::Remapper remapper(Table());
+  unwrap::Remapper remapper(test::ArticleTable());
   std::vector<unwrap::Image8> views;
   uint64_t processed = 0, dropped = 0, last_id = 0;
   double seconds = 0;

@@ -11,19 +11,11 @@
 #include "core/model_fit.h"
 #include "unwrap/remap.h"
 #include "unwrap/remap_kernels.h"
+#include "tests/bench/article_table.h"
 
 namespace {
 
 using namespace hovs;
-
-const unwrap::RemapTable& Table() {
-  static const unwrap::RemapTable table = [] {
-    const auto rig = CatadioptricCamera<double>::Aligned(
-        {0.048, 0.044, 0.080}, PinholeCamera<double>::FromPhysical(0.016, 4.54e-6, 2750, 2200), 0.010);
-    return unwrap::BuildRemapTable(AnyModel::Exact(rig), unwrap::PresetLayout("article"), {});
-  }();
-  return table;
-}
 
 // A textured frame (random noise smoothed a little: neither flat nor pure noise).
 cv::Mat Frame(int type) {
@@ -40,7 +32,7 @@ struct CvMaps {
 const CvMaps& Maps() {
   static const CvMaps maps = [] {
     CvMaps m;
-    const auto& t = Table();
+    const auto& t = test::ArticleTable();
     for (size_t v = 0; v < t.views.size(); ++v) {
       std::vector<float> x, y;
       t.DecodeView(static_cast<int>(v), &x, &y);
@@ -66,7 +58,7 @@ void BM_HovsSixViews(benchmark::State& state) {
   }
   unwrap::kernels::LimitIsa(isa);
   const cv::Mat frame = Frame(bayer || grey ? CV_8UC1 : CV_8UC3);
-  unwrap::Remapper remapper(Table());
+  unwrap::Remapper remapper(test::ArticleTable());
   const unwrap::ImageView src{frame.data, frame.cols, frame.rows, frame.step,
                               bayer  ? unwrap::PixelFormat::kBayerRggb8
                               : grey ? unwrap::PixelFormat::kGray8
@@ -76,7 +68,7 @@ void BM_HovsSixViews(benchmark::State& state) {
     remapper.Run(src, unwrap::Interpolation::kBilinear, &out);
     benchmark::DoNotOptimize(out[0].data.data());
   }
-  const auto& t = Table();
+  const auto& t = test::ArticleTable();
   int interp = 0, dense = 0, empty = 0, minified = 0;
   for (const auto& v : t.views) {
     interp += v.interp_tiles, dense += v.dense_tiles, empty += v.empty_tiles;
@@ -115,8 +107,7 @@ void BM_OpenCvRemapSixViews(benchmark::State& state) {
 BENCHMARK(BM_OpenCvRemapSixViews)->Arg(0)->Arg(1)->Arg(2)->Unit(benchmark::kMillisecond)->UseRealTime()->MinTime(2.0);
 
 void BM_BuildArticleTable(benchmark::State& state) {
-  const auto rig = CatadioptricCamera<double>::Aligned(
-      {0.048, 0.044, 0.080}, PinholeCamera<double>::FromPhysical(0.016, 4.54e-6, 2750, 2200), 0.010);
+  const auto rig = test::AlignedRig();
   for (auto _ : state) {
     const auto t = unwrap::BuildRemapTable(AnyModel::Exact(rig), unwrap::PresetLayout("article"), {});
     benchmark::DoNotOptimize(t.views.size());

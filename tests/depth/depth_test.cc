@@ -12,6 +12,7 @@
 #include "depth/stereo.h"
 #include "raytrace/render.h"
 #include "scenes/scene_config.h"
+#include "tests/core/test_rigs.h"
 
 namespace hovs::depth {
 namespace {
@@ -39,8 +40,7 @@ std::vector<Vec3d> PointsLeft(int n, unsigned seed) {
 }
 
 TEST(Sparse, LawOfSinesIsTheTriangulationOfAParallelRig) {
-  const auto rig0 = CatadioptricCamera<double>::Aligned(
-      {0.048, 0.044, 0.080}, PinholeCamera<double>::FromPhysical(0.016, 4.54e-6, 2750, 2200), 0.010);
+  const auto rig0 = test::AlignedRig();
   StereoRig rig{AnyModel::Exact(rig0), AnyModel::Exact(rig0), Rigid3d::Translation(Vec3d(-0.64, 0, 0))};
   EXPECT_NEAR(rig.Baseline(), 0.64, 1e-12);
   const Vec3d X(1.3, 2.1, 0.0);   // a horizontal ray from both units

@@ -10,6 +10,7 @@
 #include "core/io.h"
 #include "core/model_fit.h"
 #include "tests/cli_helper.h"
+#include "tests/core/test_rigs.h"
 
 namespace hovs {
 namespace {
@@ -53,8 +54,7 @@ TEST(UnwrapCli, ViewsFromAModelOrAMappingFileAreIdenticalAndBadInputIsRejected) 
   EXPECT_FALSE(j["truth"]["per_frame"]["frame0"].contains("p"));
 
   // Polynomial model from OCamCalib's file.
-  const auto rig = CatadioptricCamera<double>::Aligned(
-      {0.048, 0.044, 0.080}, PinholeCamera<double>::FromPhysical(0.016, 4.54e-6, 2750, 2200), 0.010);
+  const auto rig = test::AlignedRig();
   WriteFileAtomic(dir / "calib_results.txt", calib::FormatOcamCalibResults(PolynomialFromCatadioptric(rig, 5)));
   const auto poly = Hovs("--quiet unwrap --model " + (dir / "calib_results.txt").string() + " --layout panorama --input " +
                          frame + " -o " + (dir / "c").string());

@@ -12,6 +12,7 @@
 #include "core/model_fit.h"
 #include "unwrap/remap.h"
 #include "unwrap/remap_kernels.h"
+#include "tests/core/test_rigs.h"
 
 namespace hovs::unwrap {
 namespace {
@@ -19,8 +20,7 @@ namespace {
 constexpr double kDeg = M_PI / 180;
 
 CatadioptricCamera<double> Rig() {
-  return CatadioptricCamera<double>::Aligned({0.048, 0.044, 0.080},
-                                             PinholeCamera<double>::FromPhysical(0.016, 4.54e-6, 2750, 2200), 0.010);
+  return test::AlignedRig();
 }
 
 std::filesystem::path TempDir() {
