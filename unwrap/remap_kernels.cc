@@ -130,8 +130,13 @@ __attribute__((target("avx2"))) void BilinearRgbRowAvx2(const uint8_t* data, ptr
   // (left, right) byte pairs of R, G, B for the two pixels of each 128-bit lane.
   const __m256i pairs = _mm256_setr_epi8(0, 3, 1, 4, 2, 5, -1, -1, 8, 11, 9, 12, 10, 13, -1, -1,
                                          0, 3, 1, 4, 2, 5, -1, -1, 8, 11, 9, 12, 10, 13, -1, -1);
-  const __m256i rep = _mm256_setr_epi8(0, 1, 0, 1, 0, 1, 0, 1, 4, 5, 4, 5, 4, 5, 4, 5,
-                                       0, 1, 0, 1, 0, 1, 0, 1, 4, 5, 4, 5, 4, 5, 4, 5);
+  // Each pixel's 16-bit weight (the low word of its dword) repeated in its quadword: registers A hold pixels
+  // 0, 1 | 4, 5 and B pixels 2, 3 | 6, 7 (two per 128-bit lane), so a pixel's weight already lies in its own
+  // lane and one byte shuffle places it.
+  const __m256i repA = _mm256_setr_epi8(0, 1, 0, 1, 0, 1, 0, 1, 4, 5, 4, 5, 4, 5, 4, 5,
+                                        0, 1, 0, 1, 0, 1, 0, 1, 4, 5, 4, 5, 4, 5, 4, 5);
+  const __m256i repB = _mm256_setr_epi8(8, 9, 8, 9, 8, 9, 8, 9, 12, 13, 12, 13, 12, 13, 12, 13,
+                                        8, 9, 8, 9, 8, 9, 8, 9, 12, 13, 12, 13, 12, 13, 12, 13);
   const uint8_t* d2 = data + stride;
   alignas(32) int32_t off[8];
   const auto load = [](const uint8_t* p) {
@@ -150,18 +155,14 @@ __attribute__((target("avx2"))) void BilinearRgbRowAvx2(const uint8_t* data, ptr
     const __m256i fy = _mm256_and_si256(_mm256_srai_epi32(y, 10), m63);
     _mm256_store_si256(reinterpret_cast<__m256i*>(off),
                        _mm256_add_epi32(_mm256_mullo_epi32(iy, vstride), _mm256_add_epi32(ix, _mm256_add_epi32(ix, ix))));
-    // Registers A hold pixels 0, 1 | 2, 3 and B pixels 4, 5 | 6, 7 (two per 128-bit lane).
-    const __m256i tA = _mm256_setr_epi64x(load(data + off[0]), load(data + off[1]), load(data + off[2]), load(data + off[3]));
-    const __m256i tB = _mm256_setr_epi64x(load(data + off[4]), load(data + off[5]), load(data + off[6]), load(data + off[7]));
-    const __m256i bA = _mm256_setr_epi64x(load(d2 + off[0]), load(d2 + off[1]), load(d2 + off[2]), load(d2 + off[3]));
-    const __m256i bB = _mm256_setr_epi64x(load(d2 + off[4]), load(d2 + off[5]), load(d2 + off[6]), load(d2 + off[7]));
+    const __m256i tA = _mm256_setr_epi64x(load(data + off[0]), load(data + off[1]), load(data + off[4]), load(data + off[5]));
+    const __m256i tB = _mm256_setr_epi64x(load(data + off[2]), load(data + off[3]), load(data + off[6]), load(data + off[7]));
+    const __m256i bA = _mm256_setr_epi64x(load(d2 + off[0]), load(d2 + off[1]), load(d2 + off[4]), load(d2 + off[5]));
+    const __m256i bB = _mm256_setr_epi64x(load(d2 + off[2]), load(d2 + off[3]), load(d2 + off[6]), load(d2 + off[7]));
     const __m256i wxd = _mm256_or_si256(_mm256_slli_epi32(fx, 8), _mm256_sub_epi32(c64, fx));
     const __m256i wyd = _mm256_slli_epi32(fy, 9);   // fy << 9 in the low 16 bits
-    const __m256i selA = _mm256_setr_epi32(0, 1, 0, 0, 2, 3, 0, 0), selB = _mm256_setr_epi32(4, 5, 0, 0, 6, 7, 0, 0);
-    const __m256i wxA = _mm256_shuffle_epi8(_mm256_permutevar8x32_epi32(wxd, selA), rep);
-    const __m256i wxB = _mm256_shuffle_epi8(_mm256_permutevar8x32_epi32(wxd, selB), rep);
-    const __m256i wyA = _mm256_shuffle_epi8(_mm256_permutevar8x32_epi32(wyd, selA), rep);
-    const __m256i wyB = _mm256_shuffle_epi8(_mm256_permutevar8x32_epi32(wyd, selB), rep);
+    const __m256i wxA = _mm256_shuffle_epi8(wxd, repA), wxB = _mm256_shuffle_epi8(wxd, repB);
+    const __m256i wyA = _mm256_shuffle_epi8(wyd, repA), wyB = _mm256_shuffle_epi8(wyd, repB);
     // Horizontal: R G B 0 per pixel (16-bit).
     const __m256i htA = _mm256_maddubs_epi16(_mm256_shuffle_epi8(tA, pairs), wxA);
     const __m256i htB = _mm256_maddubs_epi16(_mm256_shuffle_epi8(tB, pairs), wxB);
@@ -172,9 +173,8 @@ __attribute__((target("avx2"))) void BilinearRgbRowAvx2(const uint8_t* data, ptr
     __m256i vB = _mm256_add_epi16(htB, _mm256_mulhrs_epi16(_mm256_sub_epi16(hbB, htB), wyB));
     vA = _mm256_srli_epi16(_mm256_add_epi16(vA, round), 6);
     vB = _mm256_srli_epi16(_mm256_add_epi16(vB, round), 6);
-    // Packed dwords come out as pixels 0 1 4 5 | 2 3 6 7.
-    __m256i p = _mm256_packus_epi16(vA, vB);
-    p = _mm256_permutevar8x32_epi32(p, _mm256_setr_epi32(0, 1, 4, 5, 2, 3, 6, 7));
+    // Packed dwords come out in pixel order: 0 1 2 3 | 4 5 6 7.
+    const __m256i p = _mm256_packus_epi16(vA, vB);
     StoreRgb8(p, o + 3 * i);
   }
   BilinearRgbRowScalar(data, stride, c, i0 + i, n - i, o + 3 * i);
