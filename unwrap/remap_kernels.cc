@@ -217,8 +217,9 @@ __attribute__((target("avx2"))) void BilinearGrayRowAvx2(const uint8_t* data, pt
   BilinearGrayRowScalar(data, stride, c, i0 + i, n - i, o + i);
 }
 
-// Eight pixels' 64-bit words at data + off[k] + d, each shuffled by its pixel's indices; packed order
-// 0 1 4 5 | 2 3 6 7 (see BayerRgbRowAvx2).
+// Eight pixels' 64-bit words at data + off[k] + d, each shuffled by its pixel's indices (PairShuffles), in
+// pixel order: register a holds pixels 0, 1 | 4, 5, b pixels 2, 3 | 6, 7, and each 128-bit lane of the result
+// takes the low halves of both.
 __attribute__((target("avx2"))) inline __m256i BayerWord(const uint8_t* data, const int32_t* off, ptrdiff_t d,
                                                          __m256i idxA, __m256i idxB) {
   const auto load = [](const uint8_t* p) {
@@ -227,9 +228,9 @@ __attribute__((target("avx2"))) inline __m256i BayerWord(const uint8_t* data, co
     return v;
   };
   const __m256i a = _mm256_shuffle_epi8(
-      _mm256_setr_epi64x(load(data + off[0] + d), load(data + off[1] + d), load(data + off[2] + d), load(data + off[3] + d)), idxA);
+      _mm256_setr_epi64x(load(data + off[0] + d), load(data + off[1] + d), load(data + off[4] + d), load(data + off[5] + d)), idxA);
   const __m256i b = _mm256_shuffle_epi8(
-      _mm256_setr_epi64x(load(data + off[4] + d), load(data + off[5] + d), load(data + off[6] + d), load(data + off[7] + d)), idxB);
+      _mm256_setr_epi64x(load(data + off[2] + d), load(data + off[3] + d), load(data + off[6] + d), load(data + off[7] + d)), idxB);
   return _mm256_unpacklo_epi64(a, b);
 }
 
@@ -253,30 +254,27 @@ __attribute__((target("avx2"))) inline BayerGrids8 BayerGridsAt8(__m256i x, __m2
 }
 
 // Per pixel (natural order) a shuffle dword for its own 8-byte word, to pshufb controls for the registers of
-// pixels 0, 1 | 2, 3 (a) and 4, 5 | 6, 7 (b), two 8-byte words per 128-bit lane: pixel k of a lane's pair reads
-// bytes 8k .. 8k + 7, so its indices get + 8k; the upper two dwords of each lane are zeroed (0x80).
+// pixels 0, 1 | 4, 5 (a) and 2, 3 | 6, 7 (b), two 8-byte words per 128-bit lane: pixel k of a lane's pair reads
+// bytes 8k .. 8k + 7, so its indices get + 8k; the upper two dwords of each lane are zeroed (0x80). Each
+// pixel's dword already lies in its register's lane: a takes dwords 0, 1 of each lane, b dwords 2, 3.
 __attribute__((target("avx2"))) inline void PairShuffles(__m256i idx, __m256i* a, __m256i* b) {
   const __m256i pair_add = _mm256_setr_epi32(0, 0x08080808, 0, 0, 0, 0x08080808, 0, 0);
   const __m256i zero_hi = _mm256_setr_epi32(0, 0, int(0x80808080u), int(0x80808080u), 0, 0, int(0x80808080u), int(0x80808080u));
-  *a = _mm256_or_si256(_mm256_add_epi8(_mm256_permutevar8x32_epi32(idx, _mm256_setr_epi32(0, 1, 0, 0, 2, 3, 0, 0)), pair_add), zero_hi);
-  *b = _mm256_or_si256(_mm256_add_epi8(_mm256_permutevar8x32_epi32(idx, _mm256_setr_epi32(4, 5, 0, 0, 6, 7, 0, 0)), pair_add), zero_hi);
+  *a = _mm256_or_si256(_mm256_add_epi8(idx, pair_add), zero_hi);
+  *b = _mm256_or_si256(_mm256_add_epi8(_mm256_shuffle_epi32(idx, 0xEE), pair_add), zero_hi);   // dwords 2, 3, 2, 3
 }
 
-// The colour of 8 pixels from their mosaic taps in the packed order 0 1 4 5 | 2 3 6 7 (et, eb: the even-row
-// grids' two tap rows, ot, ob: the odd-row grids'; per pixel (ce, ce + 2, co, co + 2)) and their grid fractions
-// (natural order), stored as 24 bytes at o.
+// The colour of 8 pixels from their mosaic taps (et, eb: the even-row grids' two tap rows, ot, ob: the odd-row
+// grids'; per pixel (ce, ce + 2, co, co + 2)) and their grid fractions, all in pixel order, stored as 24 bytes
+// at o.
 __attribute__((target("avx2"))) inline void BayerCombineAvx2(__m256i fxe, __m256i fxo, __m256i fye, __m256i fyo, __m256i et,
                                                              __m256i eb, __m256i ot, __m256i ob, uint8_t* o) {
   const __m256i c64 = _mm256_set1_epi32(64), lowmask = _mm256_set1_epi32(0xFFFF);
-  const __m256i order = _mm256_setr_epi32(0, 1, 4, 5, 2, 3, 6, 7);     // natural -> the packed order 0 1 4 5 | 2 3 6 7
-  const __m256i natural = _mm256_setr_epi32(0, 1, 4, 5, 2, 3, 6, 7);   // the packed order -> natural (self-inverse)
-  // Horizontal weights (64 - fxe, fxe, 64 - fxo, fxo) and vertical (fy << 9 in both words), packed order.
-  const __m256i wx = _mm256_permutevar8x32_epi32(
-      _mm256_or_si256(_mm256_or_si256(_mm256_sub_epi32(c64, fxe), _mm256_slli_epi32(fxe, 8)),
-                      _mm256_or_si256(_mm256_slli_epi32(_mm256_sub_epi32(c64, fxo), 16), _mm256_slli_epi32(fxo, 24))),
-      order);
-  const __m256i wye = _mm256_permutevar8x32_epi32(_mm256_mullo_epi32(_mm256_slli_epi32(fye, 9), _mm256_set1_epi32(0x10001)), order);
-  const __m256i wyo = _mm256_permutevar8x32_epi32(_mm256_mullo_epi32(_mm256_slli_epi32(fyo, 9), _mm256_set1_epi32(0x10001)), order);
+  // Horizontal weights (64 - fxe, fxe, 64 - fxo, fxo) and vertical (fy << 9 in both words).
+  const __m256i wx = _mm256_or_si256(_mm256_or_si256(_mm256_sub_epi32(c64, fxe), _mm256_slli_epi32(fxe, 8)),
+                                     _mm256_or_si256(_mm256_slli_epi32(_mm256_sub_epi32(c64, fxo), 16), _mm256_slli_epi32(fxo, 24)));
+  const __m256i wye = _mm256_mullo_epi32(_mm256_slli_epi32(fye, 9), _mm256_set1_epi32(0x10001));
+  const __m256i wyo = _mm256_mullo_epi32(_mm256_slli_epi32(fyo, 9), _mm256_set1_epi32(0x10001));
   const __m256i het = _mm256_maddubs_epi16(et, wx), heb = _mm256_maddubs_epi16(eb, wx);   // (R, G1)
   const __m256i hot = _mm256_maddubs_epi16(ot, wx), hob = _mm256_maddubs_epi16(ob, wx);   // (G2, B)
   const __m256i ve = _mm256_add_epi16(het, _mm256_mulhrs_epi16(_mm256_sub_epi16(heb, het), wye));
@@ -286,7 +284,7 @@ __attribute__((target("avx2"))) inline void BayerCombineAvx2(__m256i fxe, __m256
       _mm256_add_epi32(_mm256_add_epi32(_mm256_srli_epi32(ve, 16), _mm256_and_si256(vo, lowmask)), _mm256_set1_epi32(64)), 7);
   const __m256i B = _mm256_srli_epi32(_mm256_add_epi32(_mm256_srli_epi32(vo, 16), _mm256_set1_epi32(32)), 6);
   const __m256i p = _mm256_or_si256(_mm256_or_si256(R, _mm256_slli_epi32(G, 8)), _mm256_slli_epi32(B, 16));
-  StoreRgb8(_mm256_permutevar8x32_epi32(p, natural), o);
+  StoreRgb8(p, o);
 }
 
 // RGGB mosaic, 8 pixels per step, without gathers. For a pixel at mosaic column X (integer part) every tap of
@@ -317,8 +315,7 @@ __attribute__((target("avx2"))) void BayerRgbRowAvx2(const uint8_t* data, ptrdif
     const __m256i rowo = _mm256_add_epi32(_mm256_slli_epi32(_mm256_srai_epi32(pyo, 16), 1), _mm256_set1_epi32(1));
     _mm256_store_si256(reinterpret_cast<__m256i*>(offe), _mm256_add_epi32(_mm256_mullo_epi32(rowe, vstride), base));
     _mm256_store_si256(reinterpret_cast<__m256i*>(offo), _mm256_add_epi32(_mm256_mullo_epi32(rowo, vstride), base));
-    // Byte indices (ce, ce + 2, co, co + 2) per pixel, moved to the packed order (pixels 0 1 | 2 3 in A's lanes,
-    // 4 5 | 6 7 in B's): A takes packed dwords 0, 1 and 4, 5 (pixels 0, 1, 2, 3), B dwords 2, 3 and 6, 7.
+    // Byte indices (ce, ce + 2, co, co + 2) per pixel.
     const __m256i idx = _mm256_or_si256(_mm256_or_si256(ce, _mm256_slli_epi32(_mm256_add_epi32(ce, _mm256_set1_epi32(2)), 8)),
                                         _mm256_or_si256(_mm256_slli_epi32(co, 16), _mm256_slli_epi32(_mm256_add_epi32(co, _mm256_set1_epi32(2)), 24)));
     __m256i idxA, idxB;
@@ -531,10 +528,10 @@ __attribute__((target("avx2"), flatten)) void BayerRgbTileAvx2(const uint8_t* sr
       PairShuffles(idx_o, &oA, &oB);
       const uint8_t* q = p.patch;
       const uint8_t* qb = p.patch + 2 * pstride;
-      const __m256i tA = _mm256_setr_epi64x(load(q + off[0]), load(q + off[1]), load(q + off[2]), load(q + off[3]));
-      const __m256i tB = _mm256_setr_epi64x(load(q + off[4]), load(q + off[5]), load(q + off[6]), load(q + off[7]));
-      const __m256i bA = _mm256_setr_epi64x(load(qb + off[0]), load(qb + off[1]), load(qb + off[2]), load(qb + off[3]));
-      const __m256i bB = _mm256_setr_epi64x(load(qb + off[4]), load(qb + off[5]), load(qb + off[6]), load(qb + off[7]));
+      const __m256i tA = _mm256_setr_epi64x(load(q + off[0]), load(q + off[1]), load(q + off[4]), load(q + off[5]));
+      const __m256i tB = _mm256_setr_epi64x(load(q + off[2]), load(q + off[3]), load(q + off[6]), load(q + off[7]));
+      const __m256i bA = _mm256_setr_epi64x(load(qb + off[0]), load(qb + off[1]), load(qb + off[4]), load(qb + off[5]));
+      const __m256i bB = _mm256_setr_epi64x(load(qb + off[2]), load(qb + off[3]), load(qb + off[6]), load(qb + off[7]));
       const __m256i et = _mm256_unpacklo_epi64(_mm256_shuffle_epi8(tA, eA), _mm256_shuffle_epi8(tB, eB));
       const __m256i ot = _mm256_unpacklo_epi64(_mm256_shuffle_epi8(tA, oA), _mm256_shuffle_epi8(tB, oB));
       const __m256i eb = _mm256_unpacklo_epi64(_mm256_shuffle_epi8(bA, eA), _mm256_shuffle_epi8(bB, eB));
