@@ -15,9 +15,7 @@
 
 #include "hw/camera_source.h"
 #include "hw/fake_gige.h"
-#include "unwrap/layout.h"
 #include "unwrap/remap.h"
-#include "unwrap/remap_table.h"
 #include "tests/bench/article_table.h"
 
 namespace {
