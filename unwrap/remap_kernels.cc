@@ -371,7 +371,17 @@ void TileByRows(RowKernel row, int bytes_per_pixel, const uint8_t* src, ptrdiff_
 
 // The AVX2 tile functions (flatten: the row kernel inlined).
 namespace {
-HOVS_REMAP_TILE_FUNCTION(__attribute__((target("avx2"), flatten)), BilinearRgbTileAvx2, BilinearRgbRowAvx2)
+// RGB: every row straight from the frame through the row kernel, the row polynomials 8 rows at a time.
+__attribute__((target("avx2"), flatten)) void BilinearRgbTileAvx2(const uint8_t* src, ptrdiff_t stride, const Tile& t, int T,
+                                                                  int nu, int nv, uint8_t* out, ptrdiff_t ostride) {
+  RowPolys<8> polys;
+  RowCoords c;
+  for (int j = 0; j < nv; ++j) {
+    if (j % 8 == 0) InterpRowPolys(t, T, j, &polys);
+    c.poly = polys.Row(j % 8);
+    BilinearRgbRowAvx2(src, stride, c, 0, nu, out + j * ostride);
+  }
+}
 
 // Grey and Bayer interp tiles as the AVX-512 ones (remap_kernels_avx512.cc): every pixel's coordinates first,
 // with the source region the pixels' taps cover; that region copied into a patch (it stays in L1) holding two
@@ -388,9 +398,11 @@ struct TilePassAvx2 {
   __attribute__((target("avx2"))) void Coordinates(const Tile& t, int T, int nu, int nv) {
     row = (nu + 7) & ~7;
     __m256i xmin = _mm256_set1_epi32(INT32_MAX), xmax = _mm256_set1_epi32(INT32_MIN), ymin = xmin, ymax = xmax;
+    RowPolys<8> polys;
     RowCoords c;
     for (int j = 0; j < nv; ++j) {
-      c.poly = InterpRowPoly(t, T, j);
+      if (j % 8 == 0) InterpRowPolys(t, T, j, &polys);
+      c.poly = polys.Row(j % 8);
       for (int i = 0; i < nu; i += 8) {
         __m256i x, y;
         Coords8(c, i, &x, &y);

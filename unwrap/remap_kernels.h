@@ -51,19 +51,6 @@ void BilinearGrayRowScalar(const uint8_t* src, ptrdiff_t stride, const RowCoords
 void BayerRgbRowScalar(const uint8_t* src, ptrdiff_t stride, const RowCoords& c, int i0, int n,
                        uint8_t* out);
 
-// Defines an interp-tile function Name (the signature of BilinearRgbTile) with the given attributes: every row's
-// polynomial from the tile's nodes, the row function RowBody (inlined where the attributes allow) writing the
-// row straight into out. Used by the AVX2 and AVX-512 kernel files.
-#define HOVS_REMAP_TILE_FUNCTION(Attributes, Name, RowBody)                                                  \
-  Attributes void Name(const uint8_t* src, ptrdiff_t stride, const Tile& t, int T, int nu, int nv, uint8_t* out, \
-                       ptrdiff_t ostride) {                                                                   \
-    RowCoords c;                                                                                              \
-    for (int j = 0; j < nv; ++j) {                                                                            \
-      c.poly = InterpRowPoly(t, T, j);                                                                        \
-      RowBody(src, stride, c, 0, nu, out + j * ostride);                                                      \
-    }                                                                                                         \
-  }
-
 // The AVX-512 versions (remap_kernels_avx512.cc); call only when DetectedIsa() is kAvx512.
 namespace avx512 {
 void BilinearRgbRow(const uint8_t* src, ptrdiff_t stride, const RowCoords& c, int i0, int n, uint8_t* out);

@@ -319,39 +319,6 @@ HOVS_AVX512 void BayerRgbRow(const uint8_t* src, ptrdiff_t stride, const RowCoor
 }
 
 // Interp tiles.
-// InterpRowPoly of 16 rows at once, lane k row j0 + k: the same float operations in the same order, so the same
-// bits (this file is compiled without fused multiply-adds).
-struct RowPolys16 {
-  alignas(64) float bx[16], c1x[16], c2x[16], by[16], c1y[16], c2y[16];
-  RowPoly Row(int k) const { return {bx[k], c1x[k], c2x[k], by[k], c1y[k], c2y[k]}; }
-};
-// One axis of InterpRowPolys16: node values n[9], Lagrange weights l0, l1, l2 of the 16 rows.
-HOVS_AVX512 inline void RowPolyAxis16(const float* n, __m512 l0, __m512 l1, __m512 l2, float inv, float inv2, float* b,
-                                      float* c1, float* c2) {
-  const __m512 scale = _mm512_set1_ps(65536.f), two = _mm512_set1_ps(2.f), four = _mm512_set1_ps(4.f);
-  __m512 a[3];
-  for (int k = 0; k < 3; ++k)
-    a[k] = _mm512_add_ps(_mm512_add_ps(_mm512_mul_ps(l0, _mm512_set1_ps(n[k])), _mm512_mul_ps(l1, _mm512_set1_ps(n[3 + k]))),
-                         _mm512_mul_ps(l2, _mm512_set1_ps(n[6 + k])));
-  _mm512_store_ps(b, _mm512_mul_ps(_mm512_add_ps(a[0], _mm512_set1_ps(1.f)), scale));
-  const __m512 d1 = _mm512_sub_ps(_mm512_add_ps(_mm512_mul_ps(_mm512_set1_ps(-3.f), a[0]), _mm512_mul_ps(four, a[1])), a[2]);
-  _mm512_store_ps(c1, _mm512_mul_ps(_mm512_mul_ps(d1, _mm512_set1_ps(inv)), scale));
-  const __m512 d2 = _mm512_add_ps(_mm512_sub_ps(_mm512_mul_ps(two, a[0]), _mm512_mul_ps(four, a[1])), _mm512_mul_ps(two, a[2]));
-  _mm512_store_ps(c2, _mm512_mul_ps(_mm512_mul_ps(d2, _mm512_set1_ps(inv2)), scale));
-}
-HOVS_AVX512 inline void InterpRowPolys16(const Tile& t, int T, int j0, RowPolys16* out) {
-  const __m512 s = _mm512_div_ps(
-      _mm512_cvtepi32_ps(_mm512_add_epi32(_mm512_set1_epi32(j0), _mm512_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15))),
-      _mm512_set1_ps(float(T)));
-  const __m512 s_half = _mm512_sub_ps(s, _mm512_set1_ps(0.5f)), s_one = _mm512_sub_ps(s, _mm512_set1_ps(1.f));
-  const __m512 l0 = _mm512_mul_ps(_mm512_mul_ps(_mm512_set1_ps(2.f), s_half), s_one);
-  const __m512 l1 = _mm512_mul_ps(_mm512_mul_ps(_mm512_set1_ps(-4.f), s), s_one);
-  const __m512 l2 = _mm512_mul_ps(_mm512_mul_ps(_mm512_set1_ps(2.f), s), s_half);
-  const float inv = 1.0f / float(T), inv2 = inv * inv;
-  RowPolyAxis16(t.x, l0, l1, l2, inv, inv2, out->bx, out->c1x, out->c2x);
-  RowPolyAxis16(t.y, l0, l1, l2, inv, inv2, out->by, out->c1y, out->c2y);
-}
-
 // The RGB, grey and Bayer tiles in three passes: (1) every pixel's coordinates (the row polynomials 16 rows at a
 // time), kept, with the source region the pixels' reads cover (only bytes the row kernels would read); (2) that
 // region copied into a patch, 64-byte aligned rows (it stays in L1); (3) the pixels from the patch. Reading the
@@ -374,8 +341,8 @@ struct TilePass {
   template <bool kBayer>
   HOVS_AVX512 void Coordinates(const Tile& t, int T, int nu, int nv) {
     __m512i xmin = _mm512_set1_epi32(INT32_MAX), xmax = _mm512_set1_epi32(INT32_MIN), ymin = xmin, ymax = xmax;
-    alignas(64) RowPolys16 polys[4];
-    for (int j0 = 0; j0 < nv; j0 += 16) InterpRowPolys16(t, T, j0, &polys[j0 / 16]);
+    RowPolys<16> polys[4];   // the row polynomials 16 rows at a time (vectorised)
+    for (int j0 = 0; j0 < nv; j0 += 16) InterpRowPolys(t, T, j0, &polys[j0 / 16]);
     RowCoords c;
     for (int j = 0; j < nv; ++j) {
       c.poly = polys[j / 16].Row(j % 16);

@@ -83,6 +83,21 @@ inline RowPoly InterpRowPoly(const Tile& t, int T, int j) {
           (2 * ax[0] - 4 * ax[1] + 2 * ax[2]) * inv2 * 65536.f, (ay[0] + 1) * 65536.f,
           (-3 * ay[0] + 4 * ay[1] - ay[2]) * inv * 65536.f, (2 * ay[0] - 4 * ay[1] + 2 * ay[2]) * inv2 * 65536.f};
 }
+// InterpRowPoly of rows j0 .. j0 + kRows - 1, structure of arrays: written as a loop over the rows so that a
+// vectorising build evaluates them together (the same operations per row, so the same bits where the file is
+// compiled without fused multiply-adds, as the kernels are).
+template <int kRows>
+struct RowPolys {
+  alignas(64) float bx[kRows], c1x[kRows], c2x[kRows], by[kRows], c1y[kRows], c2y[kRows];
+  RowPoly Row(int k) const { return {bx[k], c1x[k], c2x[k], by[k], c1y[k], c2y[k]}; }
+};
+template <int kRows>
+__attribute__((always_inline)) inline void InterpRowPolys(const Tile& t, int T, int j0, RowPolys<kRows>* out) {
+  for (int k = 0; k < kRows; ++k) {
+    const RowPoly p = InterpRowPoly(t, T, j0 + k);
+    out->bx[k] = p.bx, out->c1x[k] = p.c1x, out->c2x[k] = p.c2x, out->by[k] = p.by, out->c1y[k] = p.c1y, out->c2y[k] = p.c2y;
+  }
+}
 inline void InterpRow(const Tile& t, int T, int j, int32_t* xs, int32_t* ys) {
   const RowPoly p = InterpRowPoly(t, T, j);
   for (int i = 0; i < T; ++i) xs[i] = p.X(i), ys[i] = p.Y(i);
