@@ -712,7 +712,6 @@ void RayScene::Colours(const RayBatch& b, float* rgb) const {
     } else if (g < geom_to_user_.size() && geom_to_user_[g] >= 0) {
       const UserGeometry& u = *user_[geom_to_user_[g]];
       put(i, u.kind == UserGeometry::Kind::kMirror ? u.back_colour : u.colour);
-      j = i + 1;
     } else {
       put(i, {0, 0, 0});
     }
