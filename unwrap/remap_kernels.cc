@@ -371,27 +371,15 @@ void TileByRows(RowKernel row, int bytes_per_pixel, const uint8_t* src, ptrdiff_
 
 // The AVX2 tile functions (flatten: the row kernel inlined).
 namespace {
-// RGB: every row straight from the frame through the row kernel, the row polynomials 8 rows at a time.
-__attribute__((target("avx2"), flatten)) void BilinearRgbTileAvx2(const uint8_t* src, ptrdiff_t stride, const Tile& t, int T,
-                                                                  int nu, int nv, uint8_t* out, ptrdiff_t ostride) {
-  RowPolys<8> polys;
-  RowCoords c;
-  for (int j = 0; j < nv; ++j) {
-    if (j % 8 == 0) InterpRowPolys(t, T, j, &polys);
-    c.poly = polys.Row(j % 8);
-    BilinearRgbRowAvx2(src, stride, c, 0, nu, out + j * ostride);
-  }
-}
-
 // Grey and Bayer interp tiles as the AVX-512 ones (remap_kernels_avx512.cc): every pixel's coordinates first,
 // with the source region the pixels' taps cover; that region copied into a patch (it stays in L1) holding two
 // source rows interleaved byte by byte (pair row k: rows r0 + k and r0 + k + 1, byte 2 j + s: row r0 + k + s,
 // column c0 + j); then the pixels from the patch, whose taps come in the same order as from the frame, so the
 // same bytes come out. A region too large for the patch goes row by row through the row kernel.
 struct TilePassAvx2 {
-  static constexpr int kColumns = 128, kPairs = 128;
+  static constexpr int kColumns = 128, kPairs = 128, kPatchBytes = kPairs * 2 * kColumns;
   alignas(32) int32_t xs[64 * 64], ys[64 * 64];
-  alignas(32) uint8_t patch[kPairs * 2 * kColumns];
+  alignas(32) uint8_t patch[kPatchBytes];
   int row = 0;                          // coordinates kept per tile row (whole 8-pixel steps)
   int32_t x0 = 0, x1 = 0, y0 = 0, y1 = 0;   // the extreme coordinates (16.16)
 
@@ -429,6 +417,30 @@ struct TilePassAvx2 {
   __attribute__((target("avx2"))) __m256i X(int j, int i) const { return _mm256_load_si256(reinterpret_cast<const __m256i*>(xs + j * row + i)); }
   __attribute__((target("avx2"))) __m256i Y(int j, int i) const { return _mm256_load_si256(reinterpret_cast<const __m256i*>(ys + j * row + i)); }
 
+  // The plain patch of source rows first .. first + rows - 1, bytes from .. from + bytes - 1 of each (only those
+  // bytes are read); returns its row stride.
+  __attribute__((target("avx2"))) ptrdiff_t Copy(const uint8_t* src, ptrdiff_t stride, int first, int rows, ptrdiff_t from,
+                                                 int bytes) {
+    const ptrdiff_t pstride = (bytes + 31) & ~31;
+    for (int k = 0; k < rows; ++k) {
+      const uint8_t* a = src + (first + k) * stride + from;
+      uint8_t* d = patch + k * pstride;
+      int b = 0;
+      for (; b + 32 <= bytes; b += 32)
+        _mm256_store_si256(reinterpret_cast<__m256i*>(d + b), _mm256_loadu_si256(reinterpret_cast<const __m256i*>(a + b)));
+      std::memcpy(d + b, a + b, size_t(bytes - b));
+    }
+    return pstride;
+  }
+  // The kept coordinates of rows 0 .. nv - 1 moved by (-c0, -r0) whole pixels.
+  __attribute__((target("avx2"))) void Shift(int nv, int c0, int r0) {
+    const __m256i dx = _mm256_set1_epi32(c0 * 65536), dy = _mm256_set1_epi32(r0 * 65536);
+    for (int k = 0; k < nv * row; k += 8) {
+      _mm256_store_si256(reinterpret_cast<__m256i*>(xs + k), _mm256_sub_epi32(X(0, k), dx));
+      _mm256_store_si256(reinterpret_cast<__m256i*>(ys + k), _mm256_sub_epi32(Y(0, k), dy));
+    }
+  }
+
   // The pair patch of source rows first .. first + pairs, columns from .. from + columns - 1 (only those bytes are
   // read); returns its row stride.
   __attribute__((target("avx2"))) ptrdiff_t CopyPairs(const uint8_t* src, ptrdiff_t stride, int first, int pairs, int from,
@@ -455,6 +467,25 @@ struct TilePassAvx2 {
     return pstride;
   }
 };
+
+// RGB: a pixel reads 8 bytes from 3 x its tap column in its tap row and the row below (BilinearRgbRowAvx2), so
+// the region is bytes 3 c0 .. 3 c1 + 7 of rows r0 .. r1 + 1. It is copied as it is, the coordinates are moved
+// to the patch's origin by whole pixels (the same fractions, so the same weights), and the row kernel reads the
+// patch instead of the frame.
+__attribute__((target("avx2"), flatten)) void BilinearRgbTileAvx2(const uint8_t* src, ptrdiff_t stride, const Tile& t, int T,
+                                                                  int nu, int nv, uint8_t* out, ptrdiff_t ostride) {
+  TilePassAvx2 p;
+  p.Coordinates(t, T, nu, nv);
+  const auto cell = [](int32_t q) { return (q + kHalf) >> 16; };
+  const int c0 = cell(p.x0), r0 = cell(p.y0), bytes = 3 * (cell(p.x1) - c0) + 8, rows = cell(p.y1) - r0 + 2;
+  if (bytes > TilePassAvx2::kPatchBytes / TilePassAvx2::kPairs || rows > TilePassAvx2::kPairs) {
+    for (int j = 0; j < nv; ++j) BilinearRgbRowAvx2(src, stride, p.Row(j), 0, nu, out + j * ostride);
+    return;
+  }
+  const ptrdiff_t pstride = p.Copy(src, stride, r0, rows, 3 * ptrdiff_t(c0), bytes);
+  p.Shift(nv, c0, r0);
+  for (int j = 0; j < nv; ++j) BilinearRgbRowAvx2(p.patch, pstride, p.Row(j), 0, nu, out + j * ostride);
+}
 
 // Grey: a pixel's taps are columns c .. c + 1 of rows r .. r + 1 (c, r: (x + 1/128 px) >> 16), so one gathered
 // 4-byte word of the patch (two per 8 pixels from the frame).
