@@ -371,10 +371,10 @@ void TileByRows(RowKernel row, int bytes_per_pixel, const uint8_t* src, ptrdiff_
 
 // The AVX2 tile functions (flatten: the row kernel inlined).
 namespace {
-// Grey and Bayer interp tiles as the AVX-512 ones (remap_kernels_avx512.cc): every pixel's coordinates first,
-// with the source region the pixels' taps cover; that region copied into a patch (it stays in L1) holding two
-// source rows interleaved byte by byte (pair row k: rows r0 + k and r0 + k + 1, byte 2 j + s: row r0 + k + s,
-// column c0 + j); then the pixels from the patch, whose taps come in the same order as from the frame, so the
+// Interp tiles as the AVX-512 ones (remap_kernels_avx512.cc): every pixel's coordinates first, with the source
+// region the pixels' taps cover; that region copied into a patch (it stays in L1), for RGB as it is, for grey and
+// Bayer with two source rows interleaved byte by byte (pair row k: rows r0 + k and r0 + k + 1, byte 2 j + s: row
+// r0 + k + s, column c0 + j); then the pixels from the patch, whose taps come in the same order as from the frame, so the
 // same bytes come out. A region too large for the patch goes row by row through the row kernel.
 struct TilePassAvx2 {
   static constexpr int kColumns = 128, kPairs = 128, kPatchBytes = kPairs * 2 * kColumns;

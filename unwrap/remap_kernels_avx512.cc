@@ -4,8 +4,8 @@
 // are never fused.
 //
 // What differs from the AVX2 kernels is mostly the reading. Interp tiles (nearly all of a view) first copy the
-// source region their pixels read into a small patch that stays in L1 (see BilinearRgbTile below; the AVX2 grey
-// and Bayer tiles do the same, remap_kernels.cc): RGB as it is, grey and Bayer with two source rows interleaved
+// source region their pixels read into a small patch that stays in L1 (see BilinearRgbTile below; the AVX2 tiles
+// do the same, remap_kernels.cc): RGB as it is, grey and Bayer with two source rows interleaved
 // byte by byte, so that a grey pixel's four taps are one 4-byte word (one 16-lane gather per 16 pixels) and a
 // Bayer pixel's sixteen taps two 8-byte words (plain loads, two per 128-bit lane, put in order by two-source byte
 // permutations) instead of four gathers from the mosaic. An RGB pixel reads one 8-byte word per source row (its
