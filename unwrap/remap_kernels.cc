@@ -374,12 +374,12 @@ namespace {
 // Interp tiles as the AVX-512 ones (remap_kernels_avx512.cc): every pixel's coordinates first, with the source
 // region the pixels' taps cover; that region copied into a patch (it stays in L1), for RGB as it is, for grey and
 // Bayer with two source rows interleaved byte by byte (pair row k: rows r0 + k and r0 + k + 1, byte 2 j + s: row
-// r0 + k + s, column c0 + j); then the pixels from the patch, whose taps come in the same order as from the frame, so the
-// same bytes come out. A region too large for the patch goes row by row through the row kernel.
+// r0 + k + s, column c0 + j); then the pixels from the patch, whose taps come in the same order as from the
+// frame, so the same bytes come out. A region too large for the patch goes row by row through the row kernel.
 struct TilePassAvx2 {
-  static constexpr int kColumns = 128, kPairs = 128, kPatchBytes = kPairs * 2 * kColumns;
+  static constexpr int kColumns = 128, kPairs = 128;   // pair patches; a plain (RGB) patch: kPairs rows of 2 kColumns bytes
   alignas(32) int32_t xs[64 * 64], ys[64 * 64];
-  alignas(32) uint8_t patch[kPatchBytes];
+  alignas(32) uint8_t patch[kPairs * 2 * kColumns];
   int row = 0;                          // coordinates kept per tile row (whole 8-pixel steps)
   int32_t x0 = 0, x1 = 0, y0 = 0, y1 = 0;   // the extreme coordinates (16.16)
 
@@ -478,7 +478,7 @@ __attribute__((target("avx2"), flatten)) void BilinearRgbTileAvx2(const uint8_t*
   p.Coordinates(t, T, nu, nv);
   const auto cell = [](int32_t q) { return (q + kHalf) >> 16; };
   const int c0 = cell(p.x0), r0 = cell(p.y0), bytes = 3 * (cell(p.x1) - c0) + 8, rows = cell(p.y1) - r0 + 2;
-  if (bytes > TilePassAvx2::kPatchBytes / TilePassAvx2::kPairs || rows > TilePassAvx2::kPairs) {
+  if (bytes > 2 * TilePassAvx2::kColumns || rows > TilePassAvx2::kPairs) {
     for (int j = 0; j < nv; ++j) BilinearRgbRowAvx2(src, stride, p.Row(j), 0, nu, out + j * ostride);
     return;
   }
