@@ -11,6 +11,7 @@
 #include <utility>
 #include <vector>
 
+#include "core/large_pages.h"
 #include "raytrace/scene.h"
 
 namespace hovs::raytrace {
@@ -66,26 +67,9 @@ struct ViewCamera {
 //   mask    1 where the pixel's ray is reflected by the mirror (inside the rim) and does not see the camera
 //   M.X/Y/Z the mirror reflection point in the unit's mirror frame (0 where mask is 0 and the rim is missed)
 // A float buffer whose resize() leaves new elements uninitialised (the renderer fills frames in parallel
-// instead of zeroing hundreds of megabytes on one thread). Otherwise a std::vector<float>.
-template <class T>
-struct UninitialisedAllocator : std::allocator<T> {
-  template <class U>
-  struct rebind {
-    using other = UninitialisedAllocator<U>;
-  };
-  UninitialisedAllocator() = default;
-  template <class U>
-  UninitialisedAllocator(const UninitialisedAllocator<U>&) noexcept {}
-  template <class U>
-  void construct(U* p) noexcept {
-    ::new (static_cast<void*>(p)) U;
-  }
-  template <class U, class... Args>
-  void construct(U* p, Args&&... args) {
-    ::new (static_cast<void*>(p)) U(std::forward<Args>(args)...);
-  }
-};
-using PixelBuffer = std::vector<float, UninitialisedAllocator<float>>;
+// instead of zeroing hundreds of megabytes on one thread), in huge pages when large (core/large_pages.h).
+// Otherwise a std::vector<float>.
+using PixelBuffer = std::vector<float, LargePageAllocator<float, /*UninitialisedConstruct=*/true>>;
 
 struct GroundTruth {
   static constexpr int kChannels = 12;
@@ -105,7 +89,8 @@ struct Frame {
 
 Frame Render(const RayScene& scene, const ViewCamera& camera, const RenderOptions& options);
 // Render into *frame, reusing its buffers where large enough: a sequence of frames (a dataset) then touches its
-// memory once. At 2750 x 2200 with ground truth that first touch (362 MB) costs about 0.15 s per frame.
+// memory once. At 2750 x 2200 with ground truth that first touch (362 MB, in huge pages) cost 90-250 ms per
+// frame on a Zen 5 VM (in 4 KiB pages, before core/large_pages.h, ~650 ms there).
 void RenderInto(const RayScene& scene, const ViewCamera& camera, const RenderOptions& options, Frame* frame);
 
 // The sensor model applied to a frame: 3 channels (or 1 for Bayer), values in [0, 1] before quantisation.

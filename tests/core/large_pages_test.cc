@@ -1,0 +1,79 @@
+#include "core/large_pages.h"
+
+#include <gtest/gtest.h>
+
+#include <cstdint>
+#include <fstream>
+#include <sstream>
+#include <string>
+#include <vector>
+
+namespace hovs {
+namespace {
+
+using LargeFloats = std::vector<float, LargePageAllocator<float>>;
+
+TEST(LargePages, LargeBuffersAreHugePageAlignedAndWholeRangeWritable) {
+  for (const std::size_t bytes : {kLargeBytes, kLargeBytes + 1, std::size_t(362) << 20}) {
+    auto* p = static_cast<unsigned char*>(AllocateLargePages(bytes));
+    ASSERT_NE(p, nullptr);
+    EXPECT_EQ(reinterpret_cast<std::uintptr_t>(p) % kHugePageBytes, 0u) << bytes;
+    p[0] = 1, p[bytes / 2] = 2, p[bytes - 1] = 3;
+    EXPECT_EQ(p[0] + p[bytes / 2] + p[bytes - 1], 6) << bytes;
+    FreeLargePages(p, bytes);
+  }
+}
+
+TEST(LargePages, VectorKeepsItsContentAcrossTheLargeThreshold) {
+  LargeFloats v;
+  const std::size_t large = kLargeBytes / sizeof(float) * 3;
+  for (std::size_t i = 0; i < large; ++i) v.push_back(static_cast<float>(i % 1000));  // small -> large buffers
+  bool same = true;
+  for (std::size_t i = 0; i < large; ++i) same = same && v[i] == static_cast<float>(i % 1000);
+  EXPECT_TRUE(same);
+  v.resize(100);
+  v.shrink_to_fit();  // large -> small buffer
+  for (std::size_t i = 0; i < 100; ++i) ASSERT_EQ(v[i], static_cast<float>(i)) << i;
+  v.assign(large, 0.0f);
+  v.resize(large / 2);
+  v.resize(large, 0.0f);  // value-initialising allocator: zeros again
+  float sum = 0;
+  for (const float x : v) sum += x;
+  EXPECT_EQ(sum, 0.0f);
+}
+
+// The advice reaches the kernel: the mapping is eligible for transparent huge pages exactly when the kernel's
+// setting allows them (not "[never]").
+TEST(LargePages, MappingIsAdvisedForTransparentHugePages) {
+  std::ifstream setting("/sys/kernel/mm/transparent_hugepage/enabled");
+  std::string mode;
+  std::getline(setting, mode);
+  const std::size_t bytes = std::size_t(8) << 20;
+  auto* p = static_cast<char*>(AllocateLargePages(bytes));
+  p[0] = 1;
+  std::ifstream smaps("/proc/self/smaps");
+  ASSERT_TRUE(smaps.good());
+  const auto addr = reinterpret_cast<std::uintptr_t>(p);
+  std::string line;
+  bool in_mapping = false;
+  int eligible = -1;
+  while (std::getline(smaps, line)) {
+    std::uintptr_t lo = 0, hi = 0;
+    char dash = 0;
+    std::istringstream head(line);
+    if (head >> std::hex >> lo >> dash >> hi && dash == '-') {
+      in_mapping = lo <= addr && addr < hi;
+      if (in_mapping) {
+        EXPECT_GE(hi - addr, bytes);
+      }
+    } else if (in_mapping && line.rfind("THPeligible:", 0) == 0) {
+      eligible = std::stoi(line.substr(12));
+    }
+  }
+  FreeLargePages(p, bytes);
+  ASSERT_FALSE(mode.empty()) << "no transparent_hugepage setting";
+  EXPECT_EQ(eligible, mode.find("[never]") == std::string::npos ? 1 : 0) << mode;
+}
+
+}  // namespace
+}  // namespace hovs
