@@ -94,12 +94,18 @@ Frame Render(const RayScene& scene, const ViewCamera& camera, const RenderOption
 void RenderInto(const RayScene& scene, const ViewCamera& camera, const RenderOptions& options, Frame* frame);
 
 // The sensor model applied to a frame: 3 channels (or 1 for Bayer), values in [0, 1] before quantisation.
-std::vector<float> ApplySensor(const Frame& frame, const SensorOptions& sensor, uint64_t seed, int* channels);
+// The result is a PixelBuffer: written in parallel, in huge pages (no single-threaded zeroing of 72 MB first).
+PixelBuffer ApplySensor(const Frame& frame, const SensorOptions& sensor, uint64_t seed, int* channels);
 
 // Writers, atomic (temporary file + rename). PNG for 8/16-bit images; OpenEXR (float) for ground truth,
 // with `metadata` stored as string attributes.
-void WriteImage(const std::filesystem::path& path, int width, int height, int channels, const std::vector<float>& values,
-                int bit_depth);
+void WriteImage(const std::filesystem::path& path, int width, int height, int channels, const float* values,
+                size_t count, int bit_depth);
+template <class Allocator>
+void WriteImage(const std::filesystem::path& path, int width, int height, int channels,
+                const std::vector<float, Allocator>& values, int bit_depth) {
+  WriteImage(path, width, height, channels, values.data(), values.size(), bit_depth);
+}
 void WriteGroundTruthExr(const std::filesystem::path& path, const Frame& frame,
                          const std::vector<std::pair<std::string, std::string>>& metadata);
 

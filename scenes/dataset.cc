@@ -67,7 +67,7 @@ ViewRecord RenderView(const SceneConfig& cfg, const raytrace::RayScene& scene, i
   raytrace::RenderInto(scene, raytrace::ViewCamera::Unit(u), ro, scratch);
   const raytrace::Frame& frame = *scratch;
   int channels = 0;
-  const std::vector<float> img = raytrace::ApplySensor(frame, ro.sensor, ro.seed ^ std::hash<std::string>{}(stem), &channels);
+  const raytrace::PixelBuffer img = raytrace::ApplySensor(frame, ro.sensor, ro.seed ^ std::hash<std::string>{}(stem), &channels);
   const std::string unit = scene.description().units[u].name;
   ViewRecord v{unit, "images/" + stem + ".png", "", ""};
   // The image is compressed on its own thread while the ground truth is written (both are single-file,
