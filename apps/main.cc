@@ -2,10 +2,13 @@
 #include <glog/logging.h>
 
 #include "apps/commands.h"
+#include "core/large_pages.h"
 
 int main(int argc, char** argv) {
   // Ceres logs through glog; hovs reports what matters itself.
   FLAGS_minloglevel = 3;
   google::InitGoogleLogging(argv[0]);
+  // Frame-sized buffers freed by one frame are reused by the next instead of being faulted in again.
+  hovs::KeepFreedMemoryForReuse();
   return hovs::apps::RunCommandLine(argc, argv, false);
 }

@@ -6,6 +6,9 @@
 #if defined(__linux__)
 #include <sys/mman.h>
 #endif
+#if defined(__GLIBC__)
+#include <malloc.h>
+#endif
 
 namespace hovs {
 namespace {
@@ -42,5 +45,14 @@ void* AllocateLargePages(std::size_t bytes) {
 
 void FreeLargePages(void* p, std::size_t) noexcept { std::free(p); }
 #endif
+
+bool KeepFreedMemoryForReuse() {
+#if defined(__GLIBC__) && !defined(__SANITIZE_ADDRESS__)
+  // 32 MiB is the largest mmap threshold glibc accepts on 64-bit (it bounds the per-thread heaps' blocks).
+  return mallopt(M_MMAP_THRESHOLD, 32 << 20) == 1 && mallopt(M_TRIM_THRESHOLD, 1 << 30) == 1;
+#else
+  return false;
+#endif
+}
 
 }  // namespace hovs

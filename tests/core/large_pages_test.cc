@@ -2,7 +2,12 @@
 
 #include <gtest/gtest.h>
 
+#if defined(__GLIBC__)
+#include <malloc.h>
+#endif
+
 #include <cstdint>
+#include <cstdlib>
 #include <fstream>
 #include <sstream>
 #include <string>
@@ -73,6 +78,29 @@ TEST(LargePages, MappingIsAdvisedForTransparentHugePages) {
   FreeLargePages(p, bytes);
   ASSERT_FALSE(mode.empty()) << "no transparent_hugepage setting";
   EXPECT_EQ(eligible, mode.find("[never]") == std::string::npos ? 1 : 0) << mode;
+}
+
+// After the call a 16 MiB block comes from malloc's heap (glibc would otherwise map it on its own: the default
+// threshold starts at 128 kB) and freeing it keeps it mapped; where the call reports no effect (a sanitizer's
+// allocator), that is what it must report.
+TEST(LargePages, FreedFrameSizedBlocksStayForReuse) {
+#if defined(__GLIBC__) && !defined(__SANITIZE_ADDRESS__)
+  ASSERT_TRUE(KeepFreedMemoryForReuse());
+  const std::size_t block = std::size_t(16) << 20;
+  const auto mapped_blocks = mallinfo2().hblks;
+  void* p = std::malloc(block);
+  ASSERT_NE(p, nullptr);
+  static_cast<volatile char*>(p)[block - 1] = 1;
+  EXPECT_EQ(mallinfo2().hblks, mapped_blocks) << "the block was mapped on its own";
+  std::free(p);
+  const auto heap = mallinfo2();
+  EXPECT_GE(heap.fordblks, block) << "the freed block was returned to the kernel";
+  void* q = std::malloc(block);
+  EXPECT_EQ(mallinfo2().hblks, mapped_blocks);
+  std::free(q);
+#else
+  EXPECT_FALSE(KeepFreedMemoryForReuse());
+#endif
 }
 
 }  // namespace
