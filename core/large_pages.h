@@ -1,6 +1,7 @@
 // Large buffers in transparent huge pages. A frame's buffers (a 2750 x 2200 render with ground truth holds
 // 362 MB) are first touched page by page; on a virtual machine each 4 KiB page fault can cost microseconds
-// (measured on this project's CI VM: 362 MB touched in 4 KiB pages ~1 s on one thread, in 2 MiB pages ~26 ms).
+// (measured on a paravirtualised Zen 5 VM of this project: 362 MB touched by one thread in 4 KiB pages ~1 s,
+// in 2 MiB pages ~25 ms).
 // Buffers of at least kLargeBytes are therefore mapped on a 2 MiB boundary and advised MADV_HUGEPAGE
 // (honoured when the kernel's transparent_hugepage setting is "madvise" or "always"; otherwise they are
 // ordinary pages). Smaller buffers come from operator new.
@@ -24,7 +25,7 @@ void FreeLargePages(void* p, std::size_t bytes) noexcept;
 // threshold back to the kernel when they are freed, so every frame faults them in again. Called once at start
 // (the hovs command and the benchmark programs do), this makes glibc's malloc serve blocks below 32 MiB from its
 // heaps and keep up to 1 GiB of freed memory mapped for reuse: measured on a Zen 5 VM (4 KiB page faults ~11 us),
-// BM_DenseDepth/320/1 147-150 -> 77-78 ms. The price is that a process keeps that much freed memory. Returns
+// BM_DenseDepth/320/1 163-173 -> 79-96 ms. The price is that a process keeps that much freed memory. Returns
 // false where the allocator has no such settings (not glibc, or a sanitizer's allocator); nothing changes then.
 bool KeepFreedMemoryForReuse();
 
@@ -32,6 +33,7 @@ bool KeepFreedMemoryForReuse();
 // default-initialised (no zeroing on resize: the renderer fills its frames in parallel).
 template <class T, bool UninitialisedConstruct = false>
 struct LargePageAllocator {
+  static_assert(alignof(T) <= __STDCPP_DEFAULT_NEW_ALIGNMENT__, "over-aligned types need an aligned operator new");
   using value_type = T;
   template <class U>
   struct rebind {
@@ -45,14 +47,14 @@ struct LargePageAllocator {
     if (n > static_cast<std::size_t>(-1) / sizeof(T)) throw std::bad_array_new_length();
     const std::size_t bytes = n * sizeof(T);
     if (bytes >= kLargeBytes) return static_cast<T*>(AllocateLargePages(bytes));
-    return static_cast<T*>(::operator new(bytes, std::align_val_t(alignof(T) > 16 ? alignof(T) : 16)));
+    return static_cast<T*>(::operator new(bytes));
   }
   void deallocate(T* p, std::size_t n) noexcept {
     const std::size_t bytes = n * sizeof(T);
     if (bytes >= kLargeBytes)
       FreeLargePages(p, bytes);
     else
-      ::operator delete(p, std::align_val_t(alignof(T) > 16 ? alignof(T) : 16));
+      ::operator delete(p);
   }
   template <class U>
   void construct(U* p) noexcept(UninitialisedConstruct) {
