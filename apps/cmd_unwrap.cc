@@ -187,7 +187,7 @@ Runner SetupUnwrap(CLI::App* sub, const GlobalOptions* global) {
     for (size_t f = 0; f < frames.size(); ++f) {
       std::vector<unwrap::Image8>& views = outputs;
       int w = 0, h = 0, c = 0;
-      const std::vector<float> px = raytrace::ReadImage(frames[f].image, &w, &h, &c);
+      const raytrace::PixelBuffer px = raytrace::ReadImage(frames[f].image, &w, &h, &c);
       unwrap::PixelFormat fmt;
       if (o->format == "auto") {
         HOVS_REQUIRE(c == 1 || c == 3 || c == 4, frames[f].image.string(), "unsupported channel count ", c);

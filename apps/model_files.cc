@@ -108,7 +108,7 @@ nlohmann::json LoadDatasetManifest(const std::filesystem::path& path) {
 
 unwrap::Image8 LoadImage8(const std::filesystem::path& path) {
   int w = 0, h = 0, c = 0;
-  const std::vector<float> px = raytrace::ReadImage(path, &w, &h, &c);
+  const raytrace::PixelBuffer px = raytrace::ReadImage(path, &w, &h, &c);
   HOVS_REQUIRE(c == 1 || c >= 3, path.string(), "unsupported channel count ", c, " (grey or RGB expected)");
   unwrap::Image8 im;
   im.width = w, im.height = h, im.channels = c == 1 ? 1 : 3;

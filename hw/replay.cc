@@ -43,7 +43,7 @@ class Replay : public CameraSource {
     if (next_ >= items_.size() && !loop_) return std::nullopt;
     const ReplayItem& it = items_[next_ % items_.size()];
     int w = 0, h = 0, c = 0;
-    const std::vector<float> px = raytrace::ReadImage(it.image, &w, &h, &c);
+    const raytrace::PixelBuffer px = raytrace::ReadImage(it.image, &w, &h, &c);
     Frame f;
     f.width = w, f.height = h, f.pixel_format = format_;
     f.frame_id = next_;

@@ -615,12 +615,12 @@ void WriteGroundTruthExr(const std::filesystem::path& path, const Frame& frame,
   Publish(tmp, path);
 }
 
-std::vector<float> ReadImage(const std::filesystem::path& path, int* width, int* height, int* channels) {
+PixelBuffer ReadImage(const std::filesystem::path& path, int* width, int* height, int* channels) {
   auto in = OIIO::ImageInput::open(path.string());
   HOVS_REQUIRE(in != nullptr, path.string(), "cannot read image: ", OIIO::geterror());
   const OIIO::ImageSpec& spec = in->spec();
   *width = spec.width, *height = spec.height, *channels = spec.nchannels;
-  std::vector<float> data(static_cast<size_t>(spec.width) * spec.height * spec.nchannels);
+  PixelBuffer data(static_cast<size_t>(spec.width) * spec.height * spec.nchannels);   // all read below
   const bool ok = in->read_image(0, 0, 0, spec.nchannels, OIIO::TypeDesc::FLOAT, data.data());
   in->close();
   HOVS_REQUIRE(ok, path.string(), "cannot decode image");

@@ -110,7 +110,8 @@ void WriteGroundTruthExr(const std::filesystem::path& path, const Frame& frame,
                          const std::vector<std::pair<std::string, std::string>>& metadata);
 
 // Reads an image (any OpenImageIO format) as float channels. Throws hovs::Error naming the file.
-std::vector<float> ReadImage(const std::filesystem::path& path, int* width, int* height, int* channels);
+// A PixelBuffer: a full-size frame (72 MB as float RGB) comes in huge pages.
+PixelBuffer ReadImage(const std::filesystem::path& path, int* width, int* height, int* channels);
 
 // Reads named channels of an OpenEXR file (channel order in the file does not matter).
 struct ExrChannels {

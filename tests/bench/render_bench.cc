@@ -186,3 +186,16 @@ void BM_WritePng(benchmark::State& state) {
   std::filesystem::remove(path);
 }
 BENCHMARK(BM_WritePng)->Unit(benchmark::kMillisecond)->UseRealTime()->Iterations(3);
+
+// Reading a full-size 8-bit RGB PNG as float channels (what `hovs unwrap`, replay and the model files read per
+// image).
+void BM_ReadPng(benchmark::State& state) {
+  const auto& f = OneFrame();
+  const auto path = std::filesystem::temp_directory_path() / "hovs_bench_read.png";
+  const std::vector<float> rgb(f.rgb.begin(), f.rgb.end());
+  hovs::raytrace::WriteImage(path, f.width, f.height, 3, rgb, 8);
+  int w = 0, h = 0, c = 0;
+  for (auto _ : state) benchmark::DoNotOptimize(hovs::raytrace::ReadImage(path, &w, &h, &c).data());
+  std::filesystem::remove(path);
+}
+BENCHMARK(BM_ReadPng)->Unit(benchmark::kMillisecond)->UseRealTime()->Iterations(5);
