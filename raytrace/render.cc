@@ -639,7 +639,8 @@ ExrChannels ReadExr(const std::filesystem::path& path) {
   const OIIO::ImageSpec& spec = in->spec();
   ExrChannels out;
   out.width = spec.width, out.height = spec.height;
-  std::vector<float> data(static_cast<size_t>(spec.width) * spec.height * spec.nchannels);
+  // The interleaved file (290 MB for a full-size frame's 12 channels) in huge pages, as a frame's buffers.
+  PixelBuffer data(static_cast<size_t>(spec.width) * spec.height * spec.nchannels);
   const bool ok = in->read_image(0, 0, 0, spec.nchannels, OIIO::TypeDesc::FLOAT, data.data());
   HOVS_REQUIRE(ok, path.string(), "cannot decode OpenEXR: ", in->geterror());
   for (int c = 0; c < spec.nchannels; ++c) {

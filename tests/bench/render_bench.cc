@@ -199,3 +199,13 @@ void BM_ReadPng(benchmark::State& state) {
   std::filesystem::remove(path);
 }
 BENCHMARK(BM_ReadPng)->Unit(benchmark::kMillisecond)->UseRealTime()->Iterations(5);
+
+// Reading a full-size ground-truth OpenEXR file into named channels (`hovs depth` reads one per view).
+void BM_ReadGroundTruthExr(benchmark::State& state) {
+  const auto& f = OneFrame();
+  const auto path = std::filesystem::temp_directory_path() / "hovs_bench_read.exr";
+  hovs::raytrace::WriteGroundTruthExr(path, f, {});
+  for (auto _ : state) benchmark::DoNotOptimize(hovs::raytrace::ReadExr(path).width);
+  std::filesystem::remove(path);
+}
+BENCHMARK(BM_ReadGroundTruthExr)->Unit(benchmark::kMillisecond)->UseRealTime()->Iterations(3);
