@@ -183,9 +183,8 @@ Runner SetupUnwrap(CLI::App* sub, const GlobalOptions* global) {
     std::vector<double> remap_ms;
     // The views' buffers are reused from frame to frame (Run keeps outputs of the right size): after the first
     // frame the remap time is the kernels' alone, not the first touch of fresh pages.
-    std::vector<unwrap::Image8> outputs;
+    std::vector<unwrap::Image8> views;
     for (size_t f = 0; f < frames.size(); ++f) {
-      std::vector<unwrap::Image8>& views = outputs;
       int w = 0, h = 0, c = 0;
       const raytrace::PixelBuffer px = raytrace::ReadImage(frames[f].image, &w, &h, &c);
       unwrap::PixelFormat fmt;
@@ -241,13 +240,13 @@ Runner SetupUnwrap(CLI::App* sub, const GlobalOptions* global) {
       if (!global->quiet) std::fprintf(stderr, "\r  frame %zu / %zu", f + 1, frames.size());
     }
     if (!global->quiet) std::fprintf(stderr, "\n");
-    nlohmann::json views = nlohmann::json::array();
-    for (const auto& vt : table.views) views.push_back(ViewJson(vt));
+    nlohmann::json views_json = nlohmann::json::array();
+    for (const auto& vt : table.views) views_json.push_back(ViewJson(vt));
     std::vector<double> sorted = remap_ms;
     std::sort(sorted.begin(), sorted.end());
     nlohmann::json j = {{"tool", "hovs unwrap"}, {"versions", design::DesignVersions()},
                               {"mapping", nlohmann::json::parse(table.header)}, {"mapping_source", source},
-                              {"interpolation", o->interp}, {"views", views}, {"frames", frames_json},
+                              {"interpolation", o->interp}, {"views", views_json}, {"frames", frames_json},
                               {"timing", {{"mapping_ms", table_ms}, {"median_remap_ms", sorted[sorted.size() / 2]},
                                           {"note", "remap of all views of one frame, this machine, threads: TBB default"}}}};
     if (!truth_json.empty()) {

@@ -180,8 +180,7 @@ BENCHMARK(BM_ApplySensor)->Unit(benchmark::kMillisecond)->UseRealTime()->Iterati
 void BM_WritePng(benchmark::State& state) {
   const auto& f = OneFrame();
   const auto path = std::filesystem::temp_directory_path() / "hovs_bench_image.png";
-  const std::vector<float> rgb(f.rgb.begin(), f.rgb.end());
-  for (auto _ : state) hovs::raytrace::WriteImage(path, f.width, f.height, 3, rgb, 8);
+  for (auto _ : state) hovs::raytrace::WriteImage(path, f.width, f.height, 3, f.rgb, 8);
   state.counters["MB"] = std::filesystem::file_size(path) / 1e6;
   std::filesystem::remove(path);
 }
@@ -192,8 +191,7 @@ BENCHMARK(BM_WritePng)->Unit(benchmark::kMillisecond)->UseRealTime()->Iterations
 void BM_ReadPng(benchmark::State& state) {
   const auto& f = OneFrame();
   const auto path = std::filesystem::temp_directory_path() / "hovs_bench_read.png";
-  const std::vector<float> rgb(f.rgb.begin(), f.rgb.end());
-  hovs::raytrace::WriteImage(path, f.width, f.height, 3, rgb, 8);
+  hovs::raytrace::WriteImage(path, f.width, f.height, 3, f.rgb, 8);
   int w = 0, h = 0, c = 0;
   for (auto _ : state) benchmark::DoNotOptimize(hovs::raytrace::ReadImage(path, &w, &h, &c).data());
   std::filesystem::remove(path);
