@@ -11,6 +11,7 @@
 #include <immintrin.h>
 
 #include "core/error.h"
+#include "core/vector_clones.h"
 #include "unwrap/remap_kernels.h"
 
 namespace hovs::unwrap {
@@ -212,36 +213,65 @@ void StreamCopy(const uint8_t* src, size_t n, uint8_t* dst) {
   _mm_sfence();
 }
 
-void BuildLevel(const Image8& in, PixelFormat in_format, Image8* out) {
-  const int W = (in.width + 1) / 2, H = (in.height + 1) / 2;
-  const bool bayer = in_format == PixelFormat::kBayerRggb8;
-  const int C = bayer ? 3 : in.channels;
+// Rows of the pyramid (integer loops: every compiled copy gives the same bytes).
+// s[k] = a[k] + b[k], k < n: the vertical sums of two rows.
+HOVS_VECTOR_CLONES void AddRows(const uint8_t* a, const uint8_t* b, int n, uint16_t* s) {
+  for (int k = 0; k < n; ++k) s[k] = static_cast<uint16_t>(a[k] + b[k]);
+}
+// Output pixel i of a grey / RGB row from the vertical sums of its 2 W source pixels.
+HOVS_VECTOR_CLONES void PairSumsGray(const uint16_t* s, int W, uint8_t* o) {
+  for (int i = 0; i < W; ++i) o[i] = static_cast<uint8_t>((s[2 * i] + s[2 * i + 1] + 2) >> 2);
+}
+HOVS_VECTOR_CLONES void PairSumsRgb(const uint16_t* s, int W, uint8_t* o) {
+  for (int i = 0; i < W; ++i) {
+    o[3 * i] = static_cast<uint8_t>((s[6 * i] + s[6 * i + 3] + 2) >> 2);
+    o[3 * i + 1] = static_cast<uint8_t>((s[6 * i + 1] + s[6 * i + 4] + 2) >> 2);
+    o[3 * i + 2] = static_cast<uint8_t>((s[6 * i + 2] + s[6 * i + 5] + 2) >> 2);
+  }
+}
+// The RGGB cells of mosaic rows a (R G) and b (G B) as RGB pixels.
+HOVS_VECTOR_CLONES void BayerCells(const uint8_t* a, const uint8_t* b, int W, uint8_t* o) {
+  for (int i = 0; i < W; ++i) {
+    o[3 * i] = a[2 * i];
+    o[3 * i + 1] = static_cast<uint8_t>((a[2 * i + 1] + b[2 * i] + 1) >> 1);
+    o[3 * i + 2] = b[2 * i + 1];
+  }
+}
+
+}  // namespace
+
+void DownsampleHalf(const ImageView& in, Image8* out) {
+  HOVS_REQUIRE(in.data != nullptr && in.width > 0 && in.height > 0, "pyramid input", "no image data");
+  const bool bayer = in.format == PixelFormat::kBayerRggb8;
+  const int Cin = in.format == PixelFormat::kRgb8 ? 3 : 1;
+  HOVS_REQUIRE(in.stride >= size_t(in.width) * Cin, "pyramid input", "row stride ", in.stride,
+               " is smaller than a row of ", in.width * Cin, " bytes");
+  HOVS_REQUIRE(!bayer || (in.width % 2 == 0 && in.height % 2 == 0), "pyramid input",
+               "a Bayer mosaic needs an even width and height");
+  const int W = (in.width + 1) / 2, H = (in.height + 1) / 2, C = bayer ? 3 : Cin;
   out->width = W, out->height = H, out->channels = C;
   out->data.resize(size_t(W) * H * C);
-  const size_t is = size_t(in.width) * in.channels;
   tbb::parallel_for(tbb::blocked_range<int>(0, H, 32), [&](const tbb::blocked_range<int>& rows) {
+    std::vector<uint16_t> sums(bayer ? 0 : size_t(2 * W) * Cin);
     for (int j = rows.begin(); j < rows.end(); ++j) {
-      const int j0 = 2 * j, j1 = std::min(2 * j + 1, in.height - 1);
+      const uint8_t* a = in.data + size_t(2 * j) * in.stride;
+      const uint8_t* b = in.data + size_t(std::min(2 * j + 1, in.height - 1)) * in.stride;
       uint8_t* o = out->data.data() + size_t(j) * W * C;
-      const uint8_t* r0 = in.data.data() + j0 * is;
-      const uint8_t* r1 = in.data.data() + j1 * is;
-      for (int i = 0; i < W; ++i) {
-        const int i0 = 2 * i, i1 = std::min(2 * i + 1, in.width - 1);
-        if (bayer) {
-          // The 2 x 2 RGGB cell becomes one RGB pixel at its centre.
-          o[3 * i] = r0[i0];
-          o[3 * i + 1] = static_cast<uint8_t>((r0[i1] + r1[i0] + 1) >> 1);
-          o[3 * i + 2] = r1[i1];
-        } else {
-          for (int c = 0; c < C; ++c)
-            o[C * i + c] = static_cast<uint8_t>((r0[C * i0 + c] + r0[C * i1 + c] + r1[C * i0 + c] + r1[C * i1 + c] + 2) >> 2);
-        }
+      if (bayer) {
+        BayerCells(a, b, W, o);
+        continue;
+      }
+      const int n = in.width * Cin;
+      AddRows(a, b, n, sums.data());
+      if (in.width % 2) std::copy(sums.data() + n - Cin, sums.data() + n, sums.data() + n);   // last pixel twice
+      if (Cin == 3) {
+        PairSumsRgb(sums.data(), W, o);
+      } else {
+        PairSumsGray(sums.data(), W, o);
       }
     }
   });
 }
-
-}  // namespace
 
 const char* ToString(PixelFormat f) {
   return f == PixelFormat::kGray8 ? "gray" : f == PixelFormat::kRgb8 ? "rgb" : "bayer_rggb";
@@ -276,16 +306,9 @@ void Remapper::Prepare(const ImageView& src) {
                "a Bayer mosaic needs an even width and height");
   const auto start = std::chrono::steady_clock::now();
   pyramid_.resize(std::max(0, table_.levels - 1));
-  if (!pyramid_.empty()) {
-    // Level 0 as a packed Image8 (one copy only if the stride is padded).
-    Image8 level0;
-    level0.width = src.width, level0.height = src.height, level0.channels = C;
-    level0.data.resize(size_t(src.width) * src.height * C);
-    for (int j = 0; j < src.height; ++j)
-      std::memcpy(level0.data.data() + size_t(j) * src.width * C, src.data + j * src.stride, size_t(src.width) * C);
-    BuildLevel(level0, src.format, &pyramid_[0]);
-    for (size_t l = 1; l < pyramid_.size(); ++l) BuildLevel(pyramid_[l - 1], PixelFormat::kRgb8, &pyramid_[l]);
-  }
+  for (size_t l = 0; l < pyramid_.size(); ++l)
+    DownsampleHalf(l == 0 ? src : pyramid_[l - 1].View(pyramid_[l - 1].channels == 1 ? PixelFormat::kGray8 : PixelFormat::kRgb8),
+                   &pyramid_[l]);
   pyramid_ms_ = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
 }
 

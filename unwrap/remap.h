@@ -41,6 +41,12 @@ struct Image8 {
   ImageView View(PixelFormat f) const { return {data.data(), width, height, size_t(width) * channels, f}; }
 };
 
+// One level of the 2 x 2 box pyramid: out becomes ceil(w / 2) x ceil(h / 2) with, per channel,
+// out(i, j) = (in(2i, 2j) + in(2i + 1, 2j) + in(2i, 2j + 1) + in(2i + 1, 2j + 1) + 2) >> 2, the last column or row
+// of an odd-sized image counted twice. A Bayer mosaic (RGGB; even width and height) becomes RGB: each 2 x 2
+// cell's R, the mean of its two G (rounded half up), its B. Grey stays grey. Threads over rows (TBB).
+void DownsampleHalf(const ImageView& in, Image8* out);
+
 class Remapper {
  public:
   explicit Remapper(const RemapTable& table);   // keeps a reference: the table must outlive the remapper

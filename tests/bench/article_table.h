@@ -1,5 +1,6 @@
 // The article's six-view remap table (exact model of the reference unit, `PresetLayout("article")`), built once
-// per benchmark program: the expansion and live benchmarks measure the same table.
+// per benchmark program: the expansion and live benchmarks measure the same table. Also the panorama preset's
+// table (one 360-degree cylindrical view whose rows near the rim minify: it samples the frame's pyramid).
 #pragma once
 
 #include "tests/core/test_rigs.h"
@@ -11,6 +12,12 @@ namespace hovs::test {
 inline const unwrap::RemapTable& ArticleTable() {
   static const unwrap::RemapTable table =
       unwrap::BuildRemapTable(AnyModel::Exact(AlignedRig()), unwrap::PresetLayout("article"), {});
+  return table;
+}
+
+inline const unwrap::RemapTable& PanoramaTable() {
+  static const unwrap::RemapTable table =
+      unwrap::BuildRemapTable(AnyModel::Exact(AlignedRig()), unwrap::PresetLayout("panorama"), {});
   return table;
 }
 

@@ -1,7 +1,8 @@
 // Panoramic expansion speed: the article's six 1200 x 700 views from one 2750 x 2200 frame (target: median at
 // most 3 ms on the 2-core machine), beside cv::remap with the same maps (the table's own per-pixel
 // coordinates, converted to OpenCV's fixed-point CV_16SC2 maps) in the same run (target: at least 2x faster).
-// RGB input, raw RGGB Bayer input (OpenCV: cvtColor demosaic, then remap) and grey input (Mono8 cameras).
+// RGB input, raw RGGB Bayer input (OpenCV: cvtColor demosaic, then remap) and grey input (Mono8 cameras). The
+// panorama preset as well (BM_HovsPanorama: one view with minifying rows, i.e. with the per-frame pyramid).
 #include <benchmark/benchmark.h>
 #include <opencv2/core.hpp>
 #include <opencv2/imgproc.hpp>
@@ -29,27 +30,26 @@ cv::Mat Frame(int type) {
 struct CvMaps {
   std::vector<cv::Mat> m1, m2;
 };
-const CvMaps& Maps() {
-  static const CvMaps maps = [] {
-    CvMaps m;
-    const auto& t = test::ArticleTable();
-    for (size_t v = 0; v < t.views.size(); ++v) {
-      std::vector<float> x, y;
-      t.DecodeView(static_cast<int>(v), &x, &y);
-      const int W = t.views[v].view.width, H = t.views[v].view.height;
-      cv::Mat mx(H, W, CV_32F, x.data()), my(H, W, CV_32F, y.data());
-      cv::Mat a, b;
-      cv::convertMaps(mx, my, a, b, CV_16SC2);
-      m.m1.push_back(a);
-      m.m2.push_back(b);
-    }
-    return m;
-  }();
-  return maps;
+// The table's own per-pixel coordinates as OpenCV's fixed-point maps, one per view (invalid pixels are -1:
+// black under BORDER_CONSTANT, as hovs writes them).
+CvMaps MakeMaps(const unwrap::RemapTable& t) {
+  CvMaps m;
+  for (size_t v = 0; v < t.views.size(); ++v) {
+    std::vector<float> x, y;
+    t.DecodeView(static_cast<int>(v), &x, &y);
+    const int W = t.views[v].view.width, H = t.views[v].view.height;
+    cv::Mat mx(H, W, CV_32F, x.data()), my(H, W, CV_32F, y.data());
+    cv::Mat a, b;
+    cv::convertMaps(mx, my, a, b, CV_16SC2);
+    m.m1.push_back(a);
+    m.m2.push_back(b);
+  }
+  return m;
 }
 
-// Arguments: input (0 RGB, 1 Bayer, 2 grey), kernels (2 the widest this CPU runs, 1 AVX2 at most).
-void BM_HovsSixViews(benchmark::State& state) {
+// hovs' remap of every view of `table`. Arguments: input (0 RGB, 1 Bayer, 2 grey), kernels (2 the widest this
+// CPU runs, 1 AVX2 at most).
+void HovsRemap(benchmark::State& state, const unwrap::RemapTable& table) {
   const bool bayer = state.range(0) == 1, grey = state.range(0) == 2;
   const auto isa = static_cast<unwrap::kernels::Isa>(state.range(1));
   if (isa == unwrap::kernels::Isa::kAvx2 && unwrap::kernels::DetectedIsa() != unwrap::kernels::Isa::kAvx512) {
@@ -58,7 +58,7 @@ void BM_HovsSixViews(benchmark::State& state) {
   }
   unwrap::kernels::LimitIsa(isa);
   const cv::Mat frame = Frame(bayer || grey ? CV_8UC1 : CV_8UC3);
-  unwrap::Remapper remapper(test::ArticleTable());
+  unwrap::Remapper remapper(table);
   const unwrap::ImageView src{frame.data, frame.cols, frame.rows, frame.step,
                               bayer  ? unwrap::PixelFormat::kBayerRggb8
                               : grey ? unwrap::PixelFormat::kGray8
@@ -68,14 +68,13 @@ void BM_HovsSixViews(benchmark::State& state) {
     remapper.Run(src, unwrap::Interpolation::kBilinear, &out);
     benchmark::DoNotOptimize(out[0].data.data());
   }
-  const auto& t = test::ArticleTable();
   int interp = 0, dense = 0, empty = 0, minified = 0;
-  for (const auto& v : t.views) {
+  for (const auto& v : table.views) {
     interp += v.interp_tiles, dense += v.dense_tiles, empty += v.empty_tiles;
     for (const auto& tl : v.tiles) minified += tl.kind != unwrap::TileKind::kEmpty && tl.level > 0;
   }
   state.counters["pyramid_ms"] = remapper.last_pyramid_ms();
-  state.counters["levels"] = t.levels;
+  state.counters["levels"] = table.levels;
   state.counters["interp_tiles"] = interp;
   state.counters["dense_tiles"] = dense;
   state.counters["empty_tiles"] = empty;
@@ -84,12 +83,11 @@ void BM_HovsSixViews(benchmark::State& state) {
                  unwrap::kernels::ToString(unwrap::kernels::ActiveIsa()));
   unwrap::kernels::LimitIsa(unwrap::kernels::Isa::kAvx512);
 }
-BENCHMARK(BM_HovsSixViews)->Args({0, 2})->Args({1, 2})->Args({2, 2})->Args({0, 1})->Args({1, 1})->Args({2, 1})->Unit(benchmark::kMillisecond)->UseRealTime()->MinTime(2.0);
 
-void BM_OpenCvRemapSixViews(benchmark::State& state) {
+// cv::remap of every view with the same maps. Argument: input (0 RGB, 1 Bayer, 2 grey).
+void OpenCvRemap(benchmark::State& state, const CvMaps& maps) {
   const bool bayer = state.range(0) == 1, grey = state.range(0) == 2;
   const cv::Mat frame = Frame(bayer || grey ? CV_8UC1 : CV_8UC3);
-  const auto& maps = Maps();
   std::vector<cv::Mat> out(maps.m1.size());
   cv::Mat rgb;
   for (auto _ : state) {
@@ -104,7 +102,26 @@ void BM_OpenCvRemapSixViews(benchmark::State& state) {
   }
   state.SetLabel(bayer ? "cvtColor BayerRG2RGB + remap" : grey ? "remap CV_16SC2, grey" : "remap CV_16SC2");
 }
+
+void BM_HovsSixViews(benchmark::State& state) { HovsRemap(state, test::ArticleTable()); }
+BENCHMARK(BM_HovsSixViews)->Args({0, 2})->Args({1, 2})->Args({2, 2})->Args({0, 1})->Args({1, 1})->Args({2, 1})->Unit(benchmark::kMillisecond)->UseRealTime()->MinTime(2.0);
+
+void BM_OpenCvRemapSixViews(benchmark::State& state) {
+  static const CvMaps maps = MakeMaps(test::ArticleTable());
+  OpenCvRemap(state, maps);
+}
 BENCHMARK(BM_OpenCvRemapSixViews)->Arg(0)->Arg(1)->Arg(2)->Unit(benchmark::kMillisecond)->UseRealTime()->MinTime(2.0);
+
+// The panorama preset (3600 x 900, 360 degrees): its rows near the rim minify, so hovs also builds the frame's
+// 2 x 2 box pyramid every frame (pyramid_ms) and samples it there (antialiasing); cv::remap does neither.
+void BM_HovsPanorama(benchmark::State& state) { HovsRemap(state, test::PanoramaTable()); }
+BENCHMARK(BM_HovsPanorama)->Args({0, 2})->Args({1, 2})->Unit(benchmark::kMillisecond)->UseRealTime()->MinTime(1.0);
+
+void BM_OpenCvRemapPanorama(benchmark::State& state) {
+  static const CvMaps maps = MakeMaps(test::PanoramaTable());
+  OpenCvRemap(state, maps);
+}
+BENCHMARK(BM_OpenCvRemapPanorama)->Arg(0)->Arg(1)->Unit(benchmark::kMillisecond)->UseRealTime()->MinTime(1.0);
 
 void BM_BuildArticleTable(benchmark::State& state) {
   const auto rig = test::AlignedRig();

@@ -406,6 +406,53 @@ TEST(Remap, InterpolationsAgreeOnSmoothContentAndNearestIsExactOnIntegers) {
   EXPECT_LE(worst_bc, 3);
 }
 
+// The pyramid's levels against the 2 x 2 box mean written out pixel by pixel: odd and even sizes (the last
+// column / row counted twice), rows with padding, grey, RGB and a Bayer mosaic (its cells as RGB pixels).
+TEST(Remap, PyramidLevelIsTheRoundedBoxMean) {
+  std::mt19937 rng(5);
+  struct Case {
+    int w, h;
+    PixelFormat f;
+  };
+  for (const Case c : {Case{9, 7, PixelFormat::kGray8}, Case{10, 6, PixelFormat::kGray8}, Case{67, 5, PixelFormat::kRgb8},
+                       Case{66, 9, PixelFormat::kRgb8}, Case{70, 8, PixelFormat::kBayerRggb8}}) {
+    const int C = c.f == PixelFormat::kRgb8 ? 3 : 1;
+    const size_t stride = size_t(c.w) * C + 5;
+    std::vector<uint8_t> in(stride * c.h);
+    for (auto& v : in) v = uint8_t(rng());
+    const auto at = [&](int x, int y, int ch) {
+      return int(in[size_t(std::min(y, c.h - 1)) * stride + size_t(std::min(x, c.w - 1)) * C + ch]);
+    };
+    Image8 out;
+    DownsampleHalf({in.data(), c.w, c.h, stride, c.f}, &out);
+    const std::string what = std::to_string(c.w) + " x " + std::to_string(c.h) + " " + ToString(c.f);
+    ASSERT_EQ(out.width, (c.w + 1) / 2) << what;
+    ASSERT_EQ(out.height, (c.h + 1) / 2) << what;
+    const int OC = c.f == PixelFormat::kBayerRggb8 ? 3 : C;
+    ASSERT_EQ(out.channels, OC) << what;
+    int wrong = 0;
+    for (int j = 0; j < out.height; ++j)
+      for (int i = 0; i < out.width; ++i)
+        for (int ch = 0; ch < OC; ++ch) {
+          int want = 0;
+          if (c.f == PixelFormat::kBayerRggb8) {
+            want = ch == 0   ? at(2 * i, 2 * j, 0)
+                   : ch == 2 ? at(2 * i + 1, 2 * j + 1, 0)
+                             : (at(2 * i + 1, 2 * j, 0) + at(2 * i, 2 * j + 1, 0) + 1) >> 1;
+          } else {
+            want = (at(2 * i, 2 * j, ch) + at(2 * i + 1, 2 * j, ch) + at(2 * i, 2 * j + 1, ch) +
+                    at(2 * i + 1, 2 * j + 1, ch) + 2) >> 2;
+          }
+          wrong += out.data[(size_t(j) * out.width + i) * OC + ch] != want;
+        }
+    EXPECT_EQ(wrong, 0) << what;
+  }
+  Image8 out;
+  std::vector<uint8_t> odd(9 * 8);
+  EXPECT_THROW(DownsampleHalf({odd.data(), 9, 8, 9, PixelFormat::kBayerRggb8}, &out), Error);
+  EXPECT_THROW(DownsampleHalf({odd.data(), 9, 8, 4, PixelFormat::kGray8}, &out), Error);
+}
+
 TEST(Remap, RejectsBadInput) {
   Layout layout = PresetLayout("article");
   layout.views.resize(1);
