@@ -171,11 +171,14 @@ void WalkTile(const ViewTable& vt, const Tile& t, int T, int nu, int nv, uint8_t
 // How many tiles ahead of the one being remapped the source is prefetched.
 constexpr int kPrefetchTiles = 2;
 
-// The image a tile samples: the frame, or the pyramid level the tile asks for (grey or RGB).
+// A pyramid level as an image (levels are grey or RGB).
+ImageView LevelView(const Image8& level) {
+  return level.View(level.channels == 1 ? PixelFormat::kGray8 : PixelFormat::kRgb8);
+}
+
+// The image a tile samples: the frame, or the pyramid level the tile asks for.
 ImageView TileSource(const ImageView& src, const std::vector<Image8>& pyramid, const Tile& t) {
-  if (t.level == 0) return src;
-  const Image8& lv = pyramid[t.level - 1];
-  return lv.View(lv.channels == 1 ? PixelFormat::kGray8 : PixelFormat::kRgb8);
+  return t.level == 0 ? src : LevelView(pyramid[t.level - 1]);
 }
 
 // Asks the caches for the source region an interp tile will sample (the bounding box of its nodes).
@@ -307,8 +310,7 @@ void Remapper::Prepare(const ImageView& src) {
   const auto start = std::chrono::steady_clock::now();
   pyramid_.resize(std::max(0, table_.levels - 1));
   for (size_t l = 0; l < pyramid_.size(); ++l)
-    DownsampleHalf(l == 0 ? src : pyramid_[l - 1].View(pyramid_[l - 1].channels == 1 ? PixelFormat::kGray8 : PixelFormat::kRgb8),
-                   &pyramid_[l]);
+    DownsampleHalf(l == 0 ? src : LevelView(pyramid_[l - 1]), &pyramid_[l]);
   pyramid_ms_ = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
 }
 
