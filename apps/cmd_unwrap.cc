@@ -66,7 +66,7 @@ nlohmann::json ViewJson(const unwrap::ViewTable& vt) {
   nlohmann::json j = {{"name", vt.spec.name}, {"type", ToString(v.projection)}, {"width", v.width},
                       {"height", v.height},
                       {"mirror_from_view", {{"qw", q.w()}, {"qx", q.x()}, {"qy", q.y()}, {"qz", q.z()}}},
-                      {"valid_pixels", vt.valid_pixels}, {"tiles", {{"interp", vt.interp_tiles}, {"dense", vt.dense_tiles},
+                      {"valid_pixels", vt.valid_pixels}, {"tile_size", vt.tile}, {"tiles", {{"interp", vt.interp_tiles}, {"dense", vt.dense_tiles},
                                                                     {"empty", vt.empty_tiles}}},
                       {"max_interp_error_px", vt.max_interp_error}, {"max_pyramid_level", vt.max_level}};
   if (v.projection == ViewProjection::kPerspective) {
@@ -87,7 +87,7 @@ Runner SetupUnwrap(CLI::App* sub, const GlobalOptions* global) {
     std::string model, unit, layout = "article", input, out = "results/unwrap", map, save_map;
     std::string interp = "bilinear", format = "auto";
     double scene_distance = 10.0;
-    int tile = 32;
+    int tile = 0;
     std::string truth_scene;
     int truth_samples = 4;
     bool interactive = false;
@@ -105,7 +105,8 @@ Runner SetupUnwrap(CLI::App* sub, const GlobalOptions* global) {
   sub->add_option("--format", o->format, "auto | rgb | gray | bayer_rggb (input pixel format)")->capture_default_str();
   sub->add_option("--scene-distance", o->scene_distance, "m; depth at which a non-single-viewpoint rig is unwrapped")
       ->capture_default_str();
-  sub->add_option("--tile", o->tile, "tile size of the mapping (8, 16, 32, 64)")->capture_default_str();
+  sub->add_option("--tile", o->tile, "tile size of the mapping (8, 16, 32, 64; 0: 64 for each view that needs no per-pixel "
+                  "coordinates at that size, else 32)")->capture_default_str();
   sub->add_option("--truth-scene", o->truth_scene,
                   "scene YAML the input was rendered from: render each perspective view with a pinhole camera at the "
                   "unit's viewpoint and report PSNR against it");

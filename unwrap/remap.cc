@@ -316,7 +316,7 @@ void Remapper::Prepare(const ImageView& src) {
 
 void Remapper::RemapRows(const ImageView& src, Interpolation interp, int view, int tile_row, Image8* out) const {
   const ViewTable& vt = table_.views[view];
-  const int T = table_.tile;
+  const int T = vt.tile;
   const int v0 = tile_row * T, nv = std::min(T, vt.view.height - v0);
   const int OC = out->channels;
   const size_t ostride = size_t(out->width) * OC;

@@ -2,7 +2,9 @@
 
 #include <tbb/parallel_for.h>
 
+#include <atomic>
 #include <chrono>
+#include <optional>
 #include <cstring>
 #include <nlohmann/json.hpp>
 
@@ -13,7 +15,8 @@ namespace hovs::unwrap {
 namespace {
 
 constexpr char kMagic[8] = {'H', 'O', 'V', 'S', 'M', 'A', 'P', '\0'};
-constexpr uint32_t kFormatVersion = 1;
+constexpr uint32_t kFormatVersion = 2;
+constexpr uint32_t kOldestReadableVersion = 1;   // one tile size for every view
 
 int32_t ToFixed(double v) { return static_cast<int32_t>(std::llround(v * 65536.0)); }
 double FromFixed(int32_t v) { return v / 65536.0; }
@@ -97,9 +100,8 @@ struct TileBuild {
   double interp_error = 0;
 };
 
-TileBuild BuildTile(const AnyModel& model, const VirtualView<double>& view, int tx, int ty,
+TileBuild BuildTile(const AnyModel& model, const VirtualView<double>& view, int T, int tx, int ty,
                     const RemapOptions& o) {
-  const int T = o.tile;
   const int u0 = tx * T, v0 = ty * T;
   const int nu = std::min(T, view.width - u0), nv = std::min(T, view.height - v0);
   TileBuild b;
@@ -193,8 +195,8 @@ nlohmann::json ModelJson(const AnyModel& model) {
 }  // namespace
 
 void RemapOptions::Check(const std::string& where) const {
-  HOVS_REQUIRE(tile == 8 || tile == 16 || tile == 32 || tile == 64, where, "tile must be 8, 16, 32 or 64 (got ",
-               tile, ")");
+  HOVS_REQUIRE(tile == 0 || tile == 8 || tile == 16 || tile == 32 || tile == 64, where,
+               "tile must be 8, 16, 32 or 64, or 0 for automatic (got ", tile, ")");
   HOVS_REQUIRE(max_interp_error > 0 && max_interp_error <= 0.5, where,
                "max_interp_error must be in (0, 0.5] px (got ", max_interp_error, ")");
   HOVS_REQUIRE(max_level >= 0 && max_level <= 8, where, "max_level must be 0..8");
@@ -217,7 +219,7 @@ void ExactMaps(const AnyModel& model, const VirtualView<double>& view, std::vect
 
 void RemapTable::DecodeView(int index, std::vector<float>* map_x, std::vector<float>* map_y) const {
   const ViewTable& vt = views.at(index);
-  const int W = vt.view.width, H = vt.view.height, T = tile;
+  const int W = vt.view.width, H = vt.view.height, T = vt.tile;
   map_x->assign(size_t(W) * H, -1.f);
   map_y->assign(size_t(W) * H, -1.f);
   for (int ty = 0; ty < vt.tiles_y; ++ty)
@@ -244,43 +246,65 @@ void RemapTable::DecodeView(int index, std::vector<float>* map_x, std::vector<fl
     }
 }
 
+namespace {
+// Whether a tile may stay in a view built with RemapOptions::tile = 0 at 64 pixels.
+bool FitsLargeTiles(const Tile& t) {
+  return t.kind == TileKind::kEmpty || (t.kind == TileKind::kInterp && t.level == 0 && t.inside);
+}
+
+// One view's table at tile size T. With `only_if_large_fits`, nullopt as soon as a tile does not fit (the
+// remaining tiles are skipped; the answer does not depend on which thread finds it first).
+std::optional<ViewTable> BuildView(const AnyModel& model, const ViewSpec& spec, int T, const RemapOptions& options,
+                                   bool only_if_large_fits) {
+  ViewTable vt;
+  vt.spec = spec;
+  vt.view = spec.View();
+  vt.tile = T;
+  vt.tiles_x = (vt.view.width + T - 1) / T;
+  vt.tiles_y = (vt.view.height + T - 1) / T;
+  const int n = vt.tiles_x * vt.tiles_y;
+  std::vector<TileBuild> built(n);
+  std::atomic<bool> misfit{false};
+  tbb::parallel_for(0, n, [&](int k) {
+    if (misfit.load(std::memory_order_relaxed)) return;
+    built[k] = BuildTile(model, vt.view, T, k % vt.tiles_x, k / vt.tiles_x, options);
+    if (only_if_large_fits && !FitsLargeTiles(built[k].tile)) misfit = true;
+  });
+  if (misfit) return std::nullopt;
+  vt.tiles.resize(n);
+  for (int k = 0; k < n; ++k) {
+    Tile t = built[k].tile;
+    vt.valid_pixels += built[k].valid;
+    if (t.kind == TileKind::kDense) {
+      t.dense_index = static_cast<uint32_t>(vt.dense.size() / 2);
+      vt.dense.insert(vt.dense.end(), built[k].dense.begin(), built[k].dense.end());
+      ++vt.dense_tiles;
+    } else if (t.kind == TileKind::kInterp) {
+      ++vt.interp_tiles;
+      vt.max_interp_error = std::max(vt.max_interp_error, built[k].interp_error);
+    } else {
+      ++vt.empty_tiles;
+    }
+    if (t.kind != TileKind::kEmpty) vt.max_level = std::max<int>(vt.max_level, t.level);
+    vt.tiles[k] = t;
+  }
+  return vt;
+}
+}  // namespace
+
 RemapTable BuildRemapTable(const AnyModel& model, const Layout& layout, const RemapOptions& options,
                            const std::string& versions_json) {
   options.Check("remap options");
   layout.Check("layout " + layout.name);
   const auto start = std::chrono::steady_clock::now();
   RemapTable table;
-  table.tile = options.tile;
   table.source_width = model.width(), table.source_height = model.height();
-  const int T = options.tile;
   for (const auto& spec : layout.views) {
-    ViewTable vt;
-    vt.spec = spec;
-    vt.view = spec.View();
-    vt.tiles_x = (vt.view.width + T - 1) / T;
-    vt.tiles_y = (vt.view.height + T - 1) / T;
-    const int n = vt.tiles_x * vt.tiles_y;
-    std::vector<TileBuild> built(n);
-    tbb::parallel_for(0, n, [&](int k) { built[k] = BuildTile(model, vt.view, k % vt.tiles_x, k / vt.tiles_x, options); });
-    vt.tiles.resize(n);
-    for (int k = 0; k < n; ++k) {
-      Tile t = built[k].tile;
-      vt.valid_pixels += built[k].valid;
-      if (t.kind == TileKind::kDense) {
-        t.dense_index = static_cast<uint32_t>(vt.dense.size() / 2);
-        vt.dense.insert(vt.dense.end(), built[k].dense.begin(), built[k].dense.end());
-        ++vt.dense_tiles;
-      } else if (t.kind == TileKind::kInterp) {
-        ++vt.interp_tiles;
-        vt.max_interp_error = std::max(vt.max_interp_error, built[k].interp_error);
-      } else {
-        ++vt.empty_tiles;
-      }
-      if (t.kind != TileKind::kEmpty) vt.max_level = std::max<int>(vt.max_level, t.level);
-      vt.tiles[k] = t;
-    }
-    table.levels = std::max(table.levels, vt.max_level + 1);
-    table.views.push_back(std::move(vt));
+    std::optional<ViewTable> vt;
+    if (options.tile == 0) vt = BuildView(model, spec, 64, options, /*only_if_large_fits=*/true);
+    if (!vt) vt = BuildView(model, spec, options.tile != 0 ? options.tile : 32, options, false);
+    table.levels = std::max(table.levels, vt->max_level + 1);
+    table.views.push_back(std::move(*vt));
   }
   nlohmann::json views = nlohmann::json::array();
   for (const auto& v : layout.views) views.push_back(SpecJson(v));
@@ -307,7 +331,7 @@ void SaveRemapTable(const std::filesystem::path& path, const RemapTable& table) 
   for (const auto& v : table.views) {
     Put(&s, static_cast<uint32_t>(v.tiles_x));
     Put(&s, static_cast<uint32_t>(v.tiles_y));
-    Put(&s, static_cast<uint32_t>(table.tile));
+    Put(&s, static_cast<uint32_t>(v.tile));
     Put(&s, static_cast<uint32_t>(v.tiles.size()));
     s.append(reinterpret_cast<const char*>(v.tiles.data()), v.tiles.size() * sizeof(Tile));
     Put(&s, static_cast<uint64_t>(v.dense.size()));
@@ -324,8 +348,9 @@ std::string CheckedContents(const std::filesystem::path& path, const std::string
                "not a hovs mapping file (bad magic)");
   uint32_t version = 0;
   std::memcpy(&version, data.data() + sizeof kMagic, 4);
-  HOVS_REQUIRE(version == kFormatVersion, where, "mapping file format version ", version,
-               " is not supported (this hovs reads version ", kFormatVersion, "); rebuild the mapping");
+  HOVS_REQUIRE(version >= kOldestReadableVersion && version <= kFormatVersion, where, "mapping file format version ",
+               version, " is not supported (this hovs reads versions ", kOldestReadableVersion, " to ", kFormatVersion,
+               "); rebuild the mapping");
   uint64_t stored = 0;
   std::memcpy(&stored, data.data() + data.size() - 8, 8);
   const uint64_t actual = Fnv1a(data.data(), data.size() - 8);
@@ -363,7 +388,7 @@ RemapTable LoadRemapTable(const std::filesystem::path& path) {
   try {
     t.source_width = h.at("source").at("width");
     t.source_height = h.at("source").at("height");
-    t.tile = h.at("options").at("tile");
+    const int header_tile = h.at("options").at("tile");   // 0: chosen per view
     const auto& views = h.at("layout").at("views");
     const uint32_t nviews = r.Get<uint32_t>("view count");
     HOVS_REQUIRE(nviews == views.size(), where, "view count does not match the header");
@@ -376,20 +401,23 @@ RemapTable LoadRemapTable(const std::filesystem::path& path) {
       v.tiles_y = static_cast<int>(r.Get<uint32_t>("tiles_y"));
       const uint32_t tile = r.Get<uint32_t>("tile size");
       const uint32_t count = r.Get<uint32_t>("tile count");
-      HOVS_REQUIRE(int(tile) == t.tile && v.tiles_x == (v.view.width + t.tile - 1) / t.tile &&
-                       v.tiles_y == (v.view.height + t.tile - 1) / t.tile && count == uint32_t(v.tiles_x * v.tiles_y),
+      HOVS_REQUIRE((tile == 8 || tile == 16 || tile == 32 || tile == 64) && (header_tile == 0 || int(tile) == header_tile),
+                   where, "view '", v.spec.name, "' has tile size ", tile, " (the header asks for ", header_tile, ")");
+      v.tile = static_cast<int>(tile);
+      HOVS_REQUIRE(v.tiles_x == (v.view.width + v.tile - 1) / v.tile && v.tiles_y == (v.view.height + v.tile - 1) / v.tile &&
+                       count == uint32_t(v.tiles_x * v.tiles_y),
                    where, "tile grid of view '", v.spec.name, "' does not match its size");
       v.tiles.resize(count);
       r.Bytes(v.tiles.data(), count * sizeof(Tile), "tiles");
       const uint64_t nd = r.Get<uint64_t>("dense count");
-      HOVS_REQUIRE(nd % (2ull * t.tile * t.tile) == 0 && nd * 4 <= body.size(), where, "bad dense table size");
+      HOVS_REQUIRE(nd % (2ull * v.tile * v.tile) == 0 && nd * 4 <= body.size(), where, "bad dense table size");
       v.dense.resize(nd);
       r.Bytes(v.dense.data(), nd * sizeof(int32_t), "dense coordinates");
       for (const Tile& tl : v.tiles) {
         HOVS_REQUIRE(tl.kind == TileKind::kEmpty || tl.kind == TileKind::kInterp || tl.kind == TileKind::kDense,
                      where, "bad tile kind");
         if (tl.kind == TileKind::kDense)
-          HOVS_REQUIRE((uint64_t(tl.dense_index) + uint64_t(t.tile) * t.tile) * 2 <= nd, where,
+          HOVS_REQUIRE((uint64_t(tl.dense_index) + uint64_t(v.tile) * v.tile) * 2 <= nd, where,
                        "dense tile index out of range");
         if (tl.kind == TileKind::kEmpty) {
           ++v.empty_tiles;

@@ -144,17 +144,68 @@ TEST(RemapTable, MinifyingTilesSampleThePyramid) {
   EXPECT_EQ(BuildRemapTable(AnyModel::Exact(Rig()), layout, no_aa).levels, 1);
 }
 
+TEST(RemapTable, AutomaticTileSizeIsChosenPerView) {
+  // The default (tile 0): 64-pixel tiles for a perspective view well inside the mirror (all interp at 64), 32
+  // for a panorama that crosses the rim and the camera's reflection (it has per-pixel tiles at either size, four
+  // times the pixels of them at 64). An explicit size applies to every view.
+  Layout layout = PresetLayout("article");
+  layout.views.resize(1);
+  ViewSpec pano;
+  pano.name = "pano", pano.type = ViewProjection::kCylindrical, pano.width = 900, pano.height = 200;
+  pano.elevation_min_deg = -89, pano.elevation_max_deg = 10;
+  layout.views.push_back(pano);
+  const AnyModel exact = AnyModel::Exact(Rig());
+  const RemapTable a = BuildRemapTable(exact, layout, {});
+  ASSERT_EQ(a.views.size(), 2u);
+  EXPECT_EQ(a.views[0].tile, 64);
+  EXPECT_EQ(a.views[0].tiles_x, (a.views[0].view.width + 63) / 64);
+  EXPECT_EQ(a.views[0].dense_tiles, 0);
+  EXPECT_EQ(a.views[1].tile, 32);
+  RemapOptions fixed;
+  fixed.tile = 64;
+  const RemapTable b = BuildRemapTable(exact, layout, fixed);
+  EXPECT_EQ(b.views[1].tile, 64);
+  EXPECT_GT(int64_t(b.views[1].dense_tiles) * 64 * 64, int64_t(a.views[1].dense_tiles) * 32 * 32);
+  fixed.tile = 32;
+  const RemapTable c = BuildRemapTable(exact, layout, fixed);
+  EXPECT_EQ(c.views[0].tile, 32);
+  EXPECT_EQ(c.views[1].tile, 32);
+  // Views at 64 and 32 decode to the same coordinates within both tables' interpolation tolerance.
+  std::vector<float> x64, y64, x32, y32;
+  a.DecodeView(0, &x64, &y64);
+  c.DecodeView(0, &x32, &y32);
+  double worst = 0;
+  for (size_t k = 0; k < x64.size(); ++k) worst = std::max(worst, std::hypot(double(x64[k]) - x32[k], double(y64[k]) - y32[k]));
+  EXPECT_LT(worst, 2.0 / 64 + 2e-3);
+}
+
+// FNV-1a 64 as the mapping file's checksum (to write files that are intact but old or inconsistent).
+std::string WithChecksum(std::string body) {
+  uint64_t h = 1469598103934665603ull;
+  for (const char ch : body) h = (h ^ static_cast<unsigned char>(ch)) * 1099511628211ull;
+  body.append(reinterpret_cast<const char*>(&h), 8);
+  return body;
+}
+
 TEST(MappingFile, RoundTripAndDetectsCorruptionAndVersion) {
+  // Two article views (64-pixel tiles) and a panorama that crosses the rim (32): tile sizes differ per view.
   Layout layout = PresetLayout("article");
   layout.views.resize(2);
+  ViewSpec pano;
+  pano.name = "pano", pano.type = ViewProjection::kCylindrical, pano.width = 600, pano.height = 150;
+  pano.elevation_min_deg = -89, pano.elevation_max_deg = 10;
+  layout.views.push_back(pano);
   const RemapTable t = BuildRemapTable(AnyModel::Exact(Rig()), layout, {}, R"({"hovs": "test"})");
+  ASSERT_EQ(t.views[0].tile, 64);
+  ASSERT_EQ(t.views[2].tile, 32);
   const auto dir = TempDir();
   const auto path = dir / "article.hmap";
   SaveRemapTable(path, t);
   const RemapTable back = LoadRemapTable(path);
-  ASSERT_EQ(back.views.size(), 2u);
+  ASSERT_EQ(back.views.size(), 3u);
   EXPECT_EQ(back.header, t.header);
-  for (int v = 0; v < 2; ++v) {
+  for (int v = 0; v < 3; ++v) {
+    EXPECT_EQ(back.views[v].tile, t.views[v].tile);
     std::vector<float> a, b, c, d;
     t.DecodeView(v, &a, &b);
     back.DecodeView(v, &c, &d);
@@ -189,6 +240,28 @@ TEST(MappingFile, RoundTripAndDetectsCorruptionAndVersion) {
   std::string version = bytes;
   version[8] = 99;
   expect_error(write("version.hmap", version), "version");
+  // Version 1 (one tile size for all views, written in the header) is still read.
+  const std::string body = bytes.substr(0, bytes.size() - 8);
+  {
+    RemapOptions o32;
+    o32.tile = 32;
+    const auto p32 = dir / "tile32.hmap";
+    SaveRemapTable(p32, BuildRemapTable(AnyModel::Exact(Rig()), layout, o32));
+    std::ifstream in(p32, std::ios::binary);
+    std::string v1(std::istreambuf_iterator<char>(in), {});
+    v1 = v1.substr(0, v1.size() - 8);
+    v1[8] = 1;
+    const RemapTable old = LoadRemapTable(write("version1.hmap", WithChecksum(v1)));
+    ASSERT_EQ(old.views.size(), 3u);
+    EXPECT_EQ(old.views[0].tile, 32);
+  }
+  // A view's tile size that is not one of the four (intact checksum): the first view's record follows the header.
+  uint32_t header_length = 0;
+  std::memcpy(&header_length, body.data() + 12, 4);
+  std::string bad_tile = body;
+  const uint32_t seventeen = 17;
+  std::memcpy(&bad_tile[16 + header_length + 4 + 8], &seventeen, 4);
+  expect_error(write("tile.hmap", WithChecksum(bad_tile)), "tile size 17");
   expect_error(write("garbage.hmap", "hello world, not a mapping file"), "not a hovs mapping file");
   std::filesystem::remove_all(dir);
 }
@@ -243,29 +316,35 @@ TEST(Kernels, VectorAndScalarAgreeBitForBit) {
     // Whole tiles (partial ones too): a rotated, scaled, slightly curved patch well inside the image, written
     // into a larger output with a row stride, against the scalar rows of the same polynomials. Trials 6 and 7
     // take the AVX-512 Bayer tile's other path (row by row from the mosaic): a footprint wider than its patch
-    // (4 source columns per output pixel), and one whose taps reach a row's last 3 bytes.
-    for (int trial = 0; trial < 8; ++trial) {
-      const int T = 32, nu = trial % 3 == 0 || trial == 7 ? 32 : 9 + 5 * trial, nv = trial % 2 ? 32 : 7 + trial;
-      const float xscale = trial == 6 ? 4.f : 1.f, x0 = trial == 7 ? w - 42.f : 60.f + trial;
+    // (4 source columns per output pixel), and one whose taps reach a row's last 3 bytes. Trials 8-11 are
+    // 64-pixel tiles (what RemapOptions::tile = 0 gives views that fit): whole and partial, with a footprint
+    // the patch holds and, in trial 11, one wider than the RGB patch (row by row).
+    for (int trial = 0; trial < 12; ++trial) {
+      const bool large = trial >= 8;
+      const int T = large ? 64 : 32;
+      const int nu = large ? (trial % 2 ? 64 : 37) : trial % 3 == 0 || trial == 7 ? 32 : 9 + 5 * trial;
+      const int nv = large ? (trial == 9 ? 29 : 64) : trial % 2 ? 32 : 7 + trial;
+      const float xscale = trial == 6 ? 4.f : trial == 11 ? 1.5f : large ? 0.6f : 1.f;
+      const float x0 = trial == 7 ? w - 42.f : large ? 40.f + trial : 60.f + trial;
       Tile t;
       t.kind = TileKind::kInterp;
       for (int r = 0; r < 3; ++r)
         for (int q = 0; q < 3; ++q) {
-          const float u = 16.f * q, v = 16.f * r;
-          t.x[3 * r + q] = x0 + xscale * (1.3f * u - 0.4f * v + 0.01f * u * v);
-          t.y[3 * r + q] = 50 + 0.5f * u + 1.1f * v - 0.006f * u * u + 0.7f * trial;
+          const float u = 0.5f * T * q, v = 0.5f * T * r;
+          t.x[3 * r + q] = x0 + xscale * (1.3f * u - 0.4f * v + 0.01f * u * v * 32 / T);
+          t.y[3 * r + q] = (large ? 30 : 50) + 0.5f * u + (large ? 0.9f : 1.1f) * v - 0.006f * u * u * 32 / T + 0.7f * trial;
         }
-      const ptrdiff_t os = 3 * 40;
-      std::vector<uint8_t> got(size_t(os) * T, 7), want(size_t(os) * T, 7), ggot(40 * T, 7), gwant(40 * T, 7);
+      const ptrdiff_t os = 3 * 72;
+      std::vector<uint8_t> got(size_t(os) * T, 7), want(size_t(os) * T, 7), ggot(72 * T, 7), gwant(72 * T, 7);
       std::vector<uint8_t> bgot(size_t(os) * T, 7), bwant(size_t(os) * T, 7);
       kernels::BilinearRgbTile(rgb.data(), 3 * w, t, T, nu, nv, got.data(), os);
-      kernels::BilinearGrayTile(grey.data(), w, t, T, nu, nv, ggot.data(), 40);
+      kernels::BilinearGrayTile(grey.data(), w, t, T, nu, nv, ggot.data(), 72);
       kernels::BayerRgbTile(grey.data(), w, t, T, nu, nv, bgot.data(), os);
       kernels::RowCoords c;
       for (int j = 0; j < nv; ++j) {
         c.poly = InterpRowPoly(t, T, j);
         kernels::BilinearRgbRowScalar(rgb.data(), 3 * w, c, 0, nu, want.data() + j * os);
-        kernels::BilinearGrayRowScalar(grey.data(), w, c, 0, nu, gwant.data() + j * 40);
+        kernels::BilinearGrayRowScalar(grey.data(), w, c, 0, nu, gwant.data() + j * 72);
         kernels::BayerRgbRowScalar(grey.data(), w, c, 0, nu, bwant.data() + j * os);
       }
       const std::string what = std::string(kernels::ToString(isa)) + " tile " + std::to_string(trial);
