@@ -6,6 +6,8 @@
 
 #include <chrono>
 #include <filesystem>
+#include <optional>
+#include <thread>
 
 #include "raytrace/render.h"
 #include "scenes/scene_config.h"
@@ -98,27 +100,36 @@ void BM_RawIntersect16(benchmark::State& state) {
 }
 BENCHMARK(BM_RawIntersect16)->Arg(16)->Arg(8)->Unit(benchmark::kMillisecond)->UseRealTime()->Iterations(5);
 
-// The ratio in one figure: each iteration renders the frame with ground truth (fresh buffers for
-// argument 0, reused for 1) and traces the raw rays five times right after, each timed on its own, so that
-// both see the same state of this VM (whose speed drifts by tens of per cent within minutes). ratio = the
-// frame's rays per second over raw rtcIntersect16's, summed over the iterations; ratio_to_raw8 the same over
-// rtcIntersect8's (timed after the 16-wide passes).
+// The ratio in one figure: each iteration renders the frame with ground truth and traces the raw rays
+// five times right after, each timed on its own, so that both see the same state of this VM (whose speed drifts
+// by tens of per cent within minutes). ratio = the frame's rays per second over raw rtcIntersect16's, summed over
+// the iterations; ratio_to_raw8 the same over rtcIntersect8's (timed after the 16-wide passes). Argument: the
+// frame's buffers (the first frame, which maps memory new to the process, rendered before the timing): 0 fresh
+// ones, the previous frame's freed just before (inside the timing); 1 reused (RenderInto); 2 fresh ones, the previous frame's freed right after its render, so about a second before
+// (during the raw traces): on a VM whose hypervisor takes back guest memory that stays free (see
+// BM_FrameMemoryFirstTouch) the new buffers then come through host page faults.
 void BM_RenderRatioToRaw(benchmark::State& state) {
   const hovs::raytrace::RayScene scene(Scene().description);
   const RawRays raw(scene);
   hovs::raytrace::RenderOptions ro;
   ro.samples = 4;
   ro.ground_truth = true;
-  const bool reuse = state.range(0) != 0;
+  const int mode = static_cast<int>(state.range(0));
   hovs::raytrace::Frame kept;
-  if (reuse) hovs::raytrace::RenderInto(scene, hovs::raytrace::ViewCamera::Unit(0), ro, &kept);
+  if (mode == 1) hovs::raytrace::RenderInto(scene, hovs::raytrace::ViewCamera::Unit(0), ro, &kept);
+  std::optional<hovs::raytrace::Frame> previous;
+  if (mode == 0) previous = hovs::raytrace::Render(scene, hovs::raytrace::ViewCamera::Unit(0), ro);
   double frame_s = 0, raw_s = 0, raw8_s = 0, frame_rays = 0, raw_rays = 0;
   using Clock = std::chrono::steady_clock;
   for (auto _ : state) {
     auto t0 = Clock::now();
-    if (reuse) {
+    if (mode == 1) {
       hovs::raytrace::RenderInto(scene, hovs::raytrace::ViewCamera::Unit(0), ro, &kept);
       frame_rays += static_cast<double>(kept.rays);
+    } else if (mode == 0) {
+      previous.reset();
+      previous = hovs::raytrace::Render(scene, hovs::raytrace::ViewCamera::Unit(0), ro);
+      frame_rays += static_cast<double>(previous->rays);
     } else {
       const auto f = hovs::raytrace::Render(scene, hovs::raytrace::ViewCamera::Unit(0), ro);
       frame_rays += static_cast<double>(f.rays);
@@ -140,7 +151,35 @@ void BM_RenderRatioToRaw(benchmark::State& state) {
   state.counters["raw8_rays_per_s"] = raw_rays / raw8_s;
   state.counters["ratio_to_raw8"] = (frame_rays / frame_s) / (raw_rays / raw8_s);
 }
-BENCHMARK(BM_RenderRatioToRaw)->Arg(0)->Arg(1)->Unit(benchmark::kMillisecond)->UseRealTime()->Iterations(4);
+BENCHMARK(BM_RenderRatioToRaw)->Arg(0)->Arg(1)->Arg(2)->Unit(benchmark::kMillisecond)->UseRealTime()->Iterations(4);
+
+// What fresh frame buffers cost by themselves: the 362 MB of a 2750 x 2200 frame with ground truth (PixelBuffers
+// in huge pages, as Render allocates them), one write per 4 KiB page from both threads (the render's tiles write
+// every byte; the bytes themselves cost the same with reused buffers), then freed. Argument: for how long (ms)
+// the freed memory lies unused before the next frame's buffers are allocated (outside the timing). On a
+// virtual machine whose hypervisor takes freed guest memory back (free page reporting, as on the Firecracker VMs
+// this project is measured on: kernel command line page_reporting.page_reporting_order=11), memory that has been
+// free for more than about 1.5 s comes back through host page faults, which BM_RenderRatioToRaw/2 pays every
+// frame (its raw traces take about a second between two renders); memory freed a moment ago does not.
+void BM_FrameMemoryFirstTouch(benchmark::State& state) {
+  const size_t n = size_t(2750) * 2200 * (3 + hovs::raytrace::GroundTruth::kChannels);
+  const auto touch = [n] {
+    hovs::raytrace::PixelBuffer b(n);
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, n, size_t(1) << 20), [&](const tbb::blocked_range<size_t>& r) {
+      for (size_t i = r.begin(); i < r.end(); i += 1024) b[i] = 1.0f;
+    });
+    benchmark::DoNotOptimize(b.data());
+  };
+  touch();   // the process's first frame-sized touch (memory new to this process) is not what is measured
+  for (auto _ : state) {
+    state.PauseTiming();
+    std::this_thread::sleep_for(std::chrono::milliseconds(state.range(0)));
+    state.ResumeTiming();
+    touch();
+  }
+  state.counters["MB"] = static_cast<double>(n * sizeof(float)) / 1e6;
+}
+BENCHMARK(BM_FrameMemoryFirstTouch)->Arg(0)->Arg(2500)->Unit(benchmark::kMillisecond)->UseRealTime()->Iterations(4);
 
 }  // namespace
 
