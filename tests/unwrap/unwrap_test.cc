@@ -144,16 +144,23 @@ TEST(RemapTable, MinifyingTilesSampleThePyramid) {
   EXPECT_EQ(BuildRemapTable(AnyModel::Exact(Rig()), layout, no_aa).levels, 1);
 }
 
+// The first n article views and a cylindrical panorama from 89 degrees down to 10 up, which crosses the rim and
+// the camera's own reflection (dense and empty tiles; the automatic tile size keeps it at 32).
+Layout ArticleAndRimPanorama(int n, int pano_width, int pano_height) {
+  Layout layout = PresetLayout("article");
+  layout.views.resize(n);
+  ViewSpec pano;
+  pano.name = "pano", pano.type = ViewProjection::kCylindrical, pano.width = pano_width, pano.height = pano_height;
+  pano.elevation_min_deg = -89, pano.elevation_max_deg = 10;
+  layout.views.push_back(pano);
+  return layout;
+}
+
 TEST(RemapTable, AutomaticTileSizeIsChosenPerView) {
   // The default (tile 0): 64-pixel tiles for a perspective view well inside the mirror (all interp at 64), 32
   // for a panorama that crosses the rim and the camera's reflection (it has per-pixel tiles at either size, four
   // times the pixels of them at 64). An explicit size applies to every view.
-  Layout layout = PresetLayout("article");
-  layout.views.resize(1);
-  ViewSpec pano;
-  pano.name = "pano", pano.type = ViewProjection::kCylindrical, pano.width = 900, pano.height = 200;
-  pano.elevation_min_deg = -89, pano.elevation_max_deg = 10;
-  layout.views.push_back(pano);
+  const Layout layout = ArticleAndRimPanorama(1, 900, 200);
   const AnyModel exact = AnyModel::Exact(Rig());
   const RemapTable a = BuildRemapTable(exact, layout, {});
   ASSERT_EQ(a.views.size(), 2u);
@@ -189,12 +196,7 @@ std::string WithChecksum(std::string body) {
 
 TEST(MappingFile, RoundTripAndDetectsCorruptionAndVersion) {
   // Two article views (64-pixel tiles) and a panorama that crosses the rim (32): tile sizes differ per view.
-  Layout layout = PresetLayout("article");
-  layout.views.resize(2);
-  ViewSpec pano;
-  pano.name = "pano", pano.type = ViewProjection::kCylindrical, pano.width = 600, pano.height = 150;
-  pano.elevation_min_deg = -89, pano.elevation_max_deg = 10;
-  layout.views.push_back(pano);
+  const Layout layout = ArticleAndRimPanorama(2, 600, 150);
   const RemapTable t = BuildRemapTable(AnyModel::Exact(Rig()), layout, {}, R"({"hovs": "test"})");
   ASSERT_EQ(t.views[0].tile, 64);
   ASSERT_EQ(t.views[2].tile, 32);
@@ -412,18 +414,14 @@ TEST(Remap, BayerInputGivesTheRgbResultOnSmoothContent) {
 TEST(Remap, EveryInstructionSetGivesTheSameViews) {
   // Whole remaps (interp, dense and empty tiles, partial tiles at the views' edges, the per-thread bands and
   // their streamed copy): one perspective view and a small panorama that includes the rim and the camera's own
-  // reflection, RGB, grey and Bayer input, with the kernels limited to each instruction set the CPU runs.
+  // reflection, RGB, grey and Bayer input, with the kernels limited to each instruction set the CPU runs. The
+  // perspective view gets 64-pixel tiles, the panorama 32.
   const auto rig = Rig();
-  Layout layout = PresetLayout("article");
-  layout.views.resize(1);
-  layout.views[0].width = 333, layout.views[0].height = 211;
-  ViewSpec pano;
-  pano.name = "pano";
-  pano.type = ViewProjection::kCylindrical;
-  pano.width = 517, pano.height = 150;
-  pano.elevation_min_deg = -89, pano.elevation_max_deg = 10;
-  layout.views.push_back(pano);
+  Layout layout = ArticleAndRimPanorama(1, 517, 150);
+  layout.views[0].width = 900, layout.views[0].height = 455;   // partial tiles at the right and bottom edges
   const RemapTable t = BuildRemapTable(AnyModel::Exact(rig), layout, {});
+  ASSERT_EQ(t.views[0].tile, 64);
+  ASSERT_EQ(t.views[1].tile, 32);
   int dense = 0, empty = 0;
   for (const auto& v : t.views) dense += v.dense_tiles, empty += v.empty_tiles;
   ASSERT_GT(dense, 0);
