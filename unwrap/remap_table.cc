@@ -4,8 +4,8 @@
 
 #include <atomic>
 #include <chrono>
-#include <optional>
 #include <cstring>
+#include <optional>
 #include <nlohmann/json.hpp>
 
 #include "core/error.h"
@@ -17,6 +17,8 @@ namespace {
 constexpr char kMagic[8] = {'H', 'O', 'V', 'S', 'M', 'A', 'P', '\0'};
 constexpr uint32_t kFormatVersion = 2;
 constexpr uint32_t kOldestReadableVersion = 1;   // one tile size for every view
+
+bool IsTileSize(int t) { return t == 8 || t == 16 || t == 32 || t == 64; }
 
 int32_t ToFixed(double v) { return static_cast<int32_t>(std::llround(v * 65536.0)); }
 double FromFixed(int32_t v) { return v / 65536.0; }
@@ -195,7 +197,7 @@ nlohmann::json ModelJson(const AnyModel& model) {
 }  // namespace
 
 void RemapOptions::Check(const std::string& where) const {
-  HOVS_REQUIRE(tile == 0 || tile == 8 || tile == 16 || tile == 32 || tile == 64, where,
+  HOVS_REQUIRE(tile == 0 || IsTileSize(tile), where,
                "tile must be 8, 16, 32 or 64, or 0 for automatic (got ", tile, ")");
   HOVS_REQUIRE(max_interp_error > 0 && max_interp_error <= 0.5, where,
                "max_interp_error must be in (0, 0.5] px (got ", max_interp_error, ")");
@@ -401,7 +403,7 @@ RemapTable LoadRemapTable(const std::filesystem::path& path) {
       v.tiles_y = static_cast<int>(r.Get<uint32_t>("tiles_y"));
       const uint32_t tile = r.Get<uint32_t>("tile size");
       const uint32_t count = r.Get<uint32_t>("tile count");
-      HOVS_REQUIRE((tile == 8 || tile == 16 || tile == 32 || tile == 64) && (header_tile == 0 || int(tile) == header_tile),
+      HOVS_REQUIRE(IsTileSize(int(tile)) && (header_tile == 0 || int(tile) == header_tile),
                    where, "view '", v.spec.name, "' has tile size ", tile, " (the header asks for ", header_tile, ")");
       v.tile = static_cast<int>(tile);
       HOVS_REQUIRE(v.tiles_x == (v.view.width + v.tile - 1) / v.tile && v.tiles_y == (v.view.height + v.tile - 1) / v.tile &&
