@@ -105,8 +105,8 @@ Runner SetupUnwrap(CLI::App* sub, const GlobalOptions* global) {
   sub->add_option("--format", o->format, "auto | rgb | gray | bayer_rggb (input pixel format)")->capture_default_str();
   sub->add_option("--scene-distance", o->scene_distance, "m; depth at which a non-single-viewpoint rig is unwrapped")
       ->capture_default_str();
-  sub->add_option("--tile", o->tile, "tile size of the mapping (8, 16, 32, 64; 0: 64 for each view that needs no per-pixel "
-                  "coordinates at that size, else 32)")->capture_default_str();
+  sub->add_option("--tile", o->tile, "tile size of the mapping (8, 16, 32, 64; 0: per view, 64 where every tile of the view is "
+                  "interpolated at that size without minifying, else 32)")->capture_default_str();
   sub->add_option("--truth-scene", o->truth_scene,
                   "scene YAML the input was rendered from: render each perspective view with a pinhole camera at the "
                   "unit's viewpoint and report PSNR against it");
