@@ -216,11 +216,11 @@ TEST(MappingFile, RoundTripAndDetectsCorruptionAndVersion) {
   }
   EXPECT_NE(MappingFileHeader(path).find("\"exact\""), std::string::npos);
 
-  std::string bytes;
-  {
-    std::ifstream in(path, std::ios::binary);
-    bytes.assign(std::istreambuf_iterator<char>(in), {});
-  }
+  const auto read = [](const std::filesystem::path& p) {
+    std::ifstream in(p, std::ios::binary);
+    return std::string(std::istreambuf_iterator<char>(in), {});
+  };
+  const std::string bytes = read(path);
   const auto write = [&](const std::string& name, const std::string& content) {
     std::ofstream out(dir / name, std::ios::binary);
     out.write(content.data(), static_cast<std::streamsize>(content.size()));
@@ -243,14 +243,12 @@ TEST(MappingFile, RoundTripAndDetectsCorruptionAndVersion) {
   version[8] = 99;
   expect_error(write("version.hmap", version), "version");
   // Version 1 (one tile size for all views, written in the header) is still read.
-  const std::string body = bytes.substr(0, bytes.size() - 8);
   {
     RemapOptions o32;
     o32.tile = 32;
     const auto p32 = dir / "tile32.hmap";
     SaveRemapTable(p32, BuildRemapTable(AnyModel::Exact(Rig()), layout, o32));
-    std::ifstream in(p32, std::ios::binary);
-    std::string v1(std::istreambuf_iterator<char>(in), {});
+    std::string v1 = read(p32);
     v1 = v1.substr(0, v1.size() - 8);
     v1[8] = 1;
     const RemapTable old = LoadRemapTable(write("version1.hmap", WithChecksum(v1)));
@@ -258,6 +256,7 @@ TEST(MappingFile, RoundTripAndDetectsCorruptionAndVersion) {
     EXPECT_EQ(old.views[0].tile, 32);
   }
   // A view's tile size that is not one of the four (intact checksum): the first view's record follows the header.
+  const std::string body = bytes.substr(0, bytes.size() - 8);
   uint32_t header_length = 0;
   std::memcpy(&header_length, body.data() + 12, 4);
   std::string bad_tile = body;
