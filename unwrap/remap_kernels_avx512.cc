@@ -82,6 +82,8 @@ HOVS_AVX512 inline __m128i TwoWords(const uint8_t* base, const int32_t* offs) {
   const __m128i lo = _mm_loadl_epi64(reinterpret_cast<const __m128i*>(base + offs[0]));
   return _mm_castpd_si128(_mm_loadh_pd(_mm_castsi128_pd(lo), reinterpret_cast<const double*>(base + offs[1])));
 }
+// A compiler barrier: the values at offs are read from memory after it (see PatchBayer16).
+inline void OffsetsInMemory(const int32_t* offs) { asm volatile("" : : "r"(offs) : "memory"); }
 HOVS_AVX512 inline __m512i EightWords(const uint8_t* base, const int32_t* offs) {
   __m512i w = _mm512_castsi128_si512(TwoWords(base, offs));
   w = _mm512_inserti32x4(w, TwoWords(base, offs + 2), 1);
@@ -259,10 +261,15 @@ HOVS_AVX512 inline void PatchBayer16(const uint8_t* patch, ptrdiff_t pstride, __
   alignas(64) int32_t offs[16];
   _mm512_store_si512(offs, _mm512_add_epi32(_mm512_mullo_epi32(row, _mm512_set1_epi32(static_cast<int>(pstride))),
                                             _mm512_add_epi32(col, col)));
-  // Pixel p's word is bytes 8p .. 8p + 7 of (t0, t1) (pixels 0-7 in t0, 8-15 in t1), rows ra, ra + 1 ...
-  const __m512i t0 = EightWords(patch, offs), t1 = EightWords(patch, offs + 8);
-  // ... and of (b0, b1), rows ra + 2, ra + 3.
-  const __m512i b0 = EightWords(patch + 2 * pstride, offs), b1 = EightWords(patch + 2 * pstride, offs + 8);
+  // Pixel p's word is bytes 8p .. 8p + 7 of (t0, t1) (pixels 0-7 in t0, 8-15 in t1), rows ra, ra + 1, and of
+  // (b0, b1), rows ra + 2, ra + 3. The two compiler barriers make GCC read the offsets back with scalar loads,
+  // eight at a time: left alone it took all sixteen out of the register (vpextrd, valignd, on the shuffle ports
+  // the inserts need) and ran out of general registers. Session 19, one core, four interleaved rounds: 7.27-7.95
+  // -> 6.72-7.18 ms for the six views (the RGB step, tried the same way, got slower).
+  OffsetsInMemory(offs);
+  const __m512i t0 = EightWords(patch, offs), b0 = EightWords(patch + 2 * pstride, offs);
+  OffsetsInMemory(offs);
+  const __m512i t1 = EightWords(patch, offs + 8), b1 = EightWords(patch + 2 * pstride, offs + 8);
   // Byte k of the even grids' dword is column start + (1, 3, 0, 2)[k] (co = ce - 1) or (0, 2, 1, 3)[k]
   // (co = ce + 1), as Bayer16's idx, of the even grid's row: ra + 1 when pye's bit 15 is clear (the odd grid
   // then lies a row above), ra when it is set; the odd grids' the other row of the pair. Index 8p + 2c + s into
