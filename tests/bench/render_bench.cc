@@ -100,14 +100,15 @@ void BM_RawIntersect16(benchmark::State& state) {
 }
 BENCHMARK(BM_RawIntersect16)->Arg(16)->Arg(8)->Unit(benchmark::kMillisecond)->UseRealTime()->Iterations(5);
 
-// The ratio in one figure: each iteration renders the frame with ground truth and traces the raw rays
-// five times right after, each timed on its own, so that both see the same state of this VM (whose speed drifts
-// by tens of per cent within minutes). ratio = the frame's rays per second over raw rtcIntersect16's, summed over
-// the iterations; ratio_to_raw8 the same over rtcIntersect8's (timed after the 16-wide passes). Argument: the
-// frame's buffers (the first frame, which maps memory new to the process, rendered before the timing): 0 fresh
-// ones, the previous frame's freed just before (inside the timing); 1 reused (RenderInto); 2 fresh ones, the previous frame's freed right after its render, so about a second before
-// (during the raw traces): on a VM whose hypervisor takes back guest memory that stays free (see
-// BM_FrameMemoryFirstTouch) the new buffers then come through host page faults.
+// The ratio in one figure: each iteration renders the frame with ground truth and traces the raw rays five
+// times right after, each timed on its own, so that both see the same state of this VM (whose speed drifts by tens
+// of per cent within minutes). ratio = the frame's rays per second over raw rtcIntersect16's, summed over the
+// iterations; ratio_to_raw8 the same over rtcIntersect8's (timed after the 16-wide passes). Argument: the frame's
+// buffers (the first frame, which maps memory new to the process, rendered before the timing): 0 fresh ones, the
+// previous frame's freed just before (inside the timing); 1 reused (RenderInto); 2 fresh ones, the previous
+// frame's freed right after its render, so about a second before (during the raw traces): on a VM whose hypervisor
+// takes back guest memory that stays free (see BM_FrameMemoryFirstTouch) the new buffers then come through host
+// page faults.
 void BM_RenderRatioToRaw(benchmark::State& state) {
   const hovs::raytrace::RayScene scene(Scene().description);
   const RawRays raw(scene);
