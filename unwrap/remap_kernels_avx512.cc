@@ -82,8 +82,6 @@ HOVS_AVX512 inline __m128i TwoWords(const uint8_t* base, const int32_t* offs) {
   const __m128i lo = _mm_loadl_epi64(reinterpret_cast<const __m128i*>(base + offs[0]));
   return _mm_castpd_si128(_mm_loadh_pd(_mm_castsi128_pd(lo), reinterpret_cast<const double*>(base + offs[1])));
 }
-// A compiler barrier: the values at offs are read from memory after it (see PatchBayer16).
-inline void OffsetsInMemory(const int32_t* offs) { asm volatile("" : : "r"(offs) : "memory"); }
 HOVS_AVX512 inline __m512i EightWords(const uint8_t* base, const int32_t* offs) {
   __m512i w = _mm512_castsi128_si512(TwoWords(base, offs));
   w = _mm512_inserti32x4(w, TwoWords(base, offs + 2), 1);
@@ -91,24 +89,29 @@ HOVS_AVX512 inline __m512i EightWords(const uint8_t* base, const int32_t* offs) 
   return _mm512_inserti32x4(w, TwoWords(base, offs + 6), 3);
 }
 
-// 16 RGB pixels (bilinear) at 16.16 coordinates (x, y); the first `count` are stored at o.
-HOVS_AVX512 inline bool Rgb16(const uint8_t* data, ptrdiff_t stride, __m512i x, __m512i y, int count, uint8_t* o) {
+// The byte offsets of 16 RGB pixels' top-left taps at 16.16 coordinates (x, y) in an image of row stride `stride`.
+HOVS_AVX512 inline __m512i RgbOffsets(ptrdiff_t stride, __m512i x, __m512i y) {
+  const __m512i ix = _mm512_srai_epi32(_mm512_add_epi32(x, _mm512_set1_epi32(kHalf)), 16);
+  const __m512i iy = _mm512_srai_epi32(_mm512_add_epi32(y, _mm512_set1_epi32(kHalf)), 16);
+  return _mm512_add_epi32(_mm512_mullo_epi32(iy, _mm512_set1_epi32(static_cast<int>(stride))),
+                          _mm512_add_epi32(ix, _mm512_add_epi32(ix, ix)));
+}
+
+// 16 RGB pixels (bilinear) at 16.16 coordinates (x, y) whose tap offsets (RgbOffsets) are at offs; the first
+// `count` are stored at o.
+HOVS_AVX512 inline void RgbAt(const uint8_t* data, ptrdiff_t stride, const int32_t* offs, __m512i x, __m512i y, int count,
+                              uint8_t* o) {
   const __m512i m63 = _mm512_set1_epi32(63), c64 = _mm512_set1_epi32(64);
   x = _mm512_add_epi32(x, _mm512_set1_epi32(kHalf));
   y = _mm512_add_epi32(y, _mm512_set1_epi32(kHalf));
-  const __m512i ix = _mm512_srai_epi32(x, 16), iy = _mm512_srai_epi32(y, 16);
   const __m512i fx = _mm512_and_si512(_mm512_srai_epi32(x, 10), m63);
   const __m512i fy = _mm512_and_si512(_mm512_srai_epi32(y, 10), m63);
-  const __m512i off = _mm512_add_epi32(_mm512_mullo_epi32(iy, _mm512_set1_epi32(static_cast<int>(stride))),
-                                       _mm512_add_epi32(ix, _mm512_add_epi32(ix, ix)));
   const __m512i wxd = _mm512_or_si512(_mm512_slli_epi32(fx, 8), _mm512_sub_epi32(c64, fx));
   const __m512i wyd = _mm512_slli_epi32(fy, 9);
   // (left, right) byte pairs of R, G, B in each pixel's 8-byte word.
   const __m512i pairs = _mm512_broadcast_i32x4(_mm_setr_epi8(0, 3, 1, 4, 2, 5, -1, -1, 8, 11, 9, 12, 10, 13, -1, -1));
   const __m512i round = _mm512_set1_epi16(32);
   __m512i v[2];
-  alignas(64) int32_t offs[16];
-  _mm512_store_si512(offs, off);
   for (int h = 0; h < 2; ++h) {
     const __m512i top = EightWords(data, offs + 8 * h), bot = EightWords(data + stride, offs + 8 * h);
     const __m512i wx = RepeatLowWord(Widen(wxd, h)), wy = RepeatLowWord(Widen(wyd, h));
@@ -124,6 +127,13 @@ HOVS_AVX512 inline bool Rgb16(const uint8_t* data, ptrdiff_t stride, __m512i x, 
       53, 54, 8,  9,  10, 12, 13, 14, 24, 25, 26, 28, 29, 30, 40, 41, 42, 44, 45, 46, 56, 57,
       58, 60, 61, 62, 0,  0,  0,  0,  0,  0,  0,  0,  0,  0,  0,  0,  0,  0,  0,  0};
   Store48(_mm512_permutexvar_epi8(_mm512_load_si512(kOrder), packed), 3 * count, o);
+}
+
+// 16 RGB pixels (bilinear) at 16.16 coordinates (x, y); the first `count` are stored at o.
+HOVS_AVX512 inline bool Rgb16(const uint8_t* data, ptrdiff_t stride, __m512i x, __m512i y, int count, uint8_t* o) {
+  alignas(64) int32_t offs[16];
+  _mm512_store_si512(offs, RgbOffsets(stride, x, y));
+  RgbAt(data, stride, offs, x, y, count, o);
   return true;
 }
 
@@ -249,26 +259,23 @@ HOVS_AVX512 inline bool Bayer16(const uint8_t* data, ptrdiff_t stride, __m512i x
 // the mosaic: pair row k of the patch holds mosaic rows r0 + k and r0 + k + 1 byte by byte (byte 2 j + s is
 // row r0 + k + s, column c0 + j), so a pixel's four tap rows (ra .. ra + 3, ra = min(even grid row, odd grid
 // row)) and four tap columns (start .. start + 3) are two 8-byte words, at pair rows ra - r0 and ra - r0 + 2:
-// 32 plain loads per 16 pixels instead of four 16-lane gathers (64 elements). origin: the patch's first column
-// and row, plus one. Bit-identical to Bayer16: the same taps reach BayerCombine in the same byte order.
-HOVS_AVX512 inline void PatchBayer16(const uint8_t* patch, ptrdiff_t pstride, __m512i origin_c, __m512i origin_r,
-                                     __m512i x, __m512i y, int count, uint8_t* o) {
-  const __m512i half = _mm512_set1_epi32(kHalf), bit15 = _mm512_set1_epi32(0x8000);
+// 32 plain loads per 16 pixels instead of four 16-lane gathers (64 elements). The words' offsets in the patch
+// (PatchBayerOffsets; origin: the patch's first column and row, plus one) are read from offs. Bit-identical to
+// Bayer16: the same taps reach BayerCombine in the same byte order.
+HOVS_AVX512 inline __m512i PatchBayerOffsets(ptrdiff_t pstride, __m512i origin_c, __m512i origin_r, __m512i x, __m512i y) {
+  const __m512i half = _mm512_set1_epi32(kHalf);
   const __m512i pxe = _mm512_add_epi32(_mm512_srai_epi32(x, 1), half);
   const __m512i pye = _mm512_add_epi32(_mm512_srai_epi32(y, 1), half);
   const __m512i col = _mm512_sub_epi32(_mm512_srai_epi32(pxe, 15), origin_c);   // start - c0
   const __m512i row = _mm512_sub_epi32(_mm512_srai_epi32(pye, 15), origin_r);   // ra - r0
-  alignas(64) int32_t offs[16];
-  _mm512_store_si512(offs, _mm512_add_epi32(_mm512_mullo_epi32(row, _mm512_set1_epi32(static_cast<int>(pstride))),
-                                            _mm512_add_epi32(col, col)));
-  // Pixel p's word is bytes 8p .. 8p + 7 of (t0, t1) (pixels 0-7 in t0, 8-15 in t1), rows ra, ra + 1, and of
-  // (b0, b1), rows ra + 2, ra + 3. The two compiler barriers make GCC read the offsets back with scalar loads,
-  // eight at a time: left alone it took all sixteen out of the register (vpextrd, valignd, on the shuffle ports
-  // the inserts need) and ran out of general registers. Session 19, one core, four interleaved rounds: 7.27-7.95
-  // -> 6.72-7.18 ms for the six views (the RGB step, tried the same way, got slower).
-  OffsetsInMemory(offs);
+  return _mm512_add_epi32(_mm512_mullo_epi32(row, _mm512_set1_epi32(static_cast<int>(pstride))), _mm512_add_epi32(col, col));
+}
+HOVS_AVX512 inline void PatchBayer16(const uint8_t* patch, ptrdiff_t pstride, const int32_t* offs,
+                                     __m512i x, __m512i y, int count, uint8_t* o) {
+  const __m512i half = _mm512_set1_epi32(kHalf), bit15 = _mm512_set1_epi32(0x8000);
+  const __m512i pxe = _mm512_add_epi32(_mm512_srai_epi32(x, 1), half);
+  const __m512i pye = _mm512_add_epi32(_mm512_srai_epi32(y, 1), half);
   const __m512i t0 = EightWords(patch, offs), b0 = EightWords(patch + 2 * pstride, offs);
-  OffsetsInMemory(offs);
   const __m512i t1 = EightWords(patch, offs + 8), b1 = EightWords(patch + 2 * pstride, offs + 8);
   // Byte k of the even grids' dword is column start + (1, 3, 0, 2)[k] (co = ce - 1) or (0, 2, 1, 3)[k]
   // (co = ce + 1), as Bayer16's idx, of the even grid's row: ra + 1 when pye's bit 15 is clear (the odd grid
@@ -367,6 +374,24 @@ struct TilePass {
     c0 = cell(_mm512_reduce_min_epi32(xmin)), c1 = cell(_mm512_reduce_max_epi32(xmax));
     r0 = cell(_mm512_reduce_min_epi32(ymin)), r1 = cell(_mm512_reduce_max_epi32(ymax));
   }
+  // Pass 3 of the RGB and Bayer tiles: step(offs, j, i) for the 16 pixels from (i, j), where offs holds the 16
+  // patch offsets offsets(j, i) of their words. The offsets of a tile row are computed and stored one row ahead
+  // of their use, so the steps' scalar loads of them read L1, never a store still in flight: stored just before
+  // (or taken out of the register, GCC's choice when it sees both) they waited on store-to-load forwarding from
+  // a 64-byte store, which held back every step's loads. Session 20, one core, three interleaved rounds each:
+  // Bayer 7.2-7.4 -> 5.5-5.9 ms, RGB 8.6-8.7 -> 7.3-8.2 ms for the six views (bit-identical).
+  template <class Offsets, class Step>
+  HOVS_AVX512 void PixelSteps(int nu, int nv, Offsets offsets, Step step) const {
+    alignas(64) int32_t offs[2][kRow];
+    const auto row = [&](int j) HOVS_AVX512 {
+      for (int i = 0; i < nu; i += 16) _mm512_store_si512(offs[j & 1] + i, offsets(j, i));
+    };
+    row(0);
+    for (int j = 0; j < nv; ++j) {
+      if (j + 1 < nv) row(j + 1);
+      for (int i = 0; i < nu; i += 16) step(offs[j & 1] + i, j, i);
+    }
+  }
   HOVS_AVX512 __m512i X(int j, int i) const { return _mm512_load_si512(xs + j * kRow + i); }
   HOVS_AVX512 __m512i Y(int j, int i) const { return _mm512_load_si512(ys + j * kRow + i); }
 };
@@ -417,10 +442,15 @@ HOVS_AVX512 void BilinearRgbTile(const uint8_t* src, ptrdiff_t stride, const Til
   const ptrdiff_t pstride = PatchStride(bytes);
   CopyPatch(src, stride, p.r0, rows, 3 * ptrdiff_t(p.c0), bytes, p.patch, pstride);
   const __m512i dx = _mm512_set1_epi32(p.c0 * 65536), dy = _mm512_set1_epi32(p.r0 * 65536);
-  for (int j = 0; j < nv; ++j)
-    for (int i = 0; i < nu; i += 16)
-      Rgb16(p.patch, pstride, _mm512_sub_epi32(p.X(j, i), dx), _mm512_sub_epi32(p.Y(j, i), dy), nu - i < 16 ? nu - i : 16,
-            out + j * ostride + 3 * i);
+  p.PixelSteps(
+      nu, nv,
+      [&](int j, int i) HOVS_AVX512 {
+        return RgbOffsets(pstride, _mm512_sub_epi32(p.X(j, i), dx), _mm512_sub_epi32(p.Y(j, i), dy));
+      },
+      [&](const int32_t* offs, int j, int i) HOVS_AVX512 {
+        RgbAt(p.patch, pstride, offs, _mm512_sub_epi32(p.X(j, i), dx), _mm512_sub_epi32(p.Y(j, i), dy),
+              nu - i < 16 ? nu - i : 16, out + j * ostride + 3 * i);
+      });
 }
 
 // Grey: a pixel's taps are columns c .. c + 1 of rows r .. r + 1 (its cell (c, r)): pair rows r0 .. r1, columns
@@ -460,10 +490,11 @@ HOVS_AVX512 void BayerRgbTile(const uint8_t* src, ptrdiff_t stride, const Tile& 
   const ptrdiff_t pstride = PatchStride(2 * columns);
   CopyPairPatch(src, stride, p.r0 - 1, pairs, p.c0 - 1, columns, p.patch, pstride);
   const __m512i origin_c = _mm512_set1_epi32(p.c0), origin_r = _mm512_set1_epi32(p.r0);
-  for (int j = 0; j < nv; ++j)
-    for (int i = 0; i < nu; i += 16)
-      PatchBayer16(p.patch, pstride, origin_c, origin_r, p.X(j, i), p.Y(j, i), nu - i < 16 ? nu - i : 16,
-                   out + j * ostride + 3 * i);
+  p.PixelSteps(
+      nu, nv, [&](int j, int i) HOVS_AVX512 { return PatchBayerOffsets(pstride, origin_c, origin_r, p.X(j, i), p.Y(j, i)); },
+      [&](const int32_t* offs, int j, int i) HOVS_AVX512 {
+        PatchBayer16(p.patch, pstride, offs, p.X(j, i), p.Y(j, i), nu - i < 16 ? nu - i : 16, out + j * ostride + 3 * i);
+      });
 }
 
 }  // namespace hovs::unwrap::kernels::avx512
