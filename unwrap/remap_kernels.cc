@@ -120,12 +120,20 @@ __attribute__((target("avx2"))) inline void StoreRgb8(__m256i p, uint8_t* d) {
   std::memcpy(d + 20, &last, 4);
 }
 
-// 8 pixels per step. The two source pixels of each row are read with one unaligned 64-bit load per pixel and
-// row (R0 G0 B0 R1 G1 B1 . .): cheaper than gathers on the machines measured (AMD Zen 3: 2x).
-__attribute__((target("avx2"))) void BilinearRgbRowAvx2(const uint8_t* data, ptrdiff_t stride, const RowCoords& c,
-                                                         int i0, int n, uint8_t* o) {
+// The byte offsets of 8 RGB pixels' top-left taps at 16.16 coordinates (x, y) in an image of row stride `stride`.
+__attribute__((target("avx2"))) inline __m256i RgbOffsets8(ptrdiff_t stride, __m256i x, __m256i y) {
+  const __m256i half = _mm256_set1_epi32(kHalf);
+  const __m256i ix = _mm256_srai_epi32(_mm256_add_epi32(x, half), 16), iy = _mm256_srai_epi32(_mm256_add_epi32(y, half), 16);
+  return _mm256_add_epi32(_mm256_mullo_epi32(iy, _mm256_set1_epi32(static_cast<int>(stride))),
+                          _mm256_add_epi32(ix, _mm256_add_epi32(ix, ix)));
+}
+
+// 8 RGB pixels at 16.16 coordinates (x, y) whose tap offsets (RgbOffsets8) are off[0 .. 7], stored as 24 bytes
+// at o. The two source pixels of each row are read with one unaligned 64-bit load per pixel and row
+// (R0 G0 B0 R1 G1 B1 . .): cheaper than gathers on the machines measured (AMD Zen 3: 2x).
+__attribute__((target("avx2"))) inline void RgbAt8(const uint8_t* data, ptrdiff_t stride, const int32_t* off, __m256i x,
+                                                   __m256i y, uint8_t* o) {
   const __m256i half = _mm256_set1_epi32(kHalf), m63 = _mm256_set1_epi32(63), c64 = _mm256_set1_epi32(64);
-  const __m256i vstride = _mm256_set1_epi32(static_cast<int>(stride));
   const __m256i round = _mm256_set1_epi16(32);
   // (left, right) byte pairs of R, G, B for the two pixels of each 128-bit lane.
   const __m256i pairs = _mm256_setr_epi8(0, 3, 1, 4, 2, 5, -1, -1, 8, 11, 9, 12, 10, 13, -1, -1,
@@ -138,44 +146,47 @@ __attribute__((target("avx2"))) void BilinearRgbRowAvx2(const uint8_t* data, ptr
   const __m256i repB = _mm256_setr_epi8(8, 9, 8, 9, 8, 9, 8, 9, 12, 13, 12, 13, 12, 13, 12, 13,
                                         8, 9, 8, 9, 8, 9, 8, 9, 12, 13, 12, 13, 12, 13, 12, 13);
   const uint8_t* d2 = data + stride;
-  alignas(32) int32_t off[8];
   const auto load = [](const uint8_t* p) {
     long long v;
     std::memcpy(&v, p, 8);
     return v;
   };
+  x = _mm256_add_epi32(x, half);
+  y = _mm256_add_epi32(y, half);
+  const __m256i fx = _mm256_and_si256(_mm256_srai_epi32(x, 10), m63);
+  const __m256i fy = _mm256_and_si256(_mm256_srai_epi32(y, 10), m63);
+  const __m256i tA = _mm256_setr_epi64x(load(data + off[0]), load(data + off[1]), load(data + off[4]), load(data + off[5]));
+  const __m256i tB = _mm256_setr_epi64x(load(data + off[2]), load(data + off[3]), load(data + off[6]), load(data + off[7]));
+  const __m256i bA = _mm256_setr_epi64x(load(d2 + off[0]), load(d2 + off[1]), load(d2 + off[4]), load(d2 + off[5]));
+  const __m256i bB = _mm256_setr_epi64x(load(d2 + off[2]), load(d2 + off[3]), load(d2 + off[6]), load(d2 + off[7]));
+  const __m256i wxd = _mm256_or_si256(_mm256_slli_epi32(fx, 8), _mm256_sub_epi32(c64, fx));
+  const __m256i wyd = _mm256_slli_epi32(fy, 9);   // fy << 9 in the low 16 bits
+  const __m256i wxA = _mm256_shuffle_epi8(wxd, repA), wxB = _mm256_shuffle_epi8(wxd, repB);
+  const __m256i wyA = _mm256_shuffle_epi8(wyd, repA), wyB = _mm256_shuffle_epi8(wyd, repB);
+  // Horizontal: R G B 0 per pixel (16-bit).
+  const __m256i htA = _mm256_maddubs_epi16(_mm256_shuffle_epi8(tA, pairs), wxA);
+  const __m256i htB = _mm256_maddubs_epi16(_mm256_shuffle_epi8(tB, pairs), wxB);
+  const __m256i hbA = _mm256_maddubs_epi16(_mm256_shuffle_epi8(bA, pairs), wxA);
+  const __m256i hbB = _mm256_maddubs_epi16(_mm256_shuffle_epi8(bB, pairs), wxB);
+  // Vertical (VerticalStep), then (v + 32) >> 6.
+  __m256i vA = _mm256_add_epi16(htA, _mm256_mulhrs_epi16(_mm256_sub_epi16(hbA, htA), wyA));
+  __m256i vB = _mm256_add_epi16(htB, _mm256_mulhrs_epi16(_mm256_sub_epi16(hbB, htB), wyB));
+  vA = _mm256_srli_epi16(_mm256_add_epi16(vA, round), 6);
+  vB = _mm256_srli_epi16(_mm256_add_epi16(vB, round), 6);
+  // Packed dwords come out in pixel order: 0 1 2 3 | 4 5 6 7.
+  StoreRgb8(_mm256_packus_epi16(vA, vB), o);
+}
+
+// 8 pixels per step (RgbAt8).
+__attribute__((target("avx2"))) void BilinearRgbRowAvx2(const uint8_t* data, ptrdiff_t stride, const RowCoords& c,
+                                                         int i0, int n, uint8_t* o) {
+  alignas(32) int32_t off[8];
   int i = 0;
   for (; i + 8 <= n; i += 8) {
     __m256i x, y;
     Coords8(c, i0 + i, &x, &y);
-    x = _mm256_add_epi32(x, half);
-    y = _mm256_add_epi32(y, half);
-    const __m256i ix = _mm256_srai_epi32(x, 16), iy = _mm256_srai_epi32(y, 16);
-    const __m256i fx = _mm256_and_si256(_mm256_srai_epi32(x, 10), m63);
-    const __m256i fy = _mm256_and_si256(_mm256_srai_epi32(y, 10), m63);
-    _mm256_store_si256(reinterpret_cast<__m256i*>(off),
-                       _mm256_add_epi32(_mm256_mullo_epi32(iy, vstride), _mm256_add_epi32(ix, _mm256_add_epi32(ix, ix))));
-    const __m256i tA = _mm256_setr_epi64x(load(data + off[0]), load(data + off[1]), load(data + off[4]), load(data + off[5]));
-    const __m256i tB = _mm256_setr_epi64x(load(data + off[2]), load(data + off[3]), load(data + off[6]), load(data + off[7]));
-    const __m256i bA = _mm256_setr_epi64x(load(d2 + off[0]), load(d2 + off[1]), load(d2 + off[4]), load(d2 + off[5]));
-    const __m256i bB = _mm256_setr_epi64x(load(d2 + off[2]), load(d2 + off[3]), load(d2 + off[6]), load(d2 + off[7]));
-    const __m256i wxd = _mm256_or_si256(_mm256_slli_epi32(fx, 8), _mm256_sub_epi32(c64, fx));
-    const __m256i wyd = _mm256_slli_epi32(fy, 9);   // fy << 9 in the low 16 bits
-    const __m256i wxA = _mm256_shuffle_epi8(wxd, repA), wxB = _mm256_shuffle_epi8(wxd, repB);
-    const __m256i wyA = _mm256_shuffle_epi8(wyd, repA), wyB = _mm256_shuffle_epi8(wyd, repB);
-    // Horizontal: R G B 0 per pixel (16-bit).
-    const __m256i htA = _mm256_maddubs_epi16(_mm256_shuffle_epi8(tA, pairs), wxA);
-    const __m256i htB = _mm256_maddubs_epi16(_mm256_shuffle_epi8(tB, pairs), wxB);
-    const __m256i hbA = _mm256_maddubs_epi16(_mm256_shuffle_epi8(bA, pairs), wxA);
-    const __m256i hbB = _mm256_maddubs_epi16(_mm256_shuffle_epi8(bB, pairs), wxB);
-    // Vertical (VerticalStep), then (v + 32) >> 6.
-    __m256i vA = _mm256_add_epi16(htA, _mm256_mulhrs_epi16(_mm256_sub_epi16(hbA, htA), wyA));
-    __m256i vB = _mm256_add_epi16(htB, _mm256_mulhrs_epi16(_mm256_sub_epi16(hbB, htB), wyB));
-    vA = _mm256_srli_epi16(_mm256_add_epi16(vA, round), 6);
-    vB = _mm256_srli_epi16(_mm256_add_epi16(vB, round), 6);
-    // Packed dwords come out in pixel order: 0 1 2 3 | 4 5 6 7.
-    const __m256i p = _mm256_packus_epi16(vA, vB);
-    StoreRgb8(p, o + 3 * i);
+    _mm256_store_si256(reinterpret_cast<__m256i*>(off), RgbOffsets8(stride, x, y));
+    RgbAt8(data, stride, off, x, y, o + 3 * i);
   }
   BilinearRgbRowScalar(data, stride, c, i0 + i, n - i, o + 3 * i);
 }
@@ -414,6 +425,21 @@ struct TilePassAvx2 {
     for (int k = 1; k < 8; ++k) x0 = std::min(x0, v[0][k]), x1 = std::max(x1, v[1][k]), y0 = std::min(y0, v[2][k]), y1 = std::max(y1, v[3][k]);
   }
   RowCoords Row(int j) const { return RowCoords{xs + j * row, ys + j * row, {}}; }
+  // The patch pass of the RGB and Bayer tiles: step(off, j, i) for the 8 pixels from (i, j), where off holds the
+  // 8 patch offsets offsets(j, i) of their words, computed and stored one tile row ahead of their use so that
+  // the steps' scalar loads of them never wait on store-to-load forwarding (as the AVX-512 TilePass::PixelSteps).
+  template <class Offsets, class Step>
+  __attribute__((target("avx2"))) void PixelSteps(int nu, int nv, Offsets offsets, Step step) const {
+    alignas(32) int32_t offs[2][64];
+    const auto fill = [&](int j) __attribute__((target("avx2"))) {
+      for (int i = 0; i < nu; i += 8) _mm256_store_si256(reinterpret_cast<__m256i*>(offs[j & 1] + i), offsets(j, i));
+    };
+    fill(0);
+    for (int j = 0; j < nv; ++j) {
+      if (j + 1 < nv) fill(j + 1);
+      for (int i = 0; i < nu; i += 8) step(offs[j & 1] + i, j, i);
+    }
+  }
   __attribute__((target("avx2"))) __m256i X(int j, int i) const { return _mm256_load_si256(reinterpret_cast<const __m256i*>(xs + j * row + i)); }
   __attribute__((target("avx2"))) __m256i Y(int j, int i) const { return _mm256_load_si256(reinterpret_cast<const __m256i*>(ys + j * row + i)); }
 
@@ -484,7 +510,18 @@ __attribute__((target("avx2"), flatten)) void BilinearRgbTileAvx2(const uint8_t*
   }
   const ptrdiff_t pstride = p.Copy(src, stride, r0, rows, 3 * ptrdiff_t(c0), bytes);
   p.Shift(nv, c0, r0);
-  for (int j = 0; j < nv; ++j) BilinearRgbRowAvx2(p.patch, pstride, p.Row(j), 0, nu, out + j * ostride);
+  p.PixelSteps(
+      nu, nv, [&](int j, int i) __attribute__((target("avx2"))) { return RgbOffsets8(pstride, p.X(j, i), p.Y(j, i)); },
+      [&](const int32_t* off, int j, int i) __attribute__((target("avx2"))) {
+        uint8_t* o = out + j * ostride + 3 * i;
+        if (nu - i >= 8) {
+          RgbAt8(p.patch, pstride, off, p.X(j, i), p.Y(j, i), o);
+        } else {   // lanes past nu hold lane 0's coordinates
+          uint8_t tail[24];
+          RgbAt8(p.patch, pstride, off, p.X(j, i), p.Y(j, i), tail);
+          std::memcpy(o, tail, size_t(3 * (nu - i)));
+        }
+      });
 }
 
 // Grey: a pixel's taps are columns c .. c + 1 of rows r .. r + 1 (c, r: (x + 1/128 px) >> 16), so one gathered
@@ -550,45 +587,48 @@ __attribute__((target("avx2"), flatten)) void BayerRgbTileAvx2(const uint8_t* sr
     std::memcpy(&w, q, 8);
     return w;
   };
-  alignas(32) int32_t off[8];
-  for (int j = 0; j < nv; ++j) {
-    for (int i = 0; i < nu; i += 8) {
-      const BayerGrids8 g = BayerGridsAt8(p.X(j, i), p.Y(j, i));
-      const __m256i &pxe = g.pxe, &pye = g.pye;
-      const __m256i col = _mm256_sub_epi32(_mm256_srai_epi32(pxe, 15), origin_c);   // start - c0
-      const __m256i prow = _mm256_sub_epi32(_mm256_srai_epi32(pye, 15), origin_r);  // ra - r0
-      _mm256_store_si256(reinterpret_cast<__m256i*>(off),
-                         _mm256_add_epi32(_mm256_mullo_epi32(prow, vpstride), _mm256_add_epi32(col, col)));
-      // (ce, ce + 2, co, co + 2) as byte 2 c + s of a pixel's word: columns (1, 3, 0, 2) or (0, 2, 1, 3) from
-      // start (as the AVX-512 Bayer16), row s = 1 for the even grids when pye's bit 15 is clear, else 0.
-      const __m256i xodd = _mm256_cmpeq_epi32(_mm256_and_si256(pxe, bit15), bit15);
-      const __m256i yodd = _mm256_cmpeq_epi32(_mm256_and_si256(pye, bit15), bit15);
-      const __m256i cols = _mm256_blendv_epi8(_mm256_set1_epi32(0x04000602), _mm256_set1_epi32(0x06020400), xodd);
-      const __m256i idx_e = _mm256_add_epi8(cols, _mm256_andnot_si256(yodd, _mm256_set1_epi32(0x01010101)));
-      const __m256i idx_o = _mm256_xor_si256(idx_e, _mm256_set1_epi32(0x01010101));
-      __m256i eA, eB, oA, oB;
-      PairShuffles(idx_e, &eA, &eB);
-      PairShuffles(idx_o, &oA, &oB);
-      const uint8_t* q = p.patch;
-      const uint8_t* qb = p.patch + 2 * pstride;
-      const __m256i tA = _mm256_setr_epi64x(load(q + off[0]), load(q + off[1]), load(q + off[4]), load(q + off[5]));
-      const __m256i tB = _mm256_setr_epi64x(load(q + off[2]), load(q + off[3]), load(q + off[6]), load(q + off[7]));
-      const __m256i bA = _mm256_setr_epi64x(load(qb + off[0]), load(qb + off[1]), load(qb + off[4]), load(qb + off[5]));
-      const __m256i bB = _mm256_setr_epi64x(load(qb + off[2]), load(qb + off[3]), load(qb + off[6]), load(qb + off[7]));
-      const __m256i et = _mm256_unpacklo_epi64(_mm256_shuffle_epi8(tA, eA), _mm256_shuffle_epi8(tB, eB));
-      const __m256i ot = _mm256_unpacklo_epi64(_mm256_shuffle_epi8(tA, oA), _mm256_shuffle_epi8(tB, oB));
-      const __m256i eb = _mm256_unpacklo_epi64(_mm256_shuffle_epi8(bA, eA), _mm256_shuffle_epi8(bB, eB));
-      const __m256i ob = _mm256_unpacklo_epi64(_mm256_shuffle_epi8(bA, oA), _mm256_shuffle_epi8(bB, oB));
-      uint8_t* o = out + j * ostride + 3 * i;
-      if (nu - i >= 8) {
-        BayerCombineAvx2(g.fxe, g.fxo, g.fye, g.fyo, et, eb, ot, ob, o);
-      } else {
-        uint8_t tail[24];
-        BayerCombineAvx2(g.fxe, g.fxo, g.fye, g.fyo, et, eb, ot, ob, tail);
-        std::memcpy(o, tail, size_t(3 * (nu - i)));
-      }
-    }
-  }
+  p.PixelSteps(
+      nu, nv,
+      [&](int j, int i) __attribute__((target("avx2"))) {
+        const __m256i half = _mm256_set1_epi32(kHalf);
+        const __m256i pxe = _mm256_add_epi32(_mm256_srai_epi32(p.X(j, i), 1), half);
+        const __m256i pye = _mm256_add_epi32(_mm256_srai_epi32(p.Y(j, i), 1), half);
+        const __m256i col = _mm256_sub_epi32(_mm256_srai_epi32(pxe, 15), origin_c);   // start - c0
+        const __m256i prow = _mm256_sub_epi32(_mm256_srai_epi32(pye, 15), origin_r);  // ra - r0
+        return _mm256_add_epi32(_mm256_mullo_epi32(prow, vpstride), _mm256_add_epi32(col, col));
+      },
+      [&](const int32_t* off, int j, int i) __attribute__((target("avx2"))) {
+        const BayerGrids8 g = BayerGridsAt8(p.X(j, i), p.Y(j, i));
+        const __m256i &pxe = g.pxe, &pye = g.pye;
+        // (ce, ce + 2, co, co + 2) as byte 2 c + s of a pixel's word: columns (1, 3, 0, 2) or (0, 2, 1, 3) from
+        // start (as the AVX-512 Bayer16), row s = 1 for the even grids when pye's bit 15 is clear, else 0.
+        const __m256i xodd = _mm256_cmpeq_epi32(_mm256_and_si256(pxe, bit15), bit15);
+        const __m256i yodd = _mm256_cmpeq_epi32(_mm256_and_si256(pye, bit15), bit15);
+        const __m256i cols = _mm256_blendv_epi8(_mm256_set1_epi32(0x04000602), _mm256_set1_epi32(0x06020400), xodd);
+        const __m256i idx_e = _mm256_add_epi8(cols, _mm256_andnot_si256(yodd, _mm256_set1_epi32(0x01010101)));
+        const __m256i idx_o = _mm256_xor_si256(idx_e, _mm256_set1_epi32(0x01010101));
+        __m256i eA, eB, oA, oB;
+        PairShuffles(idx_e, &eA, &eB);
+        PairShuffles(idx_o, &oA, &oB);
+        const uint8_t* q = p.patch;
+        const uint8_t* qb = p.patch + 2 * pstride;
+        const __m256i tA = _mm256_setr_epi64x(load(q + off[0]), load(q + off[1]), load(q + off[4]), load(q + off[5]));
+        const __m256i tB = _mm256_setr_epi64x(load(q + off[2]), load(q + off[3]), load(q + off[6]), load(q + off[7]));
+        const __m256i bA = _mm256_setr_epi64x(load(qb + off[0]), load(qb + off[1]), load(qb + off[4]), load(qb + off[5]));
+        const __m256i bB = _mm256_setr_epi64x(load(qb + off[2]), load(qb + off[3]), load(qb + off[6]), load(qb + off[7]));
+        const __m256i et = _mm256_unpacklo_epi64(_mm256_shuffle_epi8(tA, eA), _mm256_shuffle_epi8(tB, eB));
+        const __m256i ot = _mm256_unpacklo_epi64(_mm256_shuffle_epi8(tA, oA), _mm256_shuffle_epi8(tB, oB));
+        const __m256i eb = _mm256_unpacklo_epi64(_mm256_shuffle_epi8(bA, eA), _mm256_shuffle_epi8(bB, eB));
+        const __m256i ob = _mm256_unpacklo_epi64(_mm256_shuffle_epi8(bA, oA), _mm256_shuffle_epi8(bB, oB));
+        uint8_t* o = out + j * ostride + 3 * i;
+        if (nu - i >= 8) {
+          BayerCombineAvx2(g.fxe, g.fxo, g.fye, g.fyo, et, eb, ot, ob, o);
+        } else {
+          uint8_t tail[24];
+          BayerCombineAvx2(g.fxe, g.fxo, g.fye, g.fyo, et, eb, ot, ob, tail);
+          std::memcpy(o, tail, size_t(3 * (nu - i)));
+        }
+      });
 }
 }  // namespace
 
