@@ -2,6 +2,10 @@
 
 #include <cstdint>
 #include <cstdlib>
+#include <iterator>
+#include <mutex>
+#include <utility>
+#include <vector>
 
 #if defined(__linux__)
 #include <sys/mman.h>
@@ -13,14 +17,13 @@
 namespace hovs {
 namespace {
 std::size_t RoundUp(std::size_t bytes) { return (bytes + kHugePageBytes - 1) / kHugePageBytes * kHugePageBytes; }
-}  // namespace
 
 #if defined(__linux__)
-void* AllocateLargePages(std::size_t bytes) {
-  const std::size_t len = RoundUp(bytes);
-  if (len < bytes || len + kHugePageBytes < len) throw std::bad_alloc();
+// len: a multiple of 2 MiB.
+void* MapLarge(std::size_t len) {
+  if (len + kHugePageBytes < len) throw std::bad_alloc();
   // Over-map by one huge page, then unmap the unaligned head and the tail: what stays is [p, p + len),
-  // 2 MiB aligned, which FreeLargePages unmaps from the byte count alone.
+  // 2 MiB aligned, which UnmapLarge unmaps from the length alone.
   void* raw = mmap(nullptr, len + kHugePageBytes, PROT_READ | PROT_WRITE, MAP_PRIVATE | MAP_ANONYMOUS, -1, 0);
   if (raw == MAP_FAILED) throw std::bad_alloc();
   const auto base = reinterpret_cast<std::uintptr_t>(raw);
@@ -32,21 +35,91 @@ void* AllocateLargePages(std::size_t bytes) {
   madvise(p, len, MADV_HUGEPAGE);  // advice only: without THP the pages are ordinary ones
   return p;
 }
-
-void FreeLargePages(void* p, std::size_t bytes) noexcept {
-  if (p != nullptr) munmap(p, RoundUp(bytes));
-}
+void UnmapLarge(void* p, std::size_t len) noexcept { munmap(p, len); }
 #else
-void* AllocateLargePages(std::size_t bytes) {
-  void* p = std::aligned_alloc(kHugePageBytes, RoundUp(bytes));
+void* MapLarge(std::size_t len) {
+  void* p = std::aligned_alloc(kHugePageBytes, len);
   if (p == nullptr) throw std::bad_alloc();
   return p;
 }
-
-void FreeLargePages(void* p, std::size_t) noexcept { std::free(p); }
+void UnmapLarge(void* p, std::size_t) noexcept { std::free(p); }
 #endif
 
+// The freed buffers kept for reuse, longest kept first.
+struct KeptBuffers {
+  std::mutex mutex;
+  std::size_t max_bytes = 0, bytes = 0;
+  std::vector<std::pair<void*, std::size_t>> buffers;   // (address, length)
+
+  // Unmaps the longest kept buffers until at most `limit` bytes are kept. Caller holds the mutex.
+  void TrimTo(std::size_t limit) noexcept {
+    std::size_t k = 0;
+    for (; k < buffers.size() && bytes > limit; ++k) {
+      UnmapLarge(buffers[k].first, buffers[k].second);
+      bytes -= buffers[k].second;
+    }
+    buffers.erase(buffers.begin(), buffers.begin() + static_cast<std::ptrdiff_t>(k));
+  }
+};
+KeptBuffers& Kept() {
+  static KeptBuffers* kept = new KeptBuffers;   // never destroyed: buffers may be freed during static destruction
+  return *kept;
+}
+}  // namespace
+
+void* AllocateLargePages(std::size_t bytes) {
+  const std::size_t len = RoundUp(bytes);
+  if (len < bytes) throw std::bad_alloc();
+  {
+    KeptBuffers& kept = Kept();
+    const std::lock_guard<std::mutex> lock(kept.mutex);
+    for (auto it = kept.buffers.rbegin(); it != kept.buffers.rend(); ++it)
+      if (it->second == len) {
+        void* p = it->first;
+        kept.bytes -= len;
+        kept.buffers.erase(std::next(it).base());
+        return p;
+      }
+  }
+  return MapLarge(len);
+}
+
+void FreeLargePages(void* p, std::size_t bytes) noexcept {
+  if (p == nullptr) return;
+  const std::size_t len = RoundUp(bytes);
+  KeptBuffers& kept = Kept();
+  {
+    const std::lock_guard<std::mutex> lock(kept.mutex);
+    if (len <= kept.max_bytes) {
+      kept.TrimTo(kept.max_bytes - len);
+      try {
+        kept.buffers.emplace_back(p, len);
+        kept.bytes += len;
+        return;
+      } catch (...) {   // no memory for the list's entry: unmap instead
+      }
+    }
+  }
+  UnmapLarge(p, len);
+}
+
+std::size_t KeepFreedLargePages(std::size_t max_bytes) {
+  KeptBuffers& kept = Kept();
+  const std::lock_guard<std::mutex> lock(kept.mutex);
+  const std::size_t previous = kept.max_bytes;
+  kept.max_bytes = max_bytes;
+  kept.TrimTo(max_bytes);
+  return previous;
+}
+
+std::size_t KeptLargePageBytes() {
+  KeptBuffers& kept = Kept();
+  const std::lock_guard<std::mutex> lock(kept.mutex);
+  return kept.bytes;
+}
+
 bool KeepFreedMemoryForReuse() {
+  KeepFreedLargePages(kKeptFreedBytes);
 #if defined(__GLIBC__) && !defined(__SANITIZE_ADDRESS__)
   // 32 MiB is the largest mmap threshold glibc accepts on 64-bit (it bounds the per-thread heaps' blocks).
   return mallopt(M_MMAP_THRESHOLD, 32 << 20) == 1 && mallopt(M_TRIM_THRESHOLD, 1 << 30) == 1;

@@ -16,18 +16,35 @@ inline constexpr std::size_t kHugePageBytes = std::size_t(2) << 20;
 inline constexpr std::size_t kLargeBytes = std::size_t(4) << 20;
 
 // Memory for `bytes` bytes, 2 MiB aligned; throws std::bad_alloc when it cannot be mapped. FreeLargePages
-// takes the same byte count.
+// takes the same byte count. The memory's content is unspecified: a buffer kept for reuse (below) holds what its
+// previous owner wrote.
 void* AllocateLargePages(std::size_t bytes);
 void FreeLargePages(void* p, std::size_t bytes) noexcept;
+
+// Freed large buffers kept mapped for reuse, up to max_bytes in all (0, the default: they are unmapped when
+// freed). AllocateLargePages then hands out a kept buffer of the same size (in 2 MiB pages) before it maps new
+// memory; when a freed buffer does not fit, the longest-kept ones are unmapped to make room. The point is the
+// renderer's frames (Render allocates 362 MB per 2750 x 2200 frame with ground truth): memory mapped anew is
+// faulted in page by page, and on a virtual machine whose guest reports free memory to its hypervisor (free page
+// reporting, as on the Firecracker VMs this project is measured on) memory left unmapped for more than about
+// 1.5 s comes back through host page faults, 130-240 ms per frame there (tests/bench/render_bench.cc,
+// BM_FrameMemoryFirstTouch), against none for a kept buffer. Calling with 0 unmaps what is kept. Returns the
+// previous limit.
+std::size_t KeepFreedLargePages(std::size_t max_bytes);
+// The bytes of freed large buffers kept mapped now.
+std::size_t KeptLargePageBytes();
 
 // Frame-sized work (depth matching, image reading and writing, OpenCV's own buffers) allocates and frees tens of
 // megabytes per frame through malloc, which by default hands blocks above its (adaptive, at most 32 MiB) mmap
 // threshold back to the kernel when they are freed, so every frame faults them in again. Called once at start
 // (the hovs command and the benchmark programs do), this makes glibc's malloc serve blocks below 32 MiB from its
 // heaps and keep up to 1 GiB of freed memory mapped for reuse: measured on a Zen 5 VM (4 KiB page faults ~11 us),
-// BM_DenseDepth/320/1 163-173 -> 79-96 ms. The price is that a process keeps that much freed memory. Returns
-// false where the allocator has no such settings (not glibc, or a sanitizer's allocator); nothing changes then.
+// BM_DenseDepth/320/1 163-173 -> 79-96 ms. It also keeps up to 1 GiB of freed large buffers
+// (KeepFreedLargePages). The price is that a process keeps that much freed memory. Returns false where malloc
+// has no such settings (not glibc, or a sanitizer's allocator); malloc's settings do not change then, the large
+// buffers are kept all the same.
 bool KeepFreedMemoryForReuse();
+inline constexpr std::size_t kKeptFreedBytes = std::size_t(1) << 30;
 
 // A std::allocator whose large allocations use AllocateLargePages; UninitialisedConstruct leaves elements
 // default-initialised (no zeroing on resize: the renderer fills its frames in parallel).

@@ -87,6 +87,8 @@ struct Frame {
   double seconds = 0;
 };
 
+// A new frame. Its large buffers come from core/large_pages.h, so in a process that keeps freed large buffers
+// (KeepFreedLargePages; the hovs command does) a frame freed before this one lends it its memory, already mapped.
 Frame Render(const RayScene& scene, const ViewCamera& camera, const RenderOptions& options);
 // Render into *frame, reusing its buffers where large enough: a sequence of frames (a dataset) then touches its
 // memory once. At 2750 x 2200 with ground truth that first touch (362 MB, in huge pages) cost 90-250 ms per

@@ -9,6 +9,7 @@
 #include <optional>
 #include <thread>
 
+#include "core/large_pages.h"
 #include "raytrace/render.h"
 #include "scenes/scene_config.h"
 
@@ -107,8 +108,9 @@ BENCHMARK(BM_RawIntersect16)->Arg(16)->Arg(8)->Unit(benchmark::kMillisecond)->Us
 // buffers (the first frame, which maps memory new to the process, rendered before the timing): 0 fresh ones, the
 // previous frame's freed just before (inside the timing); 1 reused (RenderInto); 2 fresh ones, the previous
 // frame's freed right after its render, so about a second before (during the raw traces): on a VM whose hypervisor
-// takes back guest memory that stays free (see BM_FrameMemoryFirstTouch) the new buffers then come through host
-// page faults.
+// takes back guest memory that stays free (see BM_FrameMemoryFirstTouch) the new buffers came through host page
+// faults until freed large buffers were kept for reuse (hovs::KeepFreedLargePages, set up by the benchmark main
+// as by the hovs command); now 0 and 2 get the previous frame's memory back.
 void BM_RenderRatioToRaw(benchmark::State& state) {
   const hovs::raytrace::RayScene scene(Scene().description);
   const RawRays raw(scene);
@@ -163,6 +165,8 @@ BENCHMARK(BM_RenderRatioToRaw)->Arg(0)->Arg(1)->Arg(2)->Unit(benchmark::kMillise
 // free for more than about 1.5 s comes back through host page faults, which BM_RenderRatioToRaw/2 pays every
 // frame (its raw traces take about a second between two renders); memory freed a moment ago does not.
 void BM_FrameMemoryFirstTouch(benchmark::State& state) {
+  // Freed buffers are unmapped here, not kept for reuse (hovs::KeepFreedLargePages): what that saves is measured.
+  const size_t keep = hovs::KeepFreedLargePages(0);
   const size_t n = size_t(2750) * 2200 * (3 + hovs::raytrace::GroundTruth::kChannels);
   const auto touch = [n] {
     hovs::raytrace::PixelBuffer b(n);
@@ -179,6 +183,7 @@ void BM_FrameMemoryFirstTouch(benchmark::State& state) {
     touch();
   }
   state.counters["MB"] = static_cast<double>(n * sizeof(float)) / 1e6;
+  hovs::KeepFreedLargePages(keep);
 }
 BENCHMARK(BM_FrameMemoryFirstTouch)->Arg(0)->Arg(2500)->Unit(benchmark::kMillisecond)->UseRealTime()->Iterations(4);
 

@@ -80,12 +80,50 @@ TEST(LargePages, MappingIsAdvisedForTransparentHugePages) {
   EXPECT_EQ(eligible, mode.find("[never]") == std::string::npos ? 1 : 0) << mode;
 }
 
+// Freed large buffers are kept up to the limit and handed out again for the same size (in 2 MiB pages), most
+// recently freed first, content included; a buffer that does not fit pushes out the longest kept; 0 unmaps all.
+TEST(LargePages, FreedBuffersAreKeptUpToTheLimitAndReusedBySize) {
+  const std::size_t mib = std::size_t(1) << 20, previous_limit = KeepFreedLargePages(0);
+  EXPECT_EQ(KeptLargePageBytes(), 0u);
+  KeepFreedLargePages(16 * mib);
+  auto* a = static_cast<unsigned char*>(AllocateLargePages(8 * mib));
+  auto* b = static_cast<unsigned char*>(AllocateLargePages(8 * mib - 100));   // 8 MiB in 2 MiB pages too
+  auto* c = static_cast<unsigned char*>(AllocateLargePages(8 * mib));
+  a[5] = 1, b[5] = 2, c[5] = 3;
+  FreeLargePages(a, 8 * mib);
+  FreeLargePages(b, 8 * mib - 100);
+  EXPECT_EQ(KeptLargePageBytes(), 16 * mib);
+  FreeLargePages(c, 8 * mib);   // does not fit: a, the longest kept, is unmapped
+  EXPECT_EQ(KeptLargePageBytes(), 16 * mib);
+  auto* d = static_cast<unsigned char*>(AllocateLargePages(10 * mib));   // no kept buffer of that size
+  EXPECT_NE(d, b);
+  EXPECT_NE(d, c);
+  EXPECT_EQ(KeptLargePageBytes(), 16 * mib);
+  auto* e = static_cast<unsigned char*>(AllocateLargePages(8 * mib));
+  auto* f = static_cast<unsigned char*>(AllocateLargePages(8 * mib - 1));
+  EXPECT_EQ(e, c);
+  EXPECT_EQ(f, b);
+  EXPECT_EQ(e[5] + f[5], 5);   // what their previous owners wrote
+  EXPECT_EQ(KeptLargePageBytes(), 0u);
+  FreeLargePages(d, 10 * mib);   // 10 MiB: fits alone
+  FreeLargePages(e, 8 * mib);    // with d it would not: d is unmapped
+  EXPECT_EQ(KeptLargePageBytes(), 8 * mib);
+  KeepFreedLargePages(4 * mib);  // a lower limit unmaps what no longer fits
+  EXPECT_EQ(KeptLargePageBytes(), 0u);
+  FreeLargePages(f, 8 * mib);    // larger than the limit: unmapped at once
+  EXPECT_EQ(KeptLargePageBytes(), 0u);
+  EXPECT_EQ(KeepFreedLargePages(previous_limit), 4 * mib);
+}
+
 // After the call a 16 MiB block comes from malloc's heap (glibc would otherwise map it on its own: the default
 // threshold starts at 128 kB) and freeing it keeps it mapped; where the call reports no effect (a sanitizer's
 // allocator), that is what it must report.
 TEST(LargePages, FreedFrameSizedBlocksStayForReuse) {
+  const std::size_t previous_limit = KeepFreedLargePages(0);
+  const bool malloc_settings = KeepFreedMemoryForReuse();
+  EXPECT_EQ(KeepFreedLargePages(previous_limit), kKeptFreedBytes) << "large buffers are kept in every build";
 #if defined(__GLIBC__) && !defined(__SANITIZE_ADDRESS__)
-  ASSERT_TRUE(KeepFreedMemoryForReuse());
+  ASSERT_TRUE(malloc_settings);
   const std::size_t block = std::size_t(16) << 20;
   const auto mapped_blocks = mallinfo2().hblks;
   void* p = std::malloc(block);
@@ -99,7 +137,7 @@ TEST(LargePages, FreedFrameSizedBlocksStayForReuse) {
   EXPECT_EQ(mallinfo2().hblks, mapped_blocks);
   std::free(q);
 #else
-  EXPECT_FALSE(KeepFreedMemoryForReuse());
+  EXPECT_FALSE(malloc_settings);
 #endif
 }
 

@@ -9,11 +9,13 @@
 #include <opencv2/imgproc.hpp>
 
 #include <cmath>
+#include <cstring>
 #include <random>
 #include <filesystem>
 
 #include "calib/checkerboard_edges.h"
 #include "core/error.h"
+#include "core/large_pages.h"
 #include "raytrace/render.h"
 #include "scenes/ground_truth.h"
 #include "scenes/scene_config.h"
@@ -525,6 +527,52 @@ TEST(Render, BatchColoursAgreeWithTheScalarTrace) {
   }
   EXPECT_GT(compared, 5000);
   EXPECT_LE(differ, compared / 1000) << differ << " of " << compared;
+}
+
+// Frames rendered into memory that held another frame (RenderInto's reused buffers, or a freed buffer that
+// AllocateLargePages hands out again) are the frames rendered into fresh memory, to the bit: every pixel and
+// channel is written, and a region render zeroes the rest. At 344 x 275 the ground truth (4.5 MB) is a large
+// buffer, so it goes through the kept-buffer path.
+TEST(Render, FramesInReusedMemoryAreTheFramesInFreshMemory) {
+  const auto small = [](bool misaligned) {
+    SceneConfig cfg = BoardScene(misaligned);
+    cfg.description.units[0].rig.camera = PinholeCamera<double>::FromPhysical(0.016, 4.54e-6 * 8, 344, 275);
+    return cfg;
+  };
+  const RayScene before(small(true).description), after(small(false).description);
+  raytrace::RenderOptions first, second;
+  first.samples = 4, first.seed = 11, first.ground_truth = true;
+  second.samples = 1, second.seed = 5, second.ground_truth = true;
+  raytrace::RenderOptions region = second;
+  region.region = {60, 40, 250, 200};
+  const auto same = [](const raytrace::Frame& a, const raytrace::Frame& b) {
+    return a.width == b.width && a.height == b.height && a.rgb.size() == b.rgb.size() &&
+           a.truth.data.size() == b.truth.data.size() &&
+           std::memcmp(a.rgb.data(), b.rgb.data(), a.rgb.size() * sizeof(float)) == 0 &&
+           std::memcmp(a.truth.data.data(), b.truth.data.data(), a.truth.data.size() * sizeof(float)) == 0;
+  };
+  const size_t previous_limit = KeepFreedLargePages(0);   // fresh memory for the references
+  const auto fresh = raytrace::Render(after, raytrace::ViewCamera::Unit(0), second);
+  const auto fresh_region = raytrace::Render(after, raytrace::ViewCamera::Unit(0), region);
+  ASSERT_GE(fresh.truth.data.size() * sizeof(float), kLargeBytes);
+  ASSERT_FALSE(same(fresh, fresh_region));
+
+  for (const auto* opts : {&second, &region}) {
+    const auto& reference = opts == &second ? fresh : fresh_region;
+    // Reused buffers.
+    raytrace::Frame f = raytrace::Render(before, raytrace::ViewCamera::Unit(0), first);
+    raytrace::RenderInto(after, raytrace::ViewCamera::Unit(0), *opts, &f);
+    EXPECT_TRUE(same(f, reference)) << "RenderInto, region " << (opts == &region);
+    // A kept buffer handed out again.
+    KeepFreedLargePages(std::size_t(64) << 20);
+    { const auto discarded = raytrace::Render(before, raytrace::ViewCamera::Unit(0), first); }
+    EXPECT_GE(KeptLargePageBytes(), kLargeBytes);
+    const auto g = raytrace::Render(after, raytrace::ViewCamera::Unit(0), *opts);
+    EXPECT_EQ(KeptLargePageBytes(), 0u) << "the ground truth did not take the kept buffer";
+    EXPECT_TRUE(same(g, reference)) << "kept buffer, region " << (opts == &region);
+    KeepFreedLargePages(0);
+  }
+  KeepFreedLargePages(previous_limit);
 }
 
 TEST(GoldenRender, SmallReferenceFrameIsUnchanged) {
