@@ -290,6 +290,40 @@ TEST(Sensor, BayerNoiseAndVignettingDoWhatTheySay) {
   const double expected_sigma = std::sqrt(0.8 * 10000 + 25) / 10000;
   EXPECT_NEAR(mean, 0.8, 4 * expected_sigma / std::sqrt(n));
   EXPECT_NEAR(std::sqrt(var), expected_sigma, 0.1 * expected_sigma);
+  // The deviates are Gaussian, not just of the right spread: the fractions beyond 1, 2 and 3 sigma.
+  for (const auto& [z, fraction] : {std::pair{1.0, 0.3173}, {2.0, 0.0455}, {3.0, 0.0027}}) {
+    size_t beyond = 0;
+    for (size_t i = 0; i < n; ++i) beyond += std::abs(a[3 * i] - 0.8) > z * expected_sigma;
+    EXPECT_NEAR(static_cast<double>(beyond) / n, fraction, 4 * std::sqrt(fraction * (1 - fraction) / n)) << z;
+  }
+  // Dark scenes (below 20 electrons, the Gaussian regime): Poisson counts, mean and variance e, 2.5 electrons
+  // without read noise (whole counts, none with probability exp(-e)); 15 electrons with read noise of 2 (the
+  // variance grows by its square; zero, where counts would be clipped, is 3.4 sigma away).
+  raytrace::Frame dark;
+  dark.width = 256, dark.height = 128;
+  s = {};
+  s.full_well = 10000;
+  for (const auto& [e, read] : {std::pair{2.5, 0.0}, {15.0, 2.0}}) {
+    dark.rgb.assign(static_cast<size_t>(dark.width) * dark.height * 3, static_cast<float>(e / 10000));
+    s.read_noise = read;
+    const auto d = raytrace::ApplySensor(dark, s, 3, &ch);
+    double m = 0, m2 = 0, whole = 0, zero = 0;
+    for (const float value : d) {
+      const double count = value * 10000.0;
+      m += count, m2 += count * count;
+      whole += std::abs(count - std::round(count)) < 1e-3;
+      zero += count < 0.5;
+    }
+    const double N = static_cast<double>(d.size());
+    m /= N;
+    const double variance = m2 / N - m * m, expected = e + read * read;
+    EXPECT_NEAR(m, e, 4 * std::sqrt(expected / N)) << e;
+    EXPECT_NEAR(variance, expected, 5 * std::sqrt(2.0 / N) * expected) << e;
+    if (read == 0) {
+      EXPECT_EQ(whole, N) << "Poisson counts are whole electrons";
+      EXPECT_NEAR(zero / N, std::exp(-e), 4 * std::sqrt(std::exp(-e) / N));
+    }
+  }
   // Vignetting: the corner keeps 1 - v of the centre.
   s = {};
   s.vignetting = 0.3;
