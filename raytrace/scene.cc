@@ -814,6 +814,41 @@ void RayScene::IntersectOnly16(int count, const Vec3d* o, const Vec3d* d, unsign
   for (int i = 0; i < count; ++i) geom_ids[i] = rh.hit.geomID[i];
 }
 
+namespace {
+// Lanes [i0, i0 + W) of a raw packet into an Embree packet of width W, every lane valid.
+template <int W, class RayHitW>
+void FillRawPacket(const RayScene::RawPacket16& p, int i0, unsigned mask, unsigned id, int* valid, RayHitW* rh) {
+  for (int i = 0; i < W; ++i) {
+    valid[i] = -1;
+    rh->ray.org_x[i] = p.ox[i0 + i], rh->ray.org_y[i] = p.oy[i0 + i], rh->ray.org_z[i] = p.oz[i0 + i];
+    rh->ray.dir_x[i] = p.dx[i0 + i], rh->ray.dir_y[i] = p.dy[i0 + i], rh->ray.dir_z[i] = p.dz[i0 + i];
+    rh->ray.tnear[i] = 0, rh->ray.tfar[i] = std::numeric_limits<float>::infinity();
+    rh->ray.mask[i] = mask, rh->ray.id[i] = id, rh->ray.flags[i] = 0, rh->ray.time[i] = 0;
+    rh->hit.geomID[i] = RTC_INVALID_GEOMETRY_ID, rh->hit.instID[0][i] = RTC_INVALID_GEOMETRY_ID;
+  }
+}
+}  // namespace
+
+void RayScene::IntersectRaw(const RawPacket16& p, int from_mirror, int width, unsigned* geom_ids) const {
+  const unsigned mask = RayMask(from_mirror), id = static_cast<unsigned>(std::max(from_mirror, -1) + 1);
+  if (width == 16) {
+    alignas(64) RTCRayHit16 rh;
+    alignas(64) int valid[16];
+    FillRawPacket<16>(p, 0, mask, id, valid, &rh);
+    TracePacket(scene_, valid, &rh, rtcIntersect16);
+    for (int i = 0; i < 16; ++i) geom_ids[i] = rh.hit.geomID[i];
+    return;
+  }
+  HOVS_REQUIRE(width == 8, "IntersectRaw", "width must be 8 or 16 (got ", width, ")");
+  for (int i0 = 0; i0 < 16; i0 += 8) {
+    alignas(32) RTCRayHit8 rh;
+    alignas(32) int valid[8];
+    FillRawPacket<8>(p, i0, mask, id, valid, &rh);
+    TracePacket(scene_, valid, &rh, rtcIntersect8);
+    for (int i = 0; i < 8; ++i) geom_ids[i0 + i] = rh.hit.geomID[i];
+  }
+}
+
 void RayScene::IntersectOnly8(int count, const Vec3d* o, const Vec3d* d, unsigned* geom_ids,
                               const int* from_mirror) const {
   alignas(32) RTCRayHit8 rh;

@@ -131,6 +131,15 @@ class RayScene {
   // The same with rtcIntersect8 (up to 8 rays): the packet width the renderer uses without AVX-512.
   void IntersectOnly8(int count, const Vec3d* origins, const Vec3d* directions, unsigned* geom_ids,
                       const int* from_mirror = nullptr) const;
+  // Sixteen rays already in single precision, structure of arrays (the layout of Embree's packets), all leaving
+  // one unit's mirror (from_mirror >= 0) or none (-1), tnear 0: copied into the packet with vector moves and
+  // traced with rtcIntersect16 (width 16) or two rtcIntersect8 (width 8); geometry ids only. The raw reference
+  // with the least work a caller must do per ray (IntersectOnly16 converts each lane from double, which takes
+  // about as long as Embree's traversal of these rays).
+  struct RawPacket16 {
+    alignas(64) float ox[16], oy[16], oz[16], dx[16], dy[16], dz[16];
+  };
+  void IntersectRaw(const RawPacket16& packet, int from_mirror, int width, unsigned* geom_ids) const;
 
   struct UserGeometry;  // mirror, annulus (mount, lens face): analytic shapes, defined in scene.cc
   // A unit's mount ring, met analytically by that unit's straight camera rays (IntersectBatch).

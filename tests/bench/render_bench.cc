@@ -57,9 +57,11 @@ void BM_RenderFrameReused(benchmark::State& state) {
 }
 BENCHMARK(BM_RenderFrameReused)->Args({4, 1})->Args({4, 0})->Unit(benchmark::kMillisecond)->UseRealTime()->Iterations(3);
 
-// The reflected rays of every pixel of the frame (one per pixel), precomputed, for the raw throughput figure.
+// The reflected rays of every pixel of the frame (one per pixel), precomputed, for the raw throughput figure:
+// in double (o, d) and in single-precision packets of 16 (RayScene::RawPacket16, Embree's own layout).
 struct RawRays {
   std::vector<Vec3d> o, d;
+  std::vector<hovs::raytrace::RayScene::RawPacket16> packets;
   explicit RawRays(const hovs::raytrace::RayScene& scene) {
     const auto& unit = scene.description().units[0];
     for (int y = 0; y < unit.rig.camera.height; ++y)
@@ -69,42 +71,61 @@ struct RawRays {
         o.push_back(unit.world_from_mirror * M);
         d.push_back(unit.world_from_mirror.Rotate(dir));
       }
+    packets.resize(o.size() / 16);
+    for (size_t p = 0; p < packets.size(); ++p)
+      for (int i = 0; i < 16; ++i) {
+        const Vec3d &oi = o[16 * p + i], &di = d[16 * p + i];
+        auto& k = packets[p];
+        k.ox[i] = static_cast<float>(oi.x()), k.oy[i] = static_cast<float>(oi.y()), k.oz[i] = static_cast<float>(oi.z());
+        k.dx[i] = static_cast<float>(di.x()), k.dy[i] = static_cast<float>(di.y()), k.dz[i] = static_cast<float>(di.z());
+      }
   }
-  size_t Count() const { return o.size() / 16 * 16; }
-  // All of them in packets of 16 (rtcIntersect16), or of 8 (rtcIntersect8, what the renderer uses without
-  // AVX-512), on both cores.
+  size_t Count() const { return packets.size() * 16; }
+  // All of them, on both cores: from the single-precision packets with rtcIntersect16 (width 16) or
+  // rtcIntersect8 (width 8, what the renderer uses without AVX-512); the raw reference.
   void Trace(const hovs::raytrace::RayScene& scene, int width) const {
-    const size_t packets = o.size() / 16;
-    tbb::parallel_for(tbb::blocked_range<size_t>(0, packets, 64), [&](const tbb::blocked_range<size_t>& r) {
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, packets.size(), 64), [&](const tbb::blocked_range<size_t>& r) {
+      unsigned ids[16];
+      for (size_t p = r.begin(); p != r.end(); ++p) scene.IntersectRaw(packets[p], 0, width, ids);
+      benchmark::DoNotOptimize(ids[0]);
+    });
+  }
+  // The same rays from double-precision vectors, each lane converted while its packet is filled
+  // (RayScene::IntersectOnly16): the raw figure of sessions 1-21, which spends about half its time filling.
+  void TraceFromDouble(const hovs::raytrace::RayScene& scene) const {
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, packets.size(), 64), [&](const tbb::blocked_range<size_t>& r) {
       unsigned ids[16];
       const int from[16] = {0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0};
-      for (size_t p = r.begin(); p != r.end(); ++p) {
-        if (width == 16) {
-          scene.IntersectOnly16(16, &o[16 * p], &d[16 * p], ids, from);
-        } else {
-          scene.IntersectOnly8(8, &o[16 * p], &d[16 * p], ids, from);
-          scene.IntersectOnly8(8, &o[16 * p + 8], &d[16 * p + 8], ids + 8, from);
-        }
-      }
+      for (size_t p = r.begin(); p != r.end(); ++p) scene.IntersectOnly16(16, &o[16 * p], &d[16 * p], ids, from);
       benchmark::DoNotOptimize(ids[0]);
     });
   }
 };
 
+// Argument: 16 or 8, the packet width from single-precision packets; 0, rtcIntersect16 filled from doubles.
 void BM_RawIntersect16(benchmark::State& state) {
   const hovs::raytrace::RayScene scene(Scene().description);
   const RawRays raw(scene);
   const int width = static_cast<int>(state.range(0));
-  for (auto _ : state) raw.Trace(scene, width);
+  for (auto _ : state) {
+    if (width == 0) {
+      raw.TraceFromDouble(scene);
+    } else {
+      raw.Trace(scene, width);
+    }
+  }
   state.counters["rays_per_s"] =
       benchmark::Counter(static_cast<double>(raw.Count()), benchmark::Counter::kIsIterationInvariantRate);
 }
-BENCHMARK(BM_RawIntersect16)->Arg(16)->Arg(8)->Unit(benchmark::kMillisecond)->UseRealTime()->Iterations(5);
+BENCHMARK(BM_RawIntersect16)->Arg(16)->Arg(8)->Arg(0)->Unit(benchmark::kMillisecond)->UseRealTime()->Iterations(10);
 
 // The ratio in one figure: each iteration renders the frame with ground truth and traces the raw rays five
 // times right after, each timed on its own, so that both see the same state of this VM (whose speed drifts by tens
-// of per cent within minutes). ratio = the frame's rays per second over raw rtcIntersect16's, summed over the
-// iterations; ratio_to_raw8 the same over rtcIntersect8's (timed after the 16-wide passes). Argument: the frame's
+// of per cent within minutes). ratio = the frame's rays per second over raw rtcIntersect16's (from
+// single-precision packets), summed over the iterations; ratio_to_raw8 the same over rtcIntersect8's;
+// ratio_to_raw_from_double over rtcIntersect16 filled lane by lane from doubles, the reference of sessions 1-21
+// (about half as fast as the raw figure: its packet filling took as long as Embree's traversal), kept so that
+// their figures can be compared. Argument: the frame's
 // buffers (the first frame, which maps memory new to the process, rendered before the timing): 0 fresh ones, the
 // previous frame's freed just before (inside the timing); 1 reused (RenderInto); 2 fresh ones, the previous
 // frame's freed right after its render, so about a second before (during the raw traces): on a VM whose hypervisor
@@ -122,7 +143,7 @@ void BM_RenderRatioToRaw(benchmark::State& state) {
   if (mode == 1) hovs::raytrace::RenderInto(scene, hovs::raytrace::ViewCamera::Unit(0), ro, &kept);
   std::optional<hovs::raytrace::Frame> previous;
   if (mode == 0) previous = hovs::raytrace::Render(scene, hovs::raytrace::ViewCamera::Unit(0), ro);
-  double frame_s = 0, raw_s = 0, raw8_s = 0, frame_rays = 0, raw_rays = 0;
+  double frame_s = 0, raw_s = 0, raw8_s = 0, raw_double_s = 0, frame_rays = 0, raw_rays = 0;
   using Clock = std::chrono::steady_clock;
   for (auto _ : state) {
     auto t0 = Clock::now();
@@ -145,6 +166,9 @@ void BM_RenderRatioToRaw(benchmark::State& state) {
     t0 = Clock::now();
     for (int k = 0; k < 5; ++k) raw.Trace(scene, 8);
     raw8_s += std::chrono::duration<double>(Clock::now() - t0).count();
+    t0 = Clock::now();
+    for (int k = 0; k < 5; ++k) raw.TraceFromDouble(scene);
+    raw_double_s += std::chrono::duration<double>(Clock::now() - t0).count();
   }
   state.counters["frame_rays_per_s"] = frame_rays / frame_s;
   state.counters["raw_rays_per_s"] = raw_rays / raw_s;
@@ -153,6 +177,8 @@ void BM_RenderRatioToRaw(benchmark::State& state) {
   // measured (Zen 3: 37-42 vs 31-36 M rays/s): the ratio to it too, so that such a machine is not judged kindly.
   state.counters["raw8_rays_per_s"] = raw_rays / raw8_s;
   state.counters["ratio_to_raw8"] = (frame_rays / frame_s) / (raw_rays / raw8_s);
+  state.counters["raw_from_double_rays_per_s"] = raw_rays / raw_double_s;
+  state.counters["ratio_to_raw_from_double"] = (frame_rays / frame_s) / (raw_rays / raw_double_s);
 }
 BENCHMARK(BM_RenderRatioToRaw)->Arg(0)->Arg(1)->Arg(2)->Unit(benchmark::kMillisecond)->UseRealTime()->Iterations(4);
 
