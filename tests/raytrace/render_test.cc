@@ -3,6 +3,7 @@
 // plane is analytic, the mirror mask is the core's, the sensor model does what it says, a golden render.
 #include <gtest/gtest.h>
 
+#include <map>
 #include <optional>
 
 #include <opencv2/aruco.hpp>
@@ -561,6 +562,55 @@ TEST(Render, BatchColoursAgreeWithTheScalarTrace) {
   }
   EXPECT_GT(compared, 5000);
   EXPECT_LE(differ, compared / 1000) << differ << " of " << compared;
+}
+
+TEST(RayScene, RawPacketsHitWhatTheDoublePathHits) {
+  // The benchmark's raw reference (IntersectRaw: single-precision packets, rtcIntersect16 or two rtcIntersect8)
+  // finds the same geometry as IntersectOnly16 (filled lane by lane from doubles) and the renderer's scalar
+  // trace, for the reflected rays of a grid of pixels: a raw path that skipped geometry would look faster.
+  const SceneConfig cfg = BoardScene(false);
+  const RayScene scene(cfg.description);
+  const auto& unit = scene.description().units[0];
+  std::vector<Vec3d> o, d;
+  for (int y = 40; y < unit.rig.camera.height; y += 29)
+    for (int x = 30; x < unit.rig.camera.width; x += 23) {
+      Vec3d M, dir;
+      if (!unit.rig.RayFromImg(Vec2d(x, y), &M, &dir)) continue;
+      o.push_back(unit.world_from_mirror * M), d.push_back(unit.world_from_mirror.Rotate(dir));
+    }
+  ASSERT_GT(o.size(), size_t(3000));
+  int compared = 0, differ = 0, scalar_differ = 0;
+  std::map<unsigned, int> seen;   // geometry id -> rays
+  const int from[16] = {0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0};
+  for (size_t p = 0; p + 16 <= o.size(); p += 16) {
+    RayScene::RawPacket16 packet;
+    for (int i = 0; i < 16; ++i) {
+      packet.ox[i] = float(o[p + i].x()), packet.oy[i] = float(o[p + i].y()), packet.oz[i] = float(o[p + i].z());
+      packet.dx[i] = float(d[p + i].x()), packet.dy[i] = float(d[p + i].y()), packet.dz[i] = float(d[p + i].z());
+    }
+    unsigned raw16[16], raw8[16], from_double[16];
+    scene.IntersectRaw(packet, 0, 16, raw16);
+    scene.IntersectRaw(packet, 0, 8, raw8);
+    scene.IntersectOnly16(16, &o[p], &d[p], from_double, from);
+    for (int i = 0; i < 16; ++i) {
+      ++compared, ++seen[raw16[i]];
+      differ += raw16[i] != from_double[i] || raw8[i] != from_double[i];
+      const raytrace::Hit h = scene.Trace(o[p + i], d[p + i], 0, 0);
+      scalar_differ += h.hit != (raw16[i] != RTC_INVALID_GEOMETRY_ID);
+    }
+  }
+  EXPECT_EQ(differ, 0) << " of " << compared;
+  EXPECT_LE(scalar_differ, compared / 1000) << " of " << compared;
+  // The rays meet the floor, the boards, the room and the camera body, and some go to the sky.
+  EXPECT_GE(seen.size(), size_t(3));
+  EXPECT_GT(seen[RTC_INVALID_GEOMETRY_ID], 0);
+  EXPECT_LT(seen[RTC_INVALID_GEOMETRY_ID], compared / 2);
+  EXPECT_THROW(
+      {
+        unsigned ids[16];
+        scene.IntersectRaw(RayScene::RawPacket16{}, 0, 4, ids);
+      },
+      Error);
 }
 
 // Frames rendered into memory that held another frame (RenderInto's reused buffers, or a freed buffer that
