@@ -132,19 +132,27 @@ void WorldRays(int n, const double* __restrict R, const double* __restrict tm, c
   }
 }
 
-// PinholeCamera::NormalisedFromImgBatch without distortion, vectorised (the same operations).
-HOVS_VECTOR_CLONES
-void NormalisedPoints(int n, double fx, double fy, double cx, double cy, const double* __restrict u,
-                      const double* __restrict v, double* __restrict x, double* __restrict y) {
-  for (int i = 0; i < n; ++i) x[i] = (u[i] - cx) / fx, y[i] = (v[i] - cy) / fy;
-}
-
 // R (column-major 3 x 3) times (x, y, 1) / |(x, y, 1)| for n points: unit rays.
 HOVS_VECTOR_CLONES
 void RotateRays(int n, const double* __restrict R, const double* __restrict x, const double* __restrict y,
                 double* __restrict vx, double* __restrict vy, double* __restrict vz) {
   for (int i = 0; i < n; ++i) {
     const double s = 1.0 / std::sqrt(x[i] * x[i] + y[i] * y[i] + 1.0), sx = x[i] * s, sy = y[i] * s;
+    vx[i] = R[0] * sx + R[3] * sy + R[6] * s;
+    vy[i] = R[1] * sx + R[4] * sy + R[7] * s;
+    vz[i] = R[2] * sx + R[5] * sy + R[8] * s;
+  }
+}
+
+// The unit rays of n pixels of a camera without distortion in one pass: PinholeCamera::NormalisedFromImgBatch
+// ((u - cx) / fx, (v - cy) / fy), then RotateRays (the same operations).
+HOVS_VECTOR_CLONES
+void PixelRays(int n, double fx, double fy, double cx, double cy, const double* __restrict R,
+               const double* __restrict u, const double* __restrict v, double* __restrict vx, double* __restrict vy,
+               double* __restrict vz) {
+  for (int i = 0; i < n; ++i) {
+    const double x = (u[i] - cx) / fx, y = (v[i] - cy) / fy;
+    const double s = 1.0 / std::sqrt(x * x + y * y + 1.0), sx = x * s, sy = y * s;
     vx[i] = R[0] * sx + R[3] * sy + R[6] * s;
     vy[i] = R[1] * sx + R[4] * sy + R[7] * s;
     vz[i] = R[2] * sx + R[5] * sy + R[8] * s;
@@ -210,22 +218,23 @@ class RayMaker {
       return;
     }
     const PinholeCamera<double>& cam = unit_ ? unit_->rig.camera : cam_.pinhole;
-    double mx[RayBatch::kMax], my[RayBatch::kMax];
+    // The unit camera rays, in the mirror frame for a unit (reflected together), in the world for a pinhole.
+    double vx[RayBatch::kMax], vy[RayBatch::kMax], vz[RayBatch::kMax];
+    const double* R = unit_ ? R_mirror_from_cam_.data() : R_world_from_cam_.data();
     if (cam.distortion.IsZero()) {
-      NormalisedPoints(n, cam.fx, cam.fy, cam.cx, cam.cy, u, v, mx, my);
+      PixelRays(n, cam.fx, cam.fy, cam.cx, cam.cy, R, u, v, vx, vy, vz);
       std::fill(b->valid, b->valid + n, 1);
     } else {
+      double mx[RayBatch::kMax], my[RayBatch::kMax];
       cam.NormalisedFromImgBatch(n, u, v, mx, my, b->valid);
+      RotateRays(n, R, mx, my, vx, vy, vz);
     }
     unsigned char on_mirror[RayBatch::kMax];
     double via[RayBatch::kMax];  // on_mirror as 0 / 1
-    // The unit camera rays, in the mirror frame for a unit (reflected together), in the world for a pinhole.
-    double vx[RayBatch::kMax], vy[RayBatch::kMax], vz[RayBatch::kMax];
     // (GCC 12 reports the arrays as maybe uninitialised when n could be 0; the callees read only [0, n).)
 #pragma GCC diagnostic push
 #pragma GCC diagnostic ignored "-Wmaybe-uninitialized"
     if (unit_) {
-      RotateRays(n, R_mirror_from_cam_.data(), mx, my, vx, vy, vz);
       reflector_->ReflectBatch(t_mirror_from_cam_, n, vx, vy, vz, Mx, My, Mz, b->dx, b->dy, b->dz, on_mirror);
       // Camera rays past the rim: where they meet the unit's mount ring, in the mirror frame where the rim test
       // was made (the world ray is the same ray rotated and moved, so the distance along it is the same).
@@ -243,7 +252,6 @@ class RayMaker {
       WorldRays(n, R_world_from_mirror_.data(), t_world_from_mirror_.data(), world_from_cam_.translation.data(), via,
                 vx, vy, vz, Mx, My, Mz, b->dx, b->dy, b->dz, b->ox, b->oy, b->oz);
     } else {
-      RotateRays(n, R_world_from_cam_.data(), mx, my, vx, vy, vz);
       std::fill(on_mirror, on_mirror + n, 0);
       RayOrigins(n, on_mirror, -1, 0.0f, via, b->tnear, b->from_mirror, b->from_camera);
       std::fill(b->mount_t, b->mount_t + n, -1.0);
