@@ -159,6 +159,18 @@ void PixelRays(int n, double fx, double fy, double cx, double cy, const double* 
   }
 }
 
+// The distance of n points from the viewpoint c: (p - c).norm() as Eigen sums it, ((x^2 + y^2) + z^2), then the
+// square root.
+HOVS_VECTOR_CLONES
+void ViewRanges(int n, const double* __restrict px, const double* __restrict py, const double* __restrict pz,
+                const double* __restrict c, double* __restrict range) {
+  const double c0 = c[0], c1 = c[1], c2 = c[2];
+  for (int i = 0; i < n; ++i) {
+    const double x = px[i] - c0, y = py[i] - c1, z = pz[i] - c2;
+    range[i] = std::sqrt(x * x + y * y + z * z);
+  }
+}
+
 // Where each ray of a batch starts: via[i] = 1 on unit's mirror (on_mirror[i]), else 0 (unit's camera, or a
 // pinhole camera when unit < 0); the matching from_mirror / from_camera (-1: none) and tnear.
 HOVS_VECTOR_CLONES
@@ -406,7 +418,8 @@ void RenderInto(const RayScene& scene, const ViewCamera& camera, const RenderOpt
       Vec2d disc[kMax];
       int px[kMax];
       float rgb[3 * kMax];
-      Hit hits[kMax];
+      HitBatch hits;            // the ground-truth rays' hits
+      double range[kMax];       // and their distances from the viewpoint
     };
     const auto scratch = std::make_unique<Scratch>();
     Scratch& sc = *scratch;
@@ -486,7 +499,9 @@ void RenderInto(const RayScene& scene, const ViewCamera& camera, const RenderOpt
             if (++gx == x1) gx = x0, ++gy;
           }
           maker.MakeBatch(m, sc.u, sc.v, nullptr, nullptr, batch.get(), sc.Mx, sc.My, sc.Mz);
-          scene.Geometry(*batch, sc.hits);
+          scene.Geometry(*batch, &sc.hits);
+          const HitBatch& H = sc.hits;
+          ViewRanges(m, H.px, H.py, H.pz, maker.viewpoint().data(), sc.range);
           static_assert(GroundTruth::kChannels == 12, "the pixel below is 12 floats");
           for (int k = 0; k < m; ++k) {
             // Every channel of the pixel is written (the buffer is not zeroed first), from values held in
@@ -495,18 +510,20 @@ void RenderInto(const RayScene& scene, const ViewCamera& camera, const RenderOpt
             // 3 % of a frame in perf samples.)
             float view_range = std::numeric_limits<float>::infinity(), point[3] = {0, 0, 0}, normal[3] = {0, 0, 0};
             float id = 0, mask = 0, mirror[3] = {0, 0, 0};
-            const Hit& h = sc.hits[k];
             if (batch->valid[k]) {
               ++task_rays;
               const bool via_mirror = batch->from_mirror[k] >= 0;
-              mask = via_mirror && h.object_id != kCameraBodyId ? 1.0f : 0.0f;
+              mask = via_mirror && H.object_id[k] != kCameraBodyId ? 1.0f : 0.0f;
               if (via_mirror)
                 mirror[0] = static_cast<float>(sc.Mx[k]), mirror[1] = static_cast<float>(sc.My[k]),
                 mirror[2] = static_cast<float>(sc.Mz[k]);
-              if (h.hit) {
-                view_range = static_cast<float>((h.point - maker.viewpoint()).norm());
-                for (int c = 0; c < 3; ++c) point[c] = static_cast<float>(h.point(c)), normal[c] = static_cast<float>(h.normal(c));
-                id = static_cast<float>(h.object_id);
+              if (H.hit[k]) {
+                view_range = static_cast<float>(sc.range[k]);
+                point[0] = static_cast<float>(H.px[k]), point[1] = static_cast<float>(H.py[k]);
+                point[2] = static_cast<float>(H.pz[k]);
+                normal[0] = static_cast<float>(H.nx[k]), normal[1] = static_cast<float>(H.ny[k]);
+                normal[2] = static_cast<float>(H.nz[k]);
+                id = static_cast<float>(H.object_id[k]);
               }
             }
             float* v = &f.truth.data[static_cast<size_t>(sc.px[k]) * GroundTruth::kChannels];

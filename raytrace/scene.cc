@@ -710,8 +710,11 @@ void RayScene::Colours(const RayBatch& b, float* rgb) const {
         for (int k = i; k < j; ++k)
           if (!seen(k)) put(k, denom[k] == 0 ? Rgb{0, 0, 0} : r.back);
     } else if (g < geom_to_user_.size() && geom_to_user_[g] >= 0) {
+      // A run of lanes on one analytic shape (the mount ring past the rim: long runs): one flat colour.
+      while (j < n && b.valid[j] && geom[j] == g) ++j;
       const UserGeometry& u = *user_[geom_to_user_[g]];
-      put(i, u.kind == UserGeometry::Kind::kMirror ? u.back_colour : u.colour);
+      const Rgb& c = u.kind == UserGeometry::Kind::kMirror ? u.back_colour : u.colour;
+      for (int k = i; k < j; ++k) put(k, c);
     } else {
       put(i, {0, 0, 0});
     }
@@ -739,45 +742,86 @@ void RayScene::Colours(const RayBatch& b, float* rgb) const {
   }
 }
 
-void RayScene::Geometry(const RayBatch& b, Hit* hits) const {
+namespace {
+
+// Lanes [i0, i1) of a run on one rectangle into the hits, from their plane points (RectPlaneHits): a hit unless
+// the ray is parallel to the plane (denom 0), with the normal facing the ray (as Shade).
+HOVS_VECTOR_CLONES
+void RectHitLanes(int i0, int i1, const RectPlaneRuns* __restrict planes, const double* __restrict normal, int id,
+                  HitBatch* __restrict H) {
+  const double n0 = normal[0], n1 = normal[1], n2 = normal[2];
+  for (int k = i0; k < i1; ++k) {
+    const bool hit = planes->denom[k] != 0;
+    const double s = planes->denom[k] < 0 ? 1.0 : -1.0;
+    H->hit[k] = hit ? 1 : 0;
+    H->object_id[k] = hit ? id : static_cast<int>(kSkyId);
+    // (Selects, not products: a ray parallel to the plane has an infinite distance and no finite point.)
+    H->px[k] = hit ? planes->px[k] : 0.0, H->py[k] = hit ? planes->py[k] : 0.0, H->pz[k] = hit ? planes->pz[k] : 0.0;
+    H->nx[k] = hit ? s * n0 : 0.0, H->ny[k] = hit ? s * n1 : 0.0, H->nz[k] = hit ? s * n2 : 0.0;
+  }
+}
+
+// Lanes [i0, i1) of straight camera rays ending on their mount ring at distance t[k] (the renderer's analytic
+// test): the point o + t d and the ring's normal n facing the ray (as UserHit).
+HOVS_VECTOR_CLONES
+void RingHitLanes(int i0, int i1, const double* __restrict ox, const double* __restrict oy,
+                  const double* __restrict oz, const double* __restrict dx, const double* __restrict dy,
+                  const double* __restrict dz, const double* __restrict t, const double* __restrict normal, int id,
+                  HitBatch* __restrict H) {
+  const double n0 = normal[0], n1 = normal[1], n2 = normal[2];
+  for (int k = i0; k < i1; ++k) {
+    const double s = dx[k] * n0 + dy[k] * n1 + dz[k] * n2 < 0 ? 1.0 : -1.0;
+    H->hit[k] = 1;
+    H->object_id[k] = id;
+    H->px[k] = ox[k] + t[k] * dx[k], H->py[k] = oy[k] + t[k] * dy[k], H->pz[k] = oz[k] + t[k] * dz[k];
+    H->nx[k] = s * n0, H->ny[k] = s * n1, H->nz[k] = s * n2;
+  }
+}
+
+}  // namespace
+
+void RayScene::Geometry(const RayBatch& b, HitBatch* H) const {
   unsigned geom[RayBatch::kMax], prim[RayBatch::kMax];
   IntersectBatch(b, geom, prim);
   RectPlaneRuns planes;
+  // Lane k ends on its unit's mount ring at the renderer's analytic distance: the unit, else -1.
+  const auto ring_unit = [&](int k) {
+    const int u = b.from_camera[k];
+    return b.valid[k] && u >= 0 && static_cast<size_t>(u) < own_mount_.size() && own_mount_[u].geometry &&
+                   b.mount_t[k] > 0 && geom[k] == own_mount_[u].geom_id
+               ? u
+               : -1;
+  };
   for (int i = 0; i < b.n;) {
+    int j = i + 1;
     if (b.valid[i] && geom[i] == rect_geom_) {
       // A run of consecutive lanes on one rectangle: their plane points in one vectorised pass (as Shade).
       const unsigned p = prim[i];
-      int j = i + 1;
       while (j < b.n && b.valid[j] && geom[j] == rect_geom_ && prim[j] == p) ++j;
       const RectFrame& fr = rect_frames_[p];
       RectPlaneHits(i, j - i, b.ox, b.oy, b.oz, b.dx, b.dy, b.dz, fr.flat, &planes);
-      const int id = desc_.rects[p].object_id;
-      for (int k = i; k < j; ++k) {
-        Hit& h = hits[k];
-        h = Hit();
-        if (planes.denom[k] == 0) continue;
-        h.hit = true, h.object_id = id, h.t = planes.k[k];
-        h.point = Vec3d(planes.px[k], planes.py[k], planes.pz[k]);
-        h.normal = planes.denom[k] < 0 ? fr.normal : Vec3d(-fr.normal);
-      }
+      RectHitLanes(i, j, &planes, fr.normal.data(), desc_.rects[p].object_id, H);
       i = j;
       continue;
     }
-    const int k = i++;
-    Hit& h = hits[k];
-    h = Hit();
-    if (!b.valid[k] || geom[k] == RTC_INVALID_GEOMETRY_ID) continue;
-    const Vec3d o(b.ox[k], b.oy[k], b.oz[k]), d(b.dx[k], b.dy[k], b.dz[k]);
-    const int u = b.from_camera[k];
-    if (u >= 0 && static_cast<size_t>(u) < own_mount_.size() && own_mount_[u].geometry && b.mount_t[k] > 0 &&
-        geom[k] == own_mount_[u].geom_id) {
-      // A straight camera ray that ended on its own mount ring: the ring's distance is already known (the
-      // renderer's analytic test, in double); Shade would solve it again. The ring's normal is its local z.
+    if (const int u = ring_unit(i); u >= 0) {
+      // A run of straight camera rays that ended on their own mount ring: the ring's distance is already known
+      // (in double); Shade would solve it again. The ring's normal is its local z.
+      while (j < b.n && ring_unit(j) == u) ++j;
       const UserGeometry& g = *own_mount_[u].geometry;
-      UserHit(g, o, d, b.mount_t[k], g.R_world_from_local.col(2), &h);
+      const Vec3d n = g.R_world_from_local.col(2);
+      RingHitLanes(i, j, b.ox, b.oy, b.oz, b.dx, b.dy, b.dz, b.mount_t, n.data(), g.object_id, H);
+      i = j;
       continue;
     }
-    Shade(o, d, geom[k], prim[k], &h, false);
+    Hit h;
+    if (b.valid[i] && geom[i] != RTC_INVALID_GEOMETRY_ID)
+      Shade(Vec3d(b.ox[i], b.oy[i], b.oz[i]), Vec3d(b.dx[i], b.dy[i], b.dz[i]), geom[i], prim[i], &h, false);
+    H->hit[i] = h.hit ? 1 : 0;
+    H->object_id[i] = h.object_id;
+    H->px[i] = h.point.x(), H->py[i] = h.point.y(), H->pz[i] = h.point.z();
+    H->nx[i] = h.normal.x(), H->ny[i] = h.normal.y(), H->nz[i] = h.normal.z();
+    i = j;
   }
 }
 

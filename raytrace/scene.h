@@ -100,6 +100,16 @@ struct RayBatch {
   alignas(64) unsigned char valid[kMax];            // 0: no ray (outside the camera's domain): black, no hit
 };
 
+// The hits of a batch without colour, in structure-of-arrays form (the ground-truth path): lane i as Hit's
+// hit, object_id, point and normal. Where hit[i] = 0 (no ray, or nothing met): object_id kSkyId, point and
+// normal zero.
+struct HitBatch {
+  alignas(64) double px[RayBatch::kMax], py[RayBatch::kMax], pz[RayBatch::kMax];  // world
+  alignas(64) double nx[RayBatch::kMax], ny[RayBatch::kMax], nz[RayBatch::kMax];  // world, facing the ray
+  alignas(64) int object_id[RayBatch::kMax];
+  alignas(64) unsigned char hit[RayBatch::kMax];
+};
+
 // The Embree scene built from a description. Thread-safe for tracing once built.
 class RayScene {
  public:
@@ -119,8 +129,10 @@ class RayScene {
   // The colour seen along each ray of a batch (3 floats per ray; black where !valid): Trace16 with colour,
   // without the hit geometry, and with the textures evaluated in batches.
   void Colours(const RayBatch& batch, float* rgb) const;
-  // The hits of a batch without colour (point, normal, id): the ground-truth path.
-  void Geometry(const RayBatch& batch, Hit* hits) const;
+  // The hits of a batch without colour (point, normal, id): the ground-truth path. The same values as Trace16
+  // without colour, lane by lane; runs of lanes on one rectangle or on their unit's mount ring are evaluated
+  // together (vectorised).
+  void Geometry(const RayBatch& batch, HitBatch* hits) const;
   Hit Trace(const Vec3d& origin, const Vec3d& direction, double tnear = 0, int from_mirror = -1) const;
   // True if anything blocks the open segment from a to b (rtcOccluded1).
   bool Occluded(const Vec3d& a, const Vec3d& b, double eps = 1e-7) const;

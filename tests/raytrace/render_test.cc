@@ -564,6 +564,41 @@ TEST(Render, BatchColoursAgreeWithTheScalarTrace) {
   EXPECT_LE(differ, compared / 1000) << differ << " of " << compared;
 }
 
+TEST(Render, GroundTruthOfMirrorPixelsIsTheScalarTrace) {
+  // The ground-truth pass (RayScene::Geometry, runs of lanes evaluated together) against the scalar trace of
+  // each mirror pixel's reflected ray, on a misaligned rig: the same object, point, normal and range.
+  SceneConfig cfg = BoardScene(true);
+  cfg.description.units[0].rig.camera = PinholeCamera<double>::FromPhysical(0.016, 4.54e-6 * 10, 275, 220);
+  const RayScene scene(cfg.description);
+  const auto& unit = scene.description().units[0];
+  raytrace::RenderOptions ro;
+  ro.samples = 1;
+  const raytrace::Frame f = raytrace::Render(scene, raytrace::ViewCamera::Unit(0), ro);
+  int compared = 0, differ = 0;
+  std::map<int, int> ids;
+  for (int y = 0; y < f.height; ++y)
+    for (int x = 0; x < f.width; ++x) {
+      Vec3d M, d;
+      if (!unit.rig.RayFromImg(Vec2d(x, y), &M, &d)) continue;
+      const Vec3d o = unit.world_from_mirror * M, dw = unit.world_from_mirror.Rotate(d);
+      const raytrace::Hit h = scene.Trace(o, dw, 1e-5, 0);
+      const float* g = &f.truth.data[(static_cast<size_t>(y) * f.width + x) * raytrace::GroundTruth::kChannels];
+      ++compared, ++ids[static_cast<int>(g[7])];
+      if (!h.hit) {
+        differ += !(std::isinf(g[0]) && g[7] == 0 && g[1] == 0 && g[4] == 0);
+        continue;
+      }
+      const Vec3d P(g[1], g[2], g[3]), N(g[4], g[5], g[6]);
+      const bool same = g[7] == h.object_id && (P - h.point).norm() < 1e-5 * (1 + h.point.norm()) &&
+                        (N - h.normal).norm() < 1e-6 &&
+                        std::abs(g[0] - (h.point - unit.world_from_mirror.translation).norm()) < 1e-5;
+      differ += !same;
+    }
+  EXPECT_GT(compared, 25000);
+  EXPECT_LE(differ, compared / 1000) << differ << " of " << compared;
+  EXPECT_GE(ids.size(), size_t(3)) << "sky, camera body, floor and boards are all seen";
+}
+
 TEST(RayScene, RawPacketsHitWhatTheDoublePathHits) {
   // The benchmark's raw reference (IntersectRaw: single-precision packets, rtcIntersect16 or two rtcIntersect8)
   // finds the same geometry as IntersectOnly16 (filled lane by lane from doubles) and the renderer's scalar
