@@ -859,7 +859,8 @@ void RayScene::IntersectOnly16(int count, const Vec3d* o, const Vec3d* d, unsign
 }
 
 namespace {
-// Lanes [i0, i0 + W) of a raw packet into an Embree packet of width W, every lane valid.
+// Lanes [i0, i0 + W) of a raw packet into an Embree packet of width W, every lane valid. (SetLane's fields with
+// the mask and id computed once: with SetLane per lane the raw figure was about 6 % slower.)
 template <int W, class RayHitW>
 void FillRawPacket(const RayScene::RawPacket16& p, int i0, unsigned mask, unsigned id, int* valid, RayHitW* rh) {
   for (int i = 0; i < W; ++i) {

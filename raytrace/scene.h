@@ -137,7 +137,8 @@ class RayScene {
   // True if anything blocks the open segment from a to b (rtcOccluded1).
   bool Occluded(const Vec3d& a, const Vec3d& b, double eps = 1e-7) const;
 
-  // Raw Embree throughput reference: rtcIntersect16 only, no shading (for the benchmark's comparison).
+  // rtcIntersect16 only, no shading, each lane filled from doubles (the benchmark's raw reference until session
+  // 22; IntersectRaw below is the reference now).
   void IntersectOnly16(int count, const Vec3d* origins, const Vec3d* directions, unsigned* geom_ids,
                        const int* from_mirror = nullptr) const;
   // The same with rtcIntersect8 (up to 8 rays): the packet width the renderer uses without AVX-512.
