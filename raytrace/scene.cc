@@ -894,11 +894,4 @@ void RayScene::IntersectRaw(const RawPacket16& p, int from_mirror, int width, un
   }
 }
 
-void RayScene::IntersectOnly8(int count, const Vec3d* o, const Vec3d* d, unsigned* geom_ids,
-                              const int* from_mirror) const {
-  alignas(32) RTCRayHit8 rh;
-  IntersectPacketW<8>(scene_, count, o, d, nullptr, from_mirror, &rh, rtcIntersect8);
-  for (int i = 0; i < count; ++i) geom_ids[i] = rh.hit.geomID[i];
-}
-
 }  // namespace hovs::raytrace

@@ -141,9 +141,6 @@ class RayScene {
   // 22; IntersectRaw below is the reference now).
   void IntersectOnly16(int count, const Vec3d* origins, const Vec3d* directions, unsigned* geom_ids,
                        const int* from_mirror = nullptr) const;
-  // The same with rtcIntersect8 (up to 8 rays): the packet width the renderer uses without AVX-512.
-  void IntersectOnly8(int count, const Vec3d* origins, const Vec3d* directions, unsigned* geom_ids,
-                      const int* from_mirror = nullptr) const;
   // Sixteen rays already in single precision, structure of arrays (the layout of Embree's packets), all leaving
   // one unit's mirror (from_mirror >= 0) or none (-1), tnear 0: copied into the packet with vector moves and
   // traced with rtcIntersect16 (width 16) or two rtcIntersect8 (width 8); geometry ids only. The raw reference

@@ -121,17 +121,16 @@ BENCHMARK(BM_RawIntersect16)->Arg(16)->Arg(8)->Arg(0)->Unit(benchmark::kMillisec
 
 // The ratio in one figure: each iteration renders the frame with ground truth and traces the raw rays five
 // times right after, each timed on its own, so that both see the same state of this VM (whose speed drifts by tens
-// of per cent within minutes). ratio = the frame's rays per second over raw rtcIntersect16's (from
-// single-precision packets), summed over the iterations; ratio_to_raw8 the same over rtcIntersect8's;
-// ratio_to_raw_from_double over rtcIntersect16 filled lane by lane from doubles, the reference of sessions 1-21
-// (about half as fast as the raw figure: its packet filling took as long as Embree's traversal), kept so that
-// their figures can be compared. Argument: the frame's
-// buffers (the first frame, which maps memory new to the process, rendered before the timing): 0 fresh ones, the
-// previous frame's freed just before (inside the timing); 1 reused (RenderInto); 2 fresh ones, the previous
-// frame's freed right after its render, so about a second before (during the raw traces): on a VM whose hypervisor
-// takes back guest memory that stays free (see BM_FrameMemoryFirstTouch) the new buffers came through host page
-// faults until freed large buffers were kept for reuse (hovs::KeepFreedLargePages, set up by the benchmark main
-// as by the hovs command); now 0 and 2 get the previous frame's memory back.
+// of per cent within minutes). ratio = the frame's rays per second over raw rtcIntersect16's (from single-precision
+// packets), summed over the iterations; ratio_to_raw8 the same over rtcIntersect8's; ratio_to_raw_from_double over
+// rtcIntersect16 filled lane by lane from doubles, the reference of sessions 1-21 (0.5-0.8 times as fast as the raw
+// figure: its packet filling took about as long as Embree's traversal), kept so that their figures can be compared.
+// Argument: the frame's buffers (the first frame, which maps memory new to the process, rendered before the timing):
+// 0 fresh ones, the previous frame's freed just before (inside the timing); 1 reused (RenderInto); 2 fresh ones, the
+// previous frame's freed right after its render, so about a second before (during the raw traces): on a VM whose
+// hypervisor takes back guest memory that stays free (see BM_FrameMemoryFirstTouch) the new buffers came through
+// host page faults until freed large buffers were kept for reuse (hovs::KeepFreedLargePages, set up by the benchmark
+// main as by the hovs command); now 0 and 2 get the previous frame's memory back.
 void BM_RenderRatioToRaw(benchmark::State& state) {
   const hovs::raytrace::RayScene scene(Scene().description);
   const RawRays raw(scene);
