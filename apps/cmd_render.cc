@@ -19,13 +19,14 @@ Runner SetupRender(CLI::App* sub, const GlobalOptions* global) {
   auto o = std::make_shared<Options>();
   sub->add_option("-s,--scene", o->scene, "scene file (YAML)")->capture_default_str();
   sub->add_option("-o,--out", o->out, "output folder (replaced atomically)")->capture_default_str();
-  sub->add_option("--samples", o->samples, "samples per pixel (overrides the scene)");
-  sub->add_option("--seed", o->seed, "render seed (overrides the scene)");
+  CLI::Option* samples =
+      sub->add_option("--samples", o->samples, "samples per pixel (overrides the scene)")->check(CLI::Range(1, 4096));
+  sub->add_option("--seed", o->seed, "render seed (overrides the scene)")->check(CLI::Range(0LL, (1LL << 53)));
   sub->add_option("--downscale", o->downscale, "same optics at 1/N of the resolution (quick runs)")->capture_default_str();
-  return [o, global]() {
+  return [o, global, samples]() {
     scenes::SceneConfig cfg = scenes::LoadSceneConfig(o->scene);
     scenes::DownscaleCameras(&cfg, o->downscale);
-    if (o->samples != 0) cfg.render.samples = o->samples;
+    if (samples->count() > 0) cfg.render.samples = o->samples;
     if (o->seed >= 0) cfg.render.seed = static_cast<uint64_t>(o->seed);
     cfg.render.Check("--samples/--seed");
     scenes::RenderSceneFolder(cfg, o->out, !global->quiet, design::DesignVersions());
@@ -56,21 +57,23 @@ Runner SetupDataset(CLI::App* sub, const GlobalOptions* global) {
       ->capture_default_str();
   sub->add_option("--yaw-step", o->yaw_step, "depth_sequence: rig turn per frame about the vertical, degrees")
       ->capture_default_str();
-  sub->add_option("-n,--count", o->count, "frames (default: 9 mono, 12 stereo)");
+  CLI::Option* count =
+      sub->add_option("-n,--count", o->count, "frames (default: 9 mono, 12 stereo)")->check(CLI::Range(1, 10000));
   sub->add_option("--seed", o->seed, "seed of the board poses")->capture_default_str();
-  sub->add_option("--samples", o->samples, "samples per pixel (overrides the scene)");
+  CLI::Option* samples =
+      sub->add_option("--samples", o->samples, "samples per pixel (overrides the scene)")->check(CLI::Range(1, 4096));
   sub->add_option("--downscale", o->downscale, "same optics at 1/N of the resolution (quick runs)")->capture_default_str();
   sub->add_option("--unit", o->unit, "mono_calibration: the unit to calibrate (default: the scene's first)");
   sub->add_option("--elevation", o->elevation, "board centre elevation range MIN MAX, degrees (default: per kind)")
       ->expected(2);
-  return [o, global]() {
+  return [o, global, samples, count]() {
     scenes::SceneConfig cfg = scenes::LoadSceneConfig(o->scene);
     scenes::DownscaleCameras(&cfg, o->downscale);
     if (!o->unit.empty()) scenes::SelectUnit(&cfg, o->unit);
-    if (o->samples != 0) cfg.render.samples = o->samples;
+    if (samples->count() > 0) cfg.render.samples = o->samples;
     cfg.render.Check("--samples");
     scenes::DatasetOptions d = scenes::DatasetOptions::ForKind(o->kind);
-    if (o->count != 0) d.count = o->count;
+    if (count->count() > 0) d.count = o->count;
     if (!o->elevation.empty()) d.min_elevation_deg = o->elevation[0], d.max_elevation_deg = o->elevation[1];
     d.seed = o->seed;
     d.progress = !global->quiet;

@@ -41,7 +41,10 @@ int RunCommandLine(int argc, const char* const* argv, bool rethrow) {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
     if (rethrow) throw Error("command line", std::string(e.what()));
-    return app.exit(e);
+    if (e.get_exit_code() == 0) return app.exit(e);   // --help, --version: CLI11's own output
+    // Any other command-line error is bad input like the rest: one line, exit 2.
+    std::cerr << "hovs: error: " << e.what() << " (see --help)\n";
+    return 2;
   }
   for (auto& [sub, run] : runners) {
     if (!sub->parsed()) continue;

@@ -251,6 +251,23 @@ TEST(RenderCli, RendersAndRejectsBadInput) {
   zero.replace(zero.find("render: {samples: 16"), 20, "render: {samples: 0");
   rejected(zero, "samples");
   rejected(scene, "samples", " --samples -3");
+  // Zero given on the command line is not "the scene's value" (it used to render with the scene's samples).
+  rejected(scene, "--samples", " --samples 0");
+  rejected(scene, "--seed", " --seed -1");
+  std::string far = scene;
+  far.replace(far.find("position: [0, 0, 1.3]"), 21, "position: [0, 0, 1e300]");   // an Embree assertion once
+  rejected(far, "from the world origin");
+  std::string huge = scene;
+  huge.replace(huge.find("squares: [8, 6]"), 15, "squares: [800000, 600000]");    // std::bad_alloc once
+  rejected(huge, "at most 1000 x 1000");
+  std::string pitch = scene;
+  pitch.replace(pitch.find("pixel_pitch: 3.632e-5"), 21, "pixel_pitch: 1e-300");
+  rejected(pitch, "pixel_pitch");
+  const auto no_frames = test::Hovs("dataset --scene " + (dir / "small.yaml").string() + " -n 0 --out " +
+                                    (dir / "bad_out").string());
+  EXPECT_EQ(no_frames.exit_code, 2) << no_frames.output;
+  EXPECT_NE(no_frames.output.find("--count"), std::string::npos) << no_frames.output;
+  EXPECT_FALSE(fs::exists(dir / "bad_out"));
   std::string inside = scene;
   inside.insert(inside.find("    pose: {position: [0, 0, 1.3]}"), "    misalignment: {height_error: -0.2}\n");
   rejected(inside, "inside the mirror");
