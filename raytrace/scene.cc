@@ -190,7 +190,41 @@ std::vector<Rect> MakeBox(const Rigid3d& world_from_base, const Vec3d& s, const 
   return out;
 }
 
+namespace {
+
+// Every part of the scene within kWorldExtent of the origin along each axis, and finite.
+void CheckWorldExtent(const SceneDescription& d) {
+  const auto inside = [](const Vec3d& p) { return p.allFinite() && p.cwiseAbs().maxCoeff() <= kWorldExtent; };
+  const auto name_of = [&](int id) {
+    for (const SceneObjectInfo& o : d.objects)
+      if (o.id == id) return "'" + o.name + "'";
+    return "with id " + std::to_string(id);
+  };
+  for (const Rect& r : d.rects) {
+    const double hw = 0.5 * r.width, hh = 0.5 * r.height;
+    for (const Vec3d& corner : {Vec3d(-hw, -hh, 0), Vec3d(hw, -hh, 0), Vec3d(hw, hh, 0), Vec3d(-hw, hh, 0)})
+      HOVS_REQUIRE(inside(r.world_from_rect * corner), "scene object " + name_of(r.object_id),
+                   "reaches beyond ", kWorldExtent, " m from the world origin along an axis: the renderer traces in "
+                   "single precision (1 mm there); give the scene in local coordinates");
+  }
+  for (const CatadioptricUnit& u : d.units) {
+    const HyperboloidMirror<double>& m = u.rig.mirror;
+    const Vec3d camera = (u.world_from_mirror * u.rig.cam_from_mirror.Inverse()).translation;
+    const Vec3d rim[4] = {Vec3d(m.RimRadius(), 0, m.RimZ()), Vec3d(-m.RimRadius(), 0, m.RimZ()),
+                          Vec3d(0, m.RimRadius(), m.RimZ()), Vec3d(0, -m.RimRadius(), m.RimZ())};
+    bool ok = inside(u.world_from_mirror.translation) && inside(camera) && std::isfinite(u.mount_outer_radius) &&
+              u.mount_outer_radius <= kWorldExtent && std::isfinite(u.body_length) && u.body_length <= kWorldExtent;
+    for (const Vec3d& p : rim) ok = ok && inside(u.world_from_mirror * p);
+    HOVS_REQUIRE(ok, "unit " + u.name, "its mirror or camera reaches beyond ", kWorldExtent,
+                 " m from the world origin along an axis: the renderer traces in single precision (1 mm there)");
+  }
+}
+
+}  // namespace
+
 RayScene::RayScene(SceneDescription description) : desc_(std::move(description)) {
+  // Before any Embree object exists: an error here leaves nothing to release.
+  CheckWorldExtent(desc_);
   device_ = rtcNewDevice(nullptr);
   HOVS_REQUIRE(device_ != nullptr, "embree", "cannot create a device (error ", static_cast<int>(rtcGetDeviceError(nullptr)), ")");
   scene_ = rtcNewScene(device_);

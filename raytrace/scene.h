@@ -17,6 +17,10 @@
 
 namespace hovs::raytrace {
 
+// How far from the world origin (m, along each axis) a scene may reach: Embree traces in single precision,
+// whose spacing there is about 1 mm. RayScene rejects a scene that reaches further (or is not finite).
+constexpr double kWorldExtent = 1e4;
+
 // Object ids written to the ground truth. Scene objects number from kFirstObjectId in the order given.
 enum ObjectId : int { kSkyId = 0, kMountId = 1, kCameraBodyId = 2, kMirrorId = 3, kFirstObjectId = 4 };
 

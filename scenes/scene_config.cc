@@ -61,6 +61,8 @@ void CheckBoard(const BoardSpec& s, const std::string& where) {
   HOVS_REQUIRE(s.margin >= 0 && std::isfinite(s.margin), where, "margin must be >= 0");
   if (s.kind == BoardSpec::Kind::kChecker) {
     HOVS_REQUIRE(s.squares_x >= 2 && s.squares_y >= 2, where, "a checkerboard needs at least 2 x 2 squares");
+    HOVS_REQUIRE(s.squares_x <= 1000 && s.squares_y <= 1000, where, "a checkerboard has at most 1000 x 1000 squares (got ",
+                 s.squares_x, " x ", s.squares_y, ")");
     HOVS_REQUIRE(s.square > 0 && std::isfinite(s.square), where, "square size must be positive");
   } else {
     HOVS_REQUIRE(calib::ArucoDictionaryId(s.dictionary) >= 0, where, "unknown ArUco dictionary '", s.dictionary, "' (known: ", calib::ArucoDictionaryNames(), ")");
@@ -133,9 +135,16 @@ Rigid3d ReadPose(const YamlReader& r, const YAML::Node& n, const std::string& ke
   r.OnlyKeys(n, key, {"position", "rotation_deg", "look_at", "roll_deg"});
   YAML::Node pos;
   const Vec3d p = r.Vector3(r.Require(n, key, "position", &pos), key + ".position");
+  const auto within = [&](const Vec3d& v, const YAML::Node& at, const std::string& k) {
+    HOVS_REQUIRE(v.cwiseAbs().maxCoeff() <= raytrace::kWorldExtent, r.Where(at, k), "lies more than ",
+                 raytrace::kWorldExtent, " m from the world origin: the renderer traces in single precision (1 mm "
+                 "there); give the scene in local coordinates");
+  };
+  within(p, pos, key + ".position");
   HOVS_REQUIRE(!(n["rotation_deg"] && n["look_at"]), r.Where(n, key), "give rotation_deg or look_at, not both");
   if (n["look_at"]) {
     const Vec3d t = r.Vector3(n["look_at"], key + ".look_at");
+    within(t, n["look_at"], key + ".look_at");
     HOVS_REQUIRE((t - p).norm() > 1e-9, r.Where(n["look_at"], key + ".look_at"), "look_at equals position");
     return LookAt(p, t, n["roll_deg"] ? r.Number(n["roll_deg"], key + ".roll_deg") * kDeg : 0.0);
   }
@@ -159,6 +168,8 @@ Texture ReadTexture(const YamlReader& r, const YAML::Node& n, const std::string&
     r.Require(c, k, "squares", &sq);
     HOVS_REQUIRE(sq.IsSequence() && sq.size() == 2, r.Where(sq, k + ".squares"), "expected [nx, ny]");
     t.squares_x = r.Integer(sq[0], k + ".squares[0]"), t.squares_y = r.Integer(sq[1], k + ".squares[1]");
+    HOVS_REQUIRE(t.squares_x >= 1 && t.squares_y >= 1, r.Where(sq, k + ".squares"), "needs at least 1 x 1 squares (got ",
+                 t.squares_x, " x ", t.squares_y, ")");
     YAML::Node s;
     t.square = r.Positive(r.Require(c, k, "square", &s), k + ".square");
     if (c["dark"]) t.colour_a = r.Colour(c["dark"], k + ".dark");
@@ -226,6 +237,8 @@ SceneConfig ParseSceneConfig(const std::string& text, const std::string& source,
     YAML::Node f, pp, w, h, la;
     const double focal = r.Positive(r.Require(c, kc, "focal_length", &f), kc + ".focal_length");
     const double pitch = r.Positive(r.Require(c, kc, "pixel_pitch", &pp), kc + ".pixel_pitch");
+    HOVS_REQUIRE(pitch >= 1e-7 && pitch <= 1e-3, r.Where(pp, kc + ".pixel_pitch"),
+                 "must be in 1e-7 .. 1e-3 m (0.1 um to 1 mm; got ", pitch, ")");
     const int width = r.Integer(r.Require(c, kc, "width", &w), kc + ".width");
     const int height = r.Integer(r.Require(c, kc, "height", &h), kc + ".height");
     HOVS_REQUIRE(width > 0 && height > 0 && width <= 20000 && height <= 20000, r.Where(c, kc), "image size must be 1..20000");

@@ -384,6 +384,42 @@ TEST(SceneConfig, RejectsBadInput) {
   f0.replace(f0.find("focal_length: 0.016"), 19, "focal_length: 0.0");
   expect(f0, "must be positive");
   expect(std::string(unit).insert(unit.find("    pose"), "    misalignment: {height_error: -0.2}\n"), "inside the mirror");
+  expect(unit + "objects:\n  - {type: plane, pose: {position: [1, 0, 1], look_at: [2e4, 0, 1]}, size: [1, 1], "
+                "texture: {solid: [1, 1, 1]}}\n",
+         "from the world origin");
+  expect(unit + "objects:\n  - {type: plane, pose: {position: [1, 0, 1]}, size: [1, 1], "
+                "texture: {checker: {squares: [0, 3], square: 0.1}}}\n",
+         "at least 1 x 1 squares");
+}
+
+TEST(RayScene, RejectsAWorldBeyondSinglePrecision) {
+  // Embree traces in single precision: parts beyond kWorldExtent (or not finite) are refused before any Embree
+  // object exists, with the part named. (A mirror with a = 1e300 put the camera at -2e300 and Embree aborted.)
+  const auto base = scenes::ParseSceneConfig(
+      "units:\n  - mirror: {a: 0.048, b: 0.044, rim_diameter: 0.080}\n"
+      "    camera: {focal_length: 0.016, pixel_pitch: 4.54e-6, width: 275, height: 220, lens_aperture: 0.020}\n"
+      "    pose: {position: [0, 0, 1.3]}\n"
+      "objects:\n  - {type: plane, name: wall, pose: {position: [3, 0, 1], look_at: [0, 0, 1]}, size: [2, 2], "
+      "texture: {solid: [1, 1, 1]}}\n",
+      "ok.yaml", ".");
+  EXPECT_NO_THROW(raytrace::RayScene scene(base.description));
+  const auto expect = [](raytrace::SceneDescription d, const std::string& needle) {
+    try {
+      raytrace::RayScene scene(std::move(d));
+      ADD_FAILURE() << "accepted";
+    } catch (const Error& e) {
+      EXPECT_NE(std::string(e.what()).find(needle), std::string::npos) << e.what();
+    }
+  };
+  raytrace::SceneDescription wide = base.description;
+  wide.rects[0].width = 3 * raytrace::kWorldExtent;   // its corners reach past the extent, its centre does not
+  expect(wide, "'wall'");
+  raytrace::SceneDescription big_mirror = base.description;
+  big_mirror.units[0].rig.mirror.a = 1e300;
+  expect(big_mirror, "unit unit0");
+  raytrace::SceneDescription nan_pose = base.description;
+  nan_pose.units[0].world_from_mirror.translation.x() = std::nan("");
+  expect(nan_pose, "unit unit0");
 }
 
 TEST(Render, PastTheRimTheCameraSeesTheMountNotItsOwnLens) {
