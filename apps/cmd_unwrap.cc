@@ -127,6 +127,8 @@ Runner SetupUnwrap(CLI::App* sub, const GlobalOptions* global) {
       return 0;
     }
     HOVS_REQUIRE(!o->input.empty() || !o->save_map.empty(), "hovs unwrap", "give --input (and/or --save-map)");
+    HOVS_REQUIRE(o->save_map.empty() || o->map.empty(), "--save-map", "saves the mapping built from --model, not one "
+                 "loaded with --map");
     const unwrap::Interpolation interp = unwrap::ParseInterpolation(o->interp);
     const auto t0 = std::chrono::steady_clock::now();
     unwrap::RemapTable table;
@@ -141,11 +143,17 @@ Runner SetupUnwrap(CLI::App* sub, const GlobalOptions* global) {
       const nlohmann::json versions = design::DesignVersions();
       table = unwrap::BuildRemapTable(model, unwrap::ResolveLayout(o->layout), ro, versions.dump());
       source = std::string("built from the ") + model.KindName() + " model in " + o->model;
-      if (!o->save_map.empty()) unwrap::SaveRemapTable(o->save_map, table);
     }
+    // The mapping file is saved once everything else has succeeded: a failed run leaves no new file.
+    const auto save_map = [&] {
+      if (!o->save_map.empty()) unwrap::SaveRemapTable(o->save_map, table);
+    };
     const double table_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
     if (!global->quiet) std::printf("hovs unwrap: %zu views, mapping %s in %.0f ms\n", table.views.size(), source.c_str(), table_ms);
-    if (o->input.empty()) return 0;
+    if (o->input.empty()) {
+      save_map();
+      return 0;
+    }
 
     const auto frames = ListInputs(o->input, o->unit);
     // Ground-truth views: pinhole renders of the scene (without the units' hardware) at the unit's viewpoint.
@@ -254,6 +262,7 @@ Runner SetupUnwrap(CLI::App* sub, const GlobalOptions* global) {
       j["truth"] = {{"scene", o->truth_scene}, {"samples", o->truth_samples}, {"per_frame", truth_json}};
     }
     WriteFileAtomic(staged.staging() / "views.json", j.dump(1));
+    save_map();
     staged.Commit();
     if (!global->quiet)
       std::printf("hovs unwrap: %zu frames x %zu views -> %s (median remap %.2f ms per frame)\n", frames.size(),

@@ -66,6 +66,8 @@ std::vector<fs::path> ListImageFiles(const fs::path& folder) {
       if (ext == x) files.push_back(e.path());
   }
   std::sort(files.begin(), files.end());
+  HOVS_REQUIRE(!files.empty() || !fs::is_regular_file(folder / "dataset.json"), folder.string(),
+               "the folder holds no images but a dataset manifest: give ", (folder / "dataset.json").string());
   HOVS_REQUIRE(!files.empty(), folder.string(), "the folder holds no images (png, jpg, tif, exr, bmp, pgm)");
   return files;
 }

@@ -80,6 +80,25 @@ TEST(UnwrapCli, ViewsFromAModelOrAMappingFileAreIdenticalAndBadInputIsRejected) 
   EXPECT_NE(wrong.output.find("2750 x 2200"), std::string::npos) << wrong.output;
   EXPECT_FALSE(fs::exists(dir / "y"));
 
+  // A failed run saves no mapping file either; --save-map with --map is refused; a render folder is not a
+  // folder of images (its manifest is named).
+  const auto wrong_saved = Hovs("unwrap --model " + Src("scenes/reference_board.yaml") + " --layout " +
+                                (dir / "layout.yaml").string() + " --input " + (dir / "tiny.pgm").string() +
+                                " --save-map " + (dir / "wrong.hmap").string() + " -o " + (dir / "y").string());
+  EXPECT_EQ(wrong_saved.exit_code, 2) << wrong_saved.output;
+  EXPECT_FALSE(fs::exists(dir / "wrong.hmap"));
+  EXPECT_FALSE(fs::exists(dir / "y"));
+  const auto resave = Hovs("unwrap --map " + (dir / "map.hmap").string() + " --save-map " + (dir / "copy.hmap").string() +
+                           " --input " + frame + " -o " + (dir / "y").string());
+  EXPECT_EQ(resave.exit_code, 2) << resave.output;
+  EXPECT_NE(resave.output.find("--save-map"), std::string::npos) << resave.output;
+  EXPECT_FALSE(fs::exists(dir / "copy.hmap"));
+  const auto folder = Hovs("unwrap --map " + (dir / "map.hmap").string() + " --input " + (dir / "frame").string() +
+                           " -o " + (dir / "y").string());
+  EXPECT_EQ(folder.exit_code, 2) << folder.output;
+  EXPECT_NE(folder.output.find("dataset.json"), std::string::npos) << folder.output;
+  EXPECT_FALSE(fs::exists(dir / "y"));
+
   std::ofstream(dir / "wide.yaml") << "views:\n  - {name: w, hfov: 180}\n";
   const auto wide = Hovs("unwrap --model " + Src("scenes/reference_board.yaml") + " --layout " + (dir / "wide.yaml").string() +
                          " --input " + frame + " -o " + (dir / "z").string());
