@@ -90,8 +90,9 @@ void DetectInto(const std::filesystem::path& path, const std::string& name, cons
 calib::CheckerboardSpec ParseBoard(const std::string& text) {
   calib::CheckerboardSpec b;
   char x1 = 0, x2 = 0;
-  HOVS_REQUIRE(std::sscanf(text.c_str(), "%d%c%d%c%lf", &b.cols, &x1, &b.rows, &x2, &b.square) == 5 && x1 == 'x' &&
-                   x2 == 'x',
+  int end = -1;   // where parsing stopped: nothing may follow (7x6x0.03x9 was read as 7x6x0.03)
+  HOVS_REQUIRE(std::sscanf(text.c_str(), "%d%c%d%c%lf%n", &b.cols, &x1, &b.rows, &x2, &b.square, &end) == 5 &&
+                   x1 == 'x' && x2 == 'x' && end == static_cast<int>(text.size()),
                "--board", "expected COLSxROWSxSQUARE (inner corners, square in metres), e.g. 7x6x0.03 (got '", text,
                "')");
   b.Check("--board");
@@ -351,8 +352,10 @@ Runner SetupCalibrate(CLI::App* sub, const GlobalOptions* global) {
     if (!o->corners.empty()) {
       int w = 0, h = 0;
       char x = 0;
-      HOVS_REQUIRE(std::sscanf(o->size.c_str(), "%d%c%d", &w, &x, &h) == 3 && x == 'x' && w > 0 && h > 0, "--size",
-                   "expected WxH, e.g. 1024x768 (got '", o->size, "')");
+      int end = -1;
+      HOVS_REQUIRE(std::sscanf(o->size.c_str(), "%d%c%d%n", &w, &x, &h, &end) == 3 && x == 'x' &&
+                       end == static_cast<int>(o->size.size()) && w > 0 && h > 0 && w <= 65535 && h <= 65535,
+                   "--size", "expected WxH of 1..65535 pixels each, e.g. 1024x768 (got '", o->size, "')");
       in.obs = calib::LoadCornerCsv(o->corners);
       in.width = w, in.height = h;
       in.description = {{"corners", o->corners}, {"size", {w, h}}};

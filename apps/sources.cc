@@ -73,8 +73,10 @@ OpenedSources OpenSources(const SourceOptions& o) {
   s.buffers = o.buffers, s.trigger = o.trigger, s.packet_socket = o.packet_socket;
   if (!o.region.empty()) {
     char x = 0, p1 = 0, p2 = 0;
-    HOVS_REQUIRE(std::sscanf(o.region.c_str(), "%d%c%d%c%d%c%d", &s.width, &x, &s.height, &p1, &s.offset_x, &p2,
-                             &s.offset_y) == 7 && x == 'x' && p1 == '+' && p2 == '+',
+    int end = -1;   // nothing may follow
+    HOVS_REQUIRE(std::sscanf(o.region.c_str(), "%d%c%d%c%d%c%d%n", &s.width, &x, &s.height, &p1, &s.offset_x, &p2,
+                             &s.offset_y, &end) == 7 && x == 'x' && p1 == '+' && p2 == '+' &&
+                     end == static_cast<int>(o.region.size()),
                  "--region", "expected WxH+X+Y (got '", o.region, "')");
   }
   for (const auto& f : o.features) {

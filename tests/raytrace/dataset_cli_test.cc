@@ -215,6 +215,8 @@ TEST(CalibrateCli, CalibratesASyntheticSetAgainstGroundTruthAndRejectsBadInput) 
   rejected("--images " + (dir / "set" / "images").string(), "needs --board");
   rejected("--images " + (dir / "set" / "images").string() + " --board 5x4x0.03", "larger than the 5x4 board");
   rejected("--images " + (dir / "set" / "images").string() + " --board 7x5", "expected COLSxROWSxSQUARE");
+  rejected("--images " + (dir / "set" / "images").string() + " --board 7x5x0.03x9", "expected COLSxROWSxSQUARE");
+  rejected("--corners " + vmr + " --size 1024x768x2", "expected WxH");
   rejected("--images " + (dir / "set" / "images").string() + " --board 7x5x0.03 --corner-refinement sharp",
            "corner_refinement must be 'edges' or 'subpix'");
   rejected("--corners /nonexistent.csv --size 1024x768", "cannot open the corner table");
