@@ -99,6 +99,14 @@ TEST(UnwrapCli, ViewsFromAModelOrAMappingFileAreIdenticalAndBadInputIsRejected) 
   EXPECT_NE(folder.output.find("dataset.json"), std::string::npos) << folder.output;
   EXPECT_FALSE(fs::exists(dir / "y"));
 
+  // A manifest as --model without units: named, exit 2 (an uncaught JSON exception once, exit 3).
+  std::ofstream(dir / "empty.json") << "{\"format\": \"hovs-dataset\"}";
+  const auto no_units = Hovs("unwrap --model " + (dir / "empty.json").string() + " --layout panorama --input " + frame +
+                             " -o " + (dir / "y").string());
+  EXPECT_EQ(no_units.exit_code, 2) << no_units.output;
+  EXPECT_NE(no_units.output.find("empty.json"), std::string::npos) << no_units.output;
+  EXPECT_FALSE(fs::exists(dir / "y"));
+
   std::ofstream(dir / "wide.yaml") << "views:\n  - {name: w, hfov: 180}\n";
   const auto wide = Hovs("unwrap --model " + Src("scenes/reference_board.yaml") + " --layout " + (dir / "wide.yaml").string() +
                          " --input " + frame + " -o " + (dir / "z").string());
