@@ -61,7 +61,9 @@ Runner SetupDepth(CLI::App* sub, const GlobalOptions* global) {
   sub->add_option("--refine-radius", o->refine_radius, "coarse-to-fine: block search radius, columns")->capture_default_str();
   sub->add_option("--sigma-disparity", o->sigma_px, "matching noise for sigma, px")->capture_default_str();
   sub->add_option("--max-relative-sigma", o->max_rel_sigma, "mask where sigma / range exceeds this")->capture_default_str();
-  sub->add_option("--max-points", o->max_points, "points written to PLY / VTP (evenly subsampled)")->capture_default_str();
+  sub->add_option("--max-points", o->max_points, "points written to PLY / VTP (evenly subsampled)")
+      ->check(CLI::Range(1, 1000000000))
+      ->capture_default_str();
   sub->add_option("-o,--out", o->out, "output folder (replaced atomically)")->capture_default_str();
   return [o, global]() {
     const fs::path manifest(o->dataset);

@@ -3,6 +3,7 @@
 // models). Writes stereo.json (relative pose, baseline, standard deviations, per-pair errors, detection counts,
 // and with a synthetic manifest the errors against the true rig), stereo.yaml (OpenCV FileStorage: R, T) and
 // summary.txt; the folder is replaced atomically.
+#include <cmath>
 #include <cstdio>
 #include <nlohmann/json.hpp>
 #include <optional>
@@ -68,6 +69,10 @@ Runner SetupStereoCalibrate(CLI::App* sub, const GlobalOptions* global) {
       ->capture_default_str();
   sub->add_option("-o,--out", o->out, "output folder (replaced atomically)")->capture_default_str();
   return [o, global]() {
+    // Options first: a bad one is reported before minutes of detection.
+    HOVS_REQUIRE(std::isfinite(o->huber) && o->huber > 0, "--huber", "must be a positive scale in px (got ", o->huber, ")");
+    HOVS_REQUIRE(std::isfinite(o->marker_check_px) && o->marker_check_px >= 0, "--marker-check",
+                 "must be a distance >= 0 px, 0 keeping every marker (got ", o->marker_check_px, ")");
     const fs::path manifest(o->dataset);
     const auto m = LoadDatasetManifest(manifest);
     const auto& units = m.at("units");

@@ -5,6 +5,7 @@
 #include <opencv2/aruco.hpp>
 #include <opencv2/calib3d.hpp>
 #include <opencv2/imgproc.hpp>
+#include <cmath>
 #include <memory>
 #include <algorithm>
 #include <set>
@@ -85,7 +86,9 @@ void MarkerDetectOptions::Check(const std::string& where) const {
 }
 
 void StereoCalibrationOptions::Check(const std::string& where) const {
-  HOVS_REQUIRE(huber_px > 0 && min_common_markers >= 1 && max_iterations >= 1, where, "bad options");
+  HOVS_REQUIRE(std::isfinite(huber_px) && huber_px > 0, where + ".huber_px", "must be positive (got ", huber_px, ")");
+  HOVS_REQUIRE(min_common_markers >= 1, where + ".min_common_markers", "must be >= 1 (got ", min_common_markers, ")");
+  HOVS_REQUIRE(max_iterations >= 1, where + ".max_iterations", "must be >= 1 (got ", max_iterations, ")");
   HOVS_REQUIRE(residual == "reprojection" || residual == "3d", where + ".residual", "unknown residual '", residual,
                "' (known: reprojection, 3d)");
 }

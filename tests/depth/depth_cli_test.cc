@@ -43,6 +43,14 @@ TEST(StereoCli, CalibratesRenderedPairsAndComputesDepth) {
   EXPECT_NE(badref.exit_code, 0);
   EXPECT_NE(badref.output.find("--corner-refinement"), std::string::npos) << badref.output;
   EXPECT_FALSE(fs::exists(dir / "badref"));
+  // Options out of range: named, before any detection ("bad options" once, or a negative marker check taken as 0).
+  for (const std::string opt : {"--huber -1", "--marker-check -3"}) {
+    const auto bad = Hovs("stereo-calibrate --dataset " + (dir / "stereo/dataset.json").string() + " " + opt + " -o " +
+                          (dir / "badopt").string());
+    EXPECT_EQ(bad.exit_code, 2) << bad.output;
+    EXPECT_NE(bad.output.find(opt.substr(0, opt.find(' ')) + ": must be"), std::string::npos) << bad.output;
+    EXPECT_FALSE(fs::exists(dir / "badopt"));
+  }
 
   // Depth of the first pair's frame (the board and the floor) against its range channel, with the calibrated
   // relative pose.
@@ -50,6 +58,11 @@ TEST(StereoCli, CalibratesRenderedPairsAndComputesDepth) {
                       (dir / "cal/stereo.json").string() + " --width 1024 --height 256 --num-disparities 160 -o " +
                       (dir / "depth").string());
   ASSERT_EQ(d.exit_code, 0) << d.output;
+  const auto few = Hovs("depth --dataset " + (dir / "stereo/dataset.json").string() + " --max-points 0 -o " +
+                        (dir / "badopt").string());
+  EXPECT_EQ(few.exit_code, 2) << few.output;   // (a negative count once wrote a single point)
+  EXPECT_NE(few.output.find("--max-points"), std::string::npos) << few.output;
+  EXPECT_FALSE(fs::exists(dir / "badopt"));
   const auto dj = nlohmann::json::parse(ReadFile(dir / "depth/depth.json"));
   ASSERT_TRUE(dj.contains("ground_truth"));
   EXPECT_NE(dj["relative_pose_from"].get<std::string>().find("stereo.json"), std::string::npos);
