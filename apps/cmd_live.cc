@@ -2,6 +2,7 @@
 // arrive — a raw BayerRG8 frame goes straight to RGB views (demosaiced inside the remap) — shown on the display
 // (--display), written (--out, every Nth frame) or both, with per-stage latency figures (live.json).
 #include <algorithm>
+#include <cmath>
 #include <atomic>
 #include <chrono>
 #include <csignal>
@@ -68,6 +69,8 @@ Runner SetupLive(CLI::App* sub, const GlobalOptions* global) {
     HOVS_REQUIRE(o->model.empty() != o->map.empty(), "hovs live", "give either --model or --map");
     HOVS_REQUIRE(o->frames >= 0 && o->write_every >= 0 && o->seconds >= 0, "hovs live",
                  "--frames, --write-every and --seconds must not be negative");
+    HOVS_REQUIRE(std::isfinite(o->timeout) && o->timeout > 0 && o->timeout <= 3600, "--timeout",
+                 "must be in (0, 3600] seconds (got ", o->timeout, ")");
     HOVS_REQUIRE(o->frames > 0 || o->seconds > 0 || o->display, "hovs live",
                  "give --frames or --seconds (or --display, ended with q)");
     HOVS_REQUIRE(o->write_every == 0 || !o->out.empty(), "--write-every", "needs --out");

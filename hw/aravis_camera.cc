@@ -1,6 +1,7 @@
 // The Aravis 0.8 camera source.
 #include <arv.h>
 #include <arpa/inet.h>
+#include <cmath>
 #include <dirent.h>
 #include <netinet/in.h>
 #include <sys/socket.h>
@@ -259,6 +260,9 @@ class AravisCamera : public CameraSource {
 
   std::optional<Frame> Grab(double timeout_s) override {
     HOVS_REQUIRE(running_, "camera " + id_, "Grab before Start");
+    // (A NaN or negative timeout became a GLib assertion inside Aravis: checked here, for every caller.)
+    HOVS_REQUIRE(std::isfinite(timeout_s) && timeout_s > 0 && timeout_s <= 3600, "camera " + id_,
+                 "the frame timeout must be in (0, 3600] s (got ", timeout_s, ")");
     ArvBuffer* b = arv_stream_timeout_pop_buffer(stream_, static_cast<guint64>(timeout_s * 1e6));
     if (!b) return std::nullopt;
     Frame f;

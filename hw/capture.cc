@@ -1,6 +1,7 @@
 #include "hw/capture.h"
 
 #include <chrono>
+#include <cmath>
 #include <condition_variable>
 #include <cstdio>
 #include <cstring>
@@ -19,7 +20,10 @@ namespace fs = std::filesystem;
 void CaptureOptions::Check(size_t sources, const std::string& where) const {
   HOVS_REQUIRE(sources == 1 || sources == 2, where, "capture takes one or two cameras (got ", sources, ")");
   HOVS_REQUIRE(frames >= 1, where, "frames must be at least 1 (got ", frames, ")");
-  HOVS_REQUIRE(max_seconds >= 0 && grab_timeout_s > 0, where, "durations must be positive");
+  HOVS_REQUIRE(max_seconds >= 0 && std::isfinite(max_seconds), where + ".max_seconds (--seconds)",
+               "must be >= 0 (got ", max_seconds, ")");
+  HOVS_REQUIRE(std::isfinite(grab_timeout_s) && grab_timeout_s > 0 && grab_timeout_s <= 3600,
+               where + ".grab_timeout_s (--timeout)", "must be in (0, 3600] seconds (got ", grab_timeout_s, ")");
   HOVS_REQUIRE(unit_names.empty() || unit_names.size() == sources, where, "one unit name per camera");
   HOVS_REQUIRE(write_queue >= 1 && write_queue <= 4096, where, "write_queue must be in 1..4096 (got ", write_queue, ")");
   HOVS_REQUIRE(image_format == "png" || image_format == "pgm", where + ".image_format", "expected png or pgm (got '",

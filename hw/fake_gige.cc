@@ -26,7 +26,13 @@ FakeGigECamera::FakeGigECamera(const std::string& interface, const std::string& 
   if (!impl_->gv || !arv_gv_fake_camera_is_running(impl_->gv)) {
     if (impl_->gv) g_object_unref(impl_->gv);
     impl_->gv = nullptr;
-    throw Error("camera simulator", "cannot serve on '" + interface + "' (address not configured or port in use)");
+    // Linux answers 127.0.0.2 on the loopback only once it is added there (the second unit of a stereo simulation).
+    const std::string hint = interface.rfind("127.", 0) == 0 && interface != "127.0.0.1"
+                                 ? "; add it with `ip addr add " + interface + "/8 dev lo` (as root), or run in a private "
+                                   "network namespace as tests/hw/run_in_netns.sh does"
+                                 : "";
+    throw Error("camera simulator",
+                "cannot serve on '" + interface + "' (address not configured or port in use)" + hint);
   }
   g_object_set(impl_->gv, "gvsp-lost-ratio", lost_packet_ratio, nullptr);
   ArvFakeCamera* fake = arv_gv_fake_camera_get_fake_camera(impl_->gv);

@@ -119,6 +119,13 @@ TEST(CaptureCli, RenderedFramesCrossTheProtocolIntoADatasetThatCalibratesAndUnwr
                                    (dir / "cal/calibration.json").string() + " --pixel-format Mono16 --frames 3");
   EXPECT_EQ(live_bad.exit_code, 2);
   EXPECT_NE(live_bad.output.find("Mono8 or BayerRG8"), std::string::npos) << live_bad.output;
+  // A NaN frame timeout reached Aravis and aborted in a GLib assertion: now named, exit 2, nothing written.
+  const auto live_nan = test::Hovs("live --simulate " + (dir / "set/dataset.json").string() + " --model " +
+                                   (dir / "cal/calibration.json").string() + " --frames 2 --timeout nan -o " +
+                                   (dir / "live-nan").string());
+  EXPECT_EQ(live_nan.exit_code, 2) << live_nan.output;
+  EXPECT_NE(live_nan.output.find("--timeout"), std::string::npos) << live_nan.output;
+  EXPECT_FALSE(fs::exists(dir / "live-nan"));
 
   // 1 % packet loss (the simulator does not resend; at 1375 x 1100, about 1000 packets a frame, few frames
   // survive): nothing corrupt is written, incomplete frames are listed, the time limit ends the capture.
@@ -171,6 +178,8 @@ TEST(CaptureCli, RenderedFramesCrossTheProtocolIntoADatasetThatCalibratesAndUnwr
   rejected("--simulate " + (dir / "set/dataset.json").string() + " --pixel-format RGB10 --out " + (dir / "none").string(),
            "unsupported pixel format");
   rejected("--simulate " + (dir / "set/dataset.json").string() + " --out " + (dir / "cap").string(), "not empty");
+  rejected("--simulate " + (dir / "set/dataset.json").string() + " --timeout nan --out " + (dir / "none").string(),
+           "--timeout");
   EXPECT_FALSE(fs::exists(dir / "none"));
   fs::remove_all(dir.parent_path());
 }
