@@ -3,6 +3,7 @@
 // detection status; with ground truth, the detected corners are compared with the exact ones); with
 // --truth-corners a synthetic manifest's exact corners are used instead (optionally with seeded noise) to check
 // the solver alone. With a synthetic manifest the result is compared with the exact rig.
+#include <cmath>
 #include <cstdio>
 #include <iostream>
 #include <nlohmann/json.hpp>
@@ -343,6 +344,9 @@ Runner SetupCalibrate(CLI::App* sub, const GlobalOptions* global) {
   return [o, global]() {
     HOVS_REQUIRE(int(!o->corners.empty()) + int(!o->dataset.empty()) + int(!o->images.empty()) == 1,
                  "hovs calibrate", "give exactly one of --corners, --dataset and --images");
+    HOVS_REQUIRE(std::isfinite(o->noise) && o->noise >= 0, "--corner-noise", "must be >= 0 px (got ", o->noise, ")");
+    HOVS_REQUIRE(o->noise == 0 || o->truth_corners, "--corner-noise",
+                 "adds noise to a synthetic manifest's exact corners: it needs --truth-corners");
     calib::CheckerboardDetectOptions detect;
     detect.subpix_half_window = o->subpix;
     detect.corner_refinement = o->corner_refinement;

@@ -217,6 +217,8 @@ TEST(CalibrateCli, CalibratesASyntheticSetAgainstGroundTruthAndRejectsBadInput) 
   rejected("--images " + (dir / "set" / "images").string() + " --board 7x5", "expected COLSxROWSxSQUARE");
   rejected("--images " + (dir / "set" / "images").string() + " --board 7x5x0.03x9", "expected COLSxROWSxSQUARE");
   rejected("--corners " + vmr + " --size 1024x768x2", "expected WxH");
+  rejected("--corners " + vmr + " --size 1024x768 --corner-noise 0.5", "needs --truth-corners");   // was ignored
+  rejected("--truth-corners --dataset " + (dir / "set" / "dataset.json").string() + " --corner-noise -1", "must be >= 0");
   rejected("--images " + (dir / "set" / "images").string() + " --board 7x5x0.03 --corner-refinement sharp",
            "corner_refinement must be 'edges' or 'subpix'");
   rejected("--corners /nonexistent.csv --size 1024x768", "cannot open the corner table");
