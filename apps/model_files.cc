@@ -101,15 +101,6 @@ AnyModel LoadModelSpec(const std::string& spec, const std::string& unit, double 
   return LoadCalibratedModel(path, "auto", scene_distance);
 }
 
-nlohmann::json LoadDatasetManifest(const std::filesystem::path& path) {
-  auto m = nlohmann::json::parse(ReadFile(path), nullptr, false);
-  HOVS_REQUIRE(!m.is_discarded() && m.is_object() && m.value("format", "") == "hovs-dataset", path.string(),
-               "not a hovs dataset manifest");
-  HOVS_REQUIRE(m.contains("units") && m["units"].is_array() && m.contains("frames") && m["frames"].is_array(),
-               path.string(), "the manifest lacks 'units' or 'frames'");
-  return m;
-}
-
 unwrap::Image8 LoadImage8(const std::filesystem::path& path) {
   int w = 0, h = 0, c = 0;
   const raytrace::PixelBuffer px = raytrace::ReadImage(path, &w, &h, &c);

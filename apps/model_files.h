@@ -7,6 +7,7 @@
 #include <string>
 
 #include "core/any_model.h"
+#include "core/manifest.h"  // LoadDatasetManifest, used with the models by every command
 #include "unwrap/remap.h"
 
 namespace hovs::apps {
@@ -23,9 +24,6 @@ AnyModel LoadCalibratedModel(const std::filesystem::path& path, const std::strin
 // The model named by --model: a scene YAML or a dataset manifest (the exact rig of `unit`, default the first),
 // calib_results.txt, or a hovs calibration.json (LoadCalibratedModel). Throws naming the file.
 AnyModel LoadModelSpec(const std::string& spec, const std::string& unit, double scene_distance);
-
-// A hovs dataset manifest (dataset.json), checked for its format tag. Throws hovs::Error naming the file.
-nlohmann::json LoadDatasetManifest(const std::filesystem::path& path);
 
 // An image as 8-bit grey (one channel) or RGB (three or more channels: alpha dropped).
 unwrap::Image8 LoadImage8(const std::filesystem::path& path);

@@ -6,6 +6,7 @@
 
 #include "core/error.h"
 #include "core/io.h"
+#include "core/manifest.h"
 #include "hw/camera_source.h"
 #include "raytrace/render.h"
 
@@ -80,12 +81,13 @@ std::unique_ptr<CameraSource> OpenReplay(const fs::path& src, const std::string&
     for (size_t k = 0; k < items.size(); ++k) items[k].device_ns = k * 100'000'000ull;
   } else {
     const auto m = nlohmann::json::parse(ReadFile(src), nullptr, false);
-    HOVS_REQUIRE(!m.is_discarded() && m.value("format", "") == "hovs-dataset", src.string(),
+    HOVS_REQUIRE(!m.is_discarded() && m.is_object() && m.value("format", "") == "hovs-dataset", src.string(),
                  "neither a folder of images nor a hovs dataset manifest");
-    for (const auto& fr : m.at("frames"))
-      for (const auto& v : fr.at("views")) {
-        if (!unit.empty() && v.at("unit") != unit) continue;
-        ReplayItem it{src.parent_path() / v.at("image").get<std::string>(), 0};
+    CheckDatasetManifest(m, src.string());
+    for (const auto& fr : m["frames"])
+      for (const auto& v : fr["views"]) {
+        if (!unit.empty() && v["unit"] != unit) continue;
+        ReplayItem it{src.parent_path() / v["image"].get<std::string>(), 0};
         it.device_ns = v.contains("device_ns") ? v["device_ns"].get<uint64_t>() : items.size() * 100'000'000ull;
         items.push_back(it);
         if (unit.empty()) break;  // the first unit's view of each frame

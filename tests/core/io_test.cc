@@ -1,9 +1,11 @@
 #include <gtest/gtest.h>
 
 #include <filesystem>
+#include <functional>
 
 #include "core/error.h"
 #include "core/io.h"
+#include "core/manifest.h"
 
 namespace hovs {
 namespace {
@@ -54,6 +56,36 @@ TEST(Io, StagedDirectoryIsAllOrNothing) {
   EXPECT_TRUE(fs::exists(target / "x.json"));
   EXPECT_FALSE(fs::exists(target / "y.json"));
   fs::remove_all(root);
+}
+
+TEST(Manifest, MalformedFieldsAreNamedErrors) {
+  // A rendered set's shape (ground truth present) and a capture's (device_ns, no ground truth) are accepted.
+  const nlohmann::json ok = nlohmann::json::parse(R"({"format": "hovs-dataset", "units": [{"name": "left"}, {"name": "right"}],
+    "frames": [{"views": [{"unit": "left", "image": "images/l.png", "ground_truth": {"exr": "t/l.exr", "sidecar": "t/l.json"}},
+                          {"unit": "right", "image": "images/r.png", "device_ns": 123456789}]}]})");
+  EXPECT_NO_THROW(CheckDatasetManifest(ok, "m.json"));
+  const auto rejected = [&](const std::function<void(nlohmann::json*)>& spoil, const std::string& needle) {
+    nlohmann::json m = ok;
+    spoil(&m);
+    try {
+      CheckDatasetManifest(m, "m.json");
+      ADD_FAILURE() << "accepted: " << m.dump();
+    } catch (const Error& e) {
+      EXPECT_NE(std::string(e.what()).find("m.json"), std::string::npos) << e.what();
+      EXPECT_NE(std::string(e.what()).find(needle), std::string::npos) << e.what();
+    }
+  };
+  // Each of these once reached a command as a JSON exception ("internal error", exit 3).
+  rejected([](nlohmann::json* m) { (*m)["frames"][0]["views"][0]["image"] = 5; }, "frames[0].views[0]");
+  rejected([](nlohmann::json* m) { (*m)["frames"][0]["views"][1].erase("unit"); }, "frames[0].views[1]");
+  rejected([](nlohmann::json* m) { (*m)["frames"][0]["views"][1]["unit"] = "middle"; }, "'middle' is not among");
+  rejected([](nlohmann::json* m) { (*m)["frames"][0]["views"][0]["ground_truth"] = {{"exr", 3}}; }, "ground_truth");
+  rejected([](nlohmann::json* m) { (*m)["frames"][0]["views"][1]["device_ns"] = -4; }, "device_ns");
+  rejected([](nlohmann::json* m) { (*m)["frames"][0] = 7; }, "frames[0]");
+  rejected([](nlohmann::json* m) { (*m)["units"][1]["name"] = "left"; }, "appears twice");
+  rejected([](nlohmann::json* m) { (*m)["units"][0] = "left"; }, "units[0]");
+  rejected([](nlohmann::json* m) { m->erase("frames"); }, "lacks 'units' or 'frames'");
+  rejected([](nlohmann::json* m) { (*m)["format"] = "other"; }, "not a hovs dataset manifest");
 }
 
 }  // namespace
