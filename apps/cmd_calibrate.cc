@@ -100,6 +100,25 @@ calib::CheckerboardSpec ParseBoard(const std::string& text) {
   return b;
 }
 
+// The visible board corners of a ground-truth sidecar (truth/*.json): board position (mm) and exact pixel.
+// Throws hovs::Error naming the file when it is not one.
+struct SidecarCorner {
+  Vec2d board, pixel;
+};
+std::vector<SidecarCorner> VisibleSidecarCorners(const std::filesystem::path& path) {
+  try {
+    const auto side = nlohmann::json::parse(ReadFile(path));
+    std::vector<SidecarCorner> out;
+    for (const auto& c : side.at("boards").at(0).at("corners"))
+      if (c.at("status") == "visible")
+        out.push_back({Vec2d(c.at("board").at(0).get<double>(), c.at("board").at(1).get<double>()),
+                       Vec2d(c.at("pixel").at(0).get<double>(), c.at("pixel").at(1).get<double>())});
+    return out;
+  } catch (const nlohmann::json::exception& e) {
+    throw Error(path.string(), std::string("not a hovs ground-truth sidecar with board corners: ") + e.what());
+  }
+}
+
 Input FromDataset(const std::filesystem::path& manifest, const std::string& unit_name, bool truth_corners,
                   double noise, uint64_t seed, const calib::CheckerboardDetectOptions& detect) {
   const auto m = LoadDatasetManifest(manifest);
@@ -118,8 +137,12 @@ Input FromDataset(const std::filesystem::path& manifest, const std::string& unit
   calib::CheckerboardDetectOptions dopt = detect;
   if (m.contains("boards") && !m["boards"].empty() && m["boards"][0].value("type", "") == "checker") {
     const auto& b = m["boards"][0];
-    dopt.board.cols = b.at("inner_corners")[0], dopt.board.rows = b.at("inner_corners")[1];
-    dopt.board.square = b.at("square");
+    try {
+      dopt.board.cols = b.at("inner_corners").at(0), dopt.board.rows = b.at("inner_corners").at(1);
+      dopt.board.square = b.at("square");
+    } catch (const nlohmann::json::exception& e) {
+      throw Error(manifest.string() + " (boards[0])", std::string("a checker board needs inner_corners and square: ") + e.what());
+    }
   } else {
     HOVS_REQUIRE(dopt.board.square > 0 && !truth_corners, manifest.string(),
                  "the manifest describes no checkerboard; give --board");
@@ -133,22 +156,18 @@ Input FromDataset(const std::filesystem::path& manifest, const std::string& unit
                    "--truth-corners needs ground truth, and frame ", v.value("image", "?"), " has none");
       if (!truth_corners) {
         std::vector<Vec2d> gt;
-        if (v.contains("ground_truth")) {
-          const auto side = nlohmann::json::parse(ReadFile(dir / v["ground_truth"]["sidecar"].get<std::string>()));
-          for (const auto& c : side["boards"][0]["corners"])
-            if (c["status"] == "visible") gt.emplace_back(c["pixel"][0].get<double>(), c["pixel"][1].get<double>());
-        }
+        if (v.contains("ground_truth"))
+          for (const SidecarCorner& c : VisibleSidecarCorners(dir / v["ground_truth"]["sidecar"].get<std::string>()))
+            gt.push_back(c.pixel);
         DetectInto(dir / v["image"].get<std::string>(), v["image"], dopt, v.contains("ground_truth") ? &gt : nullptr,
                    &in, &in.width, &in.height);
         continue;
       }
-      const auto side = nlohmann::json::parse(ReadFile(dir / v["ground_truth"]["sidecar"].get<std::string>()));
       calib::BoardObservation o;
       o.image = v["image"];
-      for (const auto& c : side["boards"][0]["corners"]) {
-        if (c["status"] != "visible") continue;
-        o.board_points.emplace_back(c["board"][0].get<double>(), c["board"][1].get<double>(), 0.0);
-        Vec2d px(c["pixel"][0].get<double>(), c["pixel"][1].get<double>());
+      for (const SidecarCorner& c : VisibleSidecarCorners(dir / v["ground_truth"]["sidecar"].get<std::string>())) {
+        o.board_points.emplace_back(c.board.x(), c.board.y(), 0.0);
+        Vec2d px = c.pixel;
         if (noise > 0) px += Vec2d(N(rng), N(rng));
         o.pixels.push_back(px);
       }

@@ -218,6 +218,11 @@ TEST(CalibrateCli, CalibratesASyntheticSetAgainstGroundTruthAndRejectsBadInput) 
   rejected("--images " + (dir / "set" / "images").string() + " --board 7x5x0.03x9", "expected COLSxROWSxSQUARE");
   rejected("--corners " + vmr + " --size 1024x768x2", "expected WxH");
   rejected("--corners " + vmr + " --size 1024x768 --corner-noise 0.5", "needs --truth-corners");   // was ignored
+  // A corrupt ground-truth sidecar: named (it was an uncaught JSON exception, exit 3).
+  fs::copy(dir / "set", dir / "set-bad", fs::copy_options::recursive);
+  const auto sidecars = nlohmann::json::parse(ReadFile(dir / "set-bad" / "dataset.json"));
+  WriteFileAtomic(dir / "set-bad" / sidecars["frames"][0]["views"][0]["ground_truth"]["sidecar"].get<std::string>(), "{bad");
+  rejected("--truth-corners --dataset " + (dir / "set-bad" / "dataset.json").string(), "not a hovs ground-truth sidecar");
   rejected("--truth-corners --dataset " + (dir / "set" / "dataset.json").string() + " --corner-noise -1", "must be >= 0");
   rejected("--images " + (dir / "set" / "images").string() + " --board 7x5x0.03 --corner-refinement sharp",
            "corner_refinement must be 'edges' or 'subpix'");
