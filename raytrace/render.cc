@@ -33,9 +33,11 @@ void SensorOptions::Check(const std::string& where) const {
 
 void RenderOptions::Check(const std::string& where) const {
   HOVS_REQUIRE(samples >= 1 && samples <= 4096, where + ".samples", "must be in 1..4096 (got ", samples, ")");
-  HOVS_REQUIRE(std::isfinite(lens_radius) && lens_radius >= 0, where + ".lens_radius", "must be >= 0");
+  HOVS_REQUIRE(std::isfinite(lens_radius) && lens_radius >= 0 && lens_radius <= 0.1, where + ".lens_radius",
+               "must be in [0, 0.1] m (got ", lens_radius, ")");
   HOVS_REQUIRE(std::isfinite(focus_distance) && focus_distance > 0, where + ".focus_distance", "must be positive");
-  HOVS_REQUIRE(std::isfinite(exposure_time) && exposure_time >= 0, where + ".exposure_time", "must be >= 0");
+  HOVS_REQUIRE(std::isfinite(exposure_time) && exposure_time >= 0 && exposure_time <= 10, where + ".exposure_time",
+               "must be in [0, 10] s (got ", exposure_time, ")");
   sensor.Check(where + ".sensor");
 }
 
@@ -357,6 +359,12 @@ void RenderInto(const RayScene& scene, const ViewCamera& camera, const RenderOpt
   const auto start = std::chrono::steady_clock::now();
   const RayMaker maker(scene, camera, options);
   const bool lens = options.lens_radius > 0, blur = options.exposure_time > 0 && camera.unit >= 0;
+  if (blur) {   // the moving unit stays where Embree's single precision holds (RayScene checks its start)
+    const CatadioptricUnit& u = scene.description().units[camera.unit];
+    const Vec3d end = u.WorldFromMirrorAt(options.exposure_time).translation;
+    HOVS_REQUIRE(end.allFinite() && end.cwiseAbs().maxCoeff() <= kWorldExtent, "render.exposure_time", "unit ", u.name,
+                 " moves beyond ", kWorldExtent, " m of the world origin during the exposure");
+  }
   Frame& f = *frame;
   f.width = maker.width(), f.height = maker.height();
   if (!options.ground_truth) f.truth.data.clear();

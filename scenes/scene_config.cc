@@ -267,7 +267,10 @@ SceneConfig ParseSceneConfig(const std::string& text, const std::string& source,
     }
     unit.world_from_mirror = ReadPose(r, r.Require(u, k, "pose", &pose), k + ".pose");
     if (u["body_length"]) unit.body_length = r.Positive(u["body_length"], k + ".body_length");
-    if (u["velocity"]) unit.velocity = r.Vector3(u["velocity"], k + ".velocity");
+    if (u["velocity"]) {
+      unit.velocity = r.Vector3(u["velocity"], k + ".velocity");
+      HOVS_REQUIRE(unit.velocity.norm() <= 1000, r.Where(u["velocity"], k + ".velocity"), "a unit moves at most 1000 m/s");
+    }
     if (u["angular_velocity_deg"]) unit.angular_velocity = r.Vector3(u["angular_velocity_deg"], k + ".angular_velocity_deg") * kDeg;
     unit.rig.Check(r.Where(u, k));
     desc.units.push_back(unit);

@@ -269,6 +269,18 @@ TEST(RenderCli, RendersAndRejectsBadInput) {
   std::string huge = scene;
   huge.replace(huge.find("squares: [8, 6]"), 15, "squares: [800000, 600000]");    // std::bad_alloc once
   rejected(huge, "at most 1000 x 1000");
+  // A lens radius of 1e300 m put ray origins at infinity (an Embree assertion); a unit may not outrun the world.
+  std::string lens = scene;
+  lens.replace(lens.find("render: {samples: 16"), 20, "render: {lens_radius: 1e300, samples: 16");
+  rejected(lens, "lens_radius");
+  std::string fast = scene;
+  fast.replace(fast.find("pose: {position: [0, 0, 1.3]}"), 29, "pose: {position: [0, 0, 1.3]}\n    velocity: [1e300, 0, 0]");
+  rejected(fast, "at most 1000 m/s");
+  std::string away = scene;
+  away.replace(away.find("pose: {position: [0, 0, 1.3]}"), 29,
+               "pose: {position: [9990, 0, 1.3]}\n    velocity: [900, 0, 0]");
+  away.replace(away.find("render: {samples: 16"), 20, "render: {exposure_time: 1, samples: 16");
+  rejected(away, "during the exposure");
   std::string pitch = scene;
   pitch.replace(pitch.find("pixel_pitch: 3.632e-5"), 21, "pixel_pitch: 1e-300");
   rejected(pitch, "pixel_pitch");
