@@ -100,25 +100,6 @@ calib::CheckerboardSpec ParseBoard(const std::string& text) {
   return b;
 }
 
-// The visible board corners of a ground-truth sidecar (truth/*.json): board position (mm) and exact pixel.
-// Throws hovs::Error naming the file when it is not one.
-struct SidecarCorner {
-  Vec2d board, pixel;
-};
-std::vector<SidecarCorner> VisibleSidecarCorners(const std::filesystem::path& path) {
-  try {
-    const auto side = nlohmann::json::parse(ReadFile(path));
-    std::vector<SidecarCorner> out;
-    for (const auto& c : side.at("boards").at(0).at("corners"))
-      if (c.at("status") == "visible")
-        out.push_back({Vec2d(c.at("board").at(0).get<double>(), c.at("board").at(1).get<double>()),
-                       Vec2d(c.at("pixel").at(0).get<double>(), c.at("pixel").at(1).get<double>())});
-    return out;
-  } catch (const nlohmann::json::exception& e) {
-    throw Error(path.string(), std::string("not a hovs ground-truth sidecar with board corners: ") + e.what());
-  }
-}
-
 Input FromDataset(const std::filesystem::path& manifest, const std::string& unit_name, bool truth_corners,
                   double noise, uint64_t seed, const calib::CheckerboardDetectOptions& detect) {
   const auto m = LoadDatasetManifest(manifest);
@@ -157,7 +138,7 @@ Input FromDataset(const std::filesystem::path& manifest, const std::string& unit
       if (!truth_corners) {
         std::vector<Vec2d> gt;
         if (v.contains("ground_truth"))
-          for (const SidecarCorner& c : VisibleSidecarCorners(dir / v["ground_truth"]["sidecar"].get<std::string>()))
+          for (const scenes::CornerTruth& c : scenes::VisibleSidecarCorners(dir / v["ground_truth"]["sidecar"].get<std::string>()))
             gt.push_back(c.pixel);
         DetectInto(dir / v["image"].get<std::string>(), v["image"], dopt, v.contains("ground_truth") ? &gt : nullptr,
                    &in, &in.width, &in.height);
@@ -165,8 +146,9 @@ Input FromDataset(const std::filesystem::path& manifest, const std::string& unit
       }
       calib::BoardObservation o;
       o.image = v["image"];
-      for (const SidecarCorner& c : VisibleSidecarCorners(dir / v["ground_truth"]["sidecar"].get<std::string>())) {
-        o.board_points.emplace_back(c.board.x(), c.board.y(), 0.0);
+      for (const scenes::CornerTruth& c :
+           scenes::VisibleSidecarCorners(dir / v["ground_truth"]["sidecar"].get<std::string>())) {
+        o.board_points.emplace_back(c.board_xy.x(), c.board_xy.y(), 0.0);
         Vec2d px = c.pixel;
         if (noise > 0) px += Vec2d(N(rng), N(rng));
         o.pixels.push_back(px);

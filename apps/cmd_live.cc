@@ -2,9 +2,9 @@
 // arrive — a raw BayerRG8 frame goes straight to RGB views (demosaiced inside the remap) — shown on the display
 // (--display), written (--out, every Nth frame) or both, with per-stage latency figures (live.json).
 #include <algorithm>
-#include <cmath>
 #include <atomic>
 #include <chrono>
+#include <cmath>
 #include <csignal>
 #include <cstdio>
 #include <iostream>

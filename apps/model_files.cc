@@ -90,12 +90,10 @@ AnyModel LoadModelSpec(const std::string& spec, const std::string& unit, double 
   const auto j = nlohmann::json::parse(ReadFile(path), nullptr, false);
   HOVS_REQUIRE(!j.is_discarded(), path.string(), "not JSON, YAML or calib_results.txt");
   if (j.is_object() && j.value("format", "") == "hovs-dataset") {
-    const auto m = LoadDatasetManifest(path);
-    const auto& units = m["units"];
+    CheckDatasetManifest(j, path.string());   // units are objects with string names from here on
+    const auto& units = j["units"];
     HOVS_REQUIRE(!units.empty(), path.string(), "the manifest lists no units");
-    const size_t i = pick(units.size(), [&](size_t k) {
-      return units[k].is_object() ? units[k].value("name", std::string()) : std::string();
-    });
+    const size_t i = pick(units.size(), [&](size_t k) { return units[k]["name"].get<std::string>(); });
     return AnyModel::Exact(scenes::UnitFromJson(units[i], spec + " (units)").rig, scene_distance);
   }
   return LoadCalibratedModel(path, "auto", scene_distance);

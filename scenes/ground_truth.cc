@@ -1,6 +1,7 @@
 #include "scenes/ground_truth.h"
 
 #include "core/error.h"
+#include "core/io.h"
 #include "raytrace/render.h"
 
 namespace hovs::scenes {
@@ -152,6 +153,24 @@ nlohmann::json FrameSidecar(const SceneConfig& cfg, const raytrace::RayScene& sc
   }
   j["boards"] = boards;
   return j;
+}
+
+std::vector<CornerTruth> VisibleSidecarCorners(const std::filesystem::path& sidecar) {
+  try {
+    const auto side = nlohmann::json::parse(ReadFile(sidecar));
+    std::vector<CornerTruth> out;
+    for (const auto& c : side.at("boards").at(0).at("corners")) {
+      if (c.at("status") != "visible") continue;
+      CornerTruth t;
+      t.id = c.at("id").get<int>(), t.status = "visible";
+      t.board_xy = Vec2d(c.at("board").at(0).get<double>(), c.at("board").at(1).get<double>());
+      t.pixel = Vec2d(c.at("pixel").at(0).get<double>(), c.at("pixel").at(1).get<double>());
+      out.push_back(t);
+    }
+    return out;
+  } catch (const nlohmann::json::exception& e) {
+    throw Error(sidecar.string(), std::string("not a hovs ground-truth sidecar with board corners: ") + e.what());
+  }
 }
 
 }  // namespace hovs::scenes

@@ -3,6 +3,7 @@
 // JSON forms of rigs and poses shared by sidecars and dataset manifests.
 #pragma once
 
+#include <filesystem>
 #include <nlohmann/json.hpp>
 #include <string>
 #include <vector>
@@ -32,5 +33,9 @@ nlohmann::json BoardToJson(const BoardInstance& board);
 
 // The per-frame sidecar: rig, board poses, corner truth, channel documentation.
 nlohmann::json FrameSidecar(const SceneConfig& config, const raytrace::RayScene& scene, int unit);
+
+// The visible corners of the first board of a sidecar file written from FrameSidecar (truth/*.json): id, board
+// position and exact pixel. Throws hovs::Error naming the file when it is not such a sidecar.
+std::vector<CornerTruth> VisibleSidecarCorners(const std::filesystem::path& sidecar);
 
 }  // namespace hovs::scenes
