@@ -1,10 +1,12 @@
 #include "core/io.h"
 
+#include <signal.h>
 #include <unistd.h>
 
 #include <algorithm>
 #include <atomic>
 #include <cctype>
+#include <cerrno>
 #include <chrono>
 #include <fstream>
 #include <sstream>
@@ -72,6 +74,32 @@ std::vector<fs::path> ListImageFiles(const fs::path& folder) {
   return files;
 }
 
+namespace {
+
+// Removes what earlier runs for the same target left behind when they were killed before their destructor ran
+// (Ctrl-C, a crash): hidden siblings .<name>.partial-<pid>-... and .<name>.old-<pid>-... whose process no longer
+// exists. A folder of a live process (another run writing the same target now) is left alone.
+void RemoveStaleStaging(const fs::path& parent, const std::string& name) {
+  std::error_code ec;
+  for (const auto& e : fs::directory_iterator(parent, ec)) {
+    const std::string f = e.path().filename().string();
+    for (const std::string tag : {".partial-", ".old-"}) {
+      const std::string prefix = "." + name + tag;
+      if (f.rfind(prefix, 0) != 0) continue;
+      const size_t end = f.find('-', prefix.size());
+      const std::string digits = f.substr(prefix.size(), end == std::string::npos ? std::string::npos : end - prefix.size());
+      if (digits.empty() || digits.size() > 9 || !std::all_of(digits.begin(), digits.end(), ::isdigit)) continue;
+      const pid_t pid = static_cast<pid_t>(std::stol(digits));
+      if (pid > 0 && ::kill(pid, 0) != 0 && errno == ESRCH) {
+        std::error_code ignore;
+        fs::remove_all(e.path(), ignore);
+      }
+    }
+  }
+}
+
+}  // namespace
+
 StagedDirectory::StagedDirectory(fs::path target) : target_(std::move(target)) {
   HOVS_REQUIRE(!target_.empty(), "output folder", "empty path");
   if (target_.filename().empty()) target_ = target_.parent_path();
@@ -79,6 +107,7 @@ StagedDirectory::StagedDirectory(fs::path target) : target_(std::move(target)) {
   std::error_code ec;
   fs::create_directories(parent, ec);
   HOVS_REQUIRE(!ec, parent.string(), "cannot create folder: ", ec.message());
+  RemoveStaleStaging(parent, target_.filename().string());
   staging_ = parent / ("." + target_.filename().string() + ".partial-" + UniqueSuffix());
   fs::create_directory(staging_, ec);
   HOVS_REQUIRE(!ec, staging_.string(), "cannot create staging folder: ", ec.message());

@@ -1,5 +1,7 @@
 #include <gtest/gtest.h>
 
+#include <unistd.h>
+
 #include <filesystem>
 #include <functional>
 
@@ -55,6 +57,26 @@ TEST(Io, StagedDirectoryIsAllOrNothing) {
   }
   EXPECT_TRUE(fs::exists(target / "x.json"));
   EXPECT_FALSE(fs::exists(target / "y.json"));
+  fs::remove_all(root);
+}
+
+TEST(Io, StagingLeftByAKilledRunIsRemovedByTheNextOne) {
+  // A run killed before its destructor (Ctrl-C, a crash) leaves its hidden staging folder; the next run for the
+  // same target removes it when its process is gone, and leaves a live process's folder and other names alone.
+  const fs::path root = TempRoot();
+  const fs::path dead = root / ".report.partial-999999999-1-0";   // beyond any pid_max: no such process
+  const fs::path dead_old = root / ".report.old-999999999-2-0";
+  const fs::path live = root / (".report.partial-" + std::to_string(::getpid()) + "-3-0");
+  const fs::path other = root / ".other.partial-999999999-4-0";
+  for (const auto& p : {dead, dead_old, live, other}) fs::create_directories(p / "images");
+  {
+    StagedDirectory stage(root / "report");
+    EXPECT_FALSE(fs::exists(dead));
+    EXPECT_FALSE(fs::exists(dead_old));
+    EXPECT_TRUE(fs::exists(live));
+    EXPECT_TRUE(fs::exists(other));
+    EXPECT_TRUE(fs::exists(stage.staging()));
+  }
   fs::remove_all(root);
 }
 
