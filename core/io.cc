@@ -76,6 +76,14 @@ std::vector<fs::path> ListImageFiles(const fs::path& folder) {
 
 namespace {
 
+// The hidden siblings of an output folder <name>: its staging folder while a run writes it, and the previous
+// output moved aside during Commit. Both end in -<pid>-<time>-<count> (UniqueSuffix).
+constexpr const char* kStagingTag = ".partial-";
+constexpr const char* kOldTag = ".old-";
+fs::path HiddenSibling(const fs::path& parent, const std::string& name, const char* tag) {
+  return parent / ("." + name + tag + UniqueSuffix());
+}
+
 // Removes what earlier runs for the same target left behind when they were killed before their destructor ran
 // (Ctrl-C, a crash): hidden siblings .<name>.partial-<pid>-... and .<name>.old-<pid>-... whose process no longer
 // exists. A folder of a live process (another run writing the same target now) is left alone.
@@ -83,7 +91,7 @@ void RemoveStaleStaging(const fs::path& parent, const std::string& name) {
   std::error_code ec;
   for (const auto& e : fs::directory_iterator(parent, ec)) {
     const std::string f = e.path().filename().string();
-    for (const std::string tag : {".partial-", ".old-"}) {
+    for (const char* tag : {kStagingTag, kOldTag}) {
       const std::string prefix = "." + name + tag;
       if (f.rfind(prefix, 0) != 0) continue;
       const size_t end = f.find('-', prefix.size());
@@ -108,7 +116,7 @@ StagedDirectory::StagedDirectory(fs::path target) : target_(std::move(target)) {
   fs::create_directories(parent, ec);
   HOVS_REQUIRE(!ec, parent.string(), "cannot create folder: ", ec.message());
   RemoveStaleStaging(parent, target_.filename().string());
-  staging_ = parent / ("." + target_.filename().string() + ".partial-" + UniqueSuffix());
+  staging_ = HiddenSibling(parent, target_.filename().string(), kStagingTag);
   fs::create_directory(staging_, ec);
   HOVS_REQUIRE(!ec, staging_.string(), "cannot create staging folder: ", ec.message());
 }
@@ -124,7 +132,7 @@ void StagedDirectory::Commit() {
   std::error_code ec;
   fs::path old;
   if (fs::exists(target_)) {
-    old = target_.parent_path() / ("." + target_.filename().string() + ".old-" + UniqueSuffix());
+    old = HiddenSibling(target_.parent_path(), target_.filename().string(), kOldTag);
     fs::rename(target_, old, ec);
     HOVS_REQUIRE(!ec, target_.string(), "cannot move the previous output aside: ", ec.message());
   }
