@@ -2,7 +2,9 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstring>
 #include <limits>
+#include <type_traits>
 
 #include "core/error.h"
 #include "core/vector_clones.h"
@@ -255,9 +257,10 @@ RayScene::RayScene(SceneDescription description) : desc_(std::move(description))
 
   for (const Rect& r : desc_.rects) {
     const Eigen::Matrix3d R = r.world_from_rect.rotation.toRotationMatrix();
-    RectFrame fr{r.world_from_rect.translation, R.col(2), R.col(0), R.col(1), {}};
+    RectFrame fr{r.world_from_rect.translation, R.col(2), R.col(0), R.col(1), {}, {}};
     for (int c = 0; c < 3; ++c)
       fr.flat[c] = fr.centre(c), fr.flat[3 + c] = fr.normal(c), fr.flat[6 + c] = fr.axis_x(c), fr.flat[9 + c] = fr.axis_y(c);
+    for (int c = 0; c < 12; ++c) fr.flat_f[c] = static_cast<float>(fr.flat[c]);
     rect_frames_.push_back(fr);
   }
 
@@ -500,10 +503,11 @@ void RayScene::Trace16(int count, const Vec3d* o, const Vec3d* d, const double* 
 namespace {
 
 // Packet fields of w full lanes from batch arrays (already offset to the packet's first ray): the conversions
-// to float, the masks (RayMask less mask_off) and ids; tfar is infinite except where tfar_in > 0.
-HOVS_VECTOR_CLONES
-void FillPacket(int w, const double* __restrict ox, const double* __restrict oy, const double* __restrict oz,
-                const double* __restrict dx, const double* __restrict dy, const double* __restrict dz,
+// to float (copies for T = float), the masks (RayMask less mask_off) and ids; tfar is infinite except where
+// tfar_in > 0.
+template <class T>
+HOVS_VECTOR_CLONES void FillPacket(int w, const T* __restrict ox, const T* __restrict oy, const T* __restrict oz,
+                const T* __restrict dx, const T* __restrict dy, const T* __restrict dz,
                 const float* __restrict tnear, const int* __restrict from_mirror, const int* __restrict from_camera,
                 const float* __restrict tfar_in, const unsigned* __restrict mask_off, float* __restrict org_x,
                 float* __restrict org_y, float* __restrict org_z, float* __restrict dir_x, float* __restrict dir_y,
@@ -540,14 +544,14 @@ struct BatchLanes {
 
 // The common case of PrepareLanes without branches: every straight camera ray of the batch leaves unit U's
 // camera with its ring distance computed.
-HOVS_VECTOR_CLONES
-void RingLanes(int n, const unsigned char* __restrict bvalid, const int* __restrict from_camera,
-               const double* __restrict mount_t, int U, unsigned bit, int clear, int* __restrict valid,
+template <class T>
+HOVS_VECTOR_CLONES void RingLanes(int n, const unsigned char* __restrict bvalid, const int* __restrict from_camera,
+               const T* __restrict mount_t, int U, unsigned bit, int clear, int* __restrict valid,
                float* __restrict tfar, unsigned* __restrict mask_off, unsigned ring_geom, unsigned* __restrict mount_geom) {
   const int match = U >= 0 ? U : -1000;   // no unit: no lane is a ring lane
   // As 0 / 1 arithmetic, not selects: GCC 12 vectorises the selects here only with a branch per vector.
   for (int i = 0; i < n; ++i) {
-    const double t = mount_t[i];
+    const T t = mount_t[i];
     const int live = bvalid[i] != 0;
     const int ring = live & (from_camera[i] == match) & (t > 0);
     tfar[i] = static_cast<float>(t) * static_cast<float>(ring);   // 0 (or -0) where not a ring lane
@@ -559,8 +563,9 @@ void RingLanes(int n, const unsigned char* __restrict bvalid, const int* __restr
 
 // The unit of a batch's straight camera rays (the largest from_camera; -1: none) and whether every straight ray
 // is that unit's with its ring distance computed (uniform): one pass without branches.
-HOVS_VECTOR_CLONES
-int CameraLanes(int n, const int* __restrict from_camera, const double* __restrict mount_t, bool* uniform) {
+template <class T>
+HOVS_VECTOR_CLONES int CameraLanes(int n, const int* __restrict from_camera, const T* __restrict mount_t,
+                                   bool* uniform) {
   int U = -1;
   for (int i = 0; i < n; ++i) U = std::max(U, from_camera[i]);
   int odd = 0;
@@ -569,7 +574,8 @@ int CameraLanes(int n, const int* __restrict from_camera, const double* __restri
   return U;
 }
 
-void PrepareLanes(const RayBatch& b, const std::vector<RayScene::OwnMount>& mounts, BatchLanes* L) {
+template <class T>
+void PrepareLanes(const RayBatchOf<T>& b, const std::vector<RayScene::OwnMount>& mounts, BatchLanes* L) {
   const int n = b.n;
   bool uniform = false;
   const int U = CameraLanes(n, b.from_camera, b.mount_t, &uniform);
@@ -599,8 +605,8 @@ void PrepareLanes(const RayBatch& b, const std::vector<RayScene::OwnMount>& moun
 }
 
 // Batch rays [i0, i0 + W) (fewer at the end) as one Embree packet of width W (RTCRayHit8 or RTCRayHit16).
-template <int W, class RayHitW, class IntersectW>
-void TracePacketOfBatch(RTCScene scene, const RayBatch& b, const BatchLanes& L, int i0, unsigned* geom_ids,
+template <int W, class RayHitW, class T, class IntersectW>
+void TracePacketOfBatch(RTCScene scene, const RayBatchOf<T>& b, const BatchLanes& L, int i0, unsigned* geom_ids,
                         unsigned* prim_ids, IntersectW intersect) {
   const int count = std::min(W, b.n - i0);
   int any = 0;
@@ -643,7 +649,8 @@ void TracePacketOfBatch(RTCScene scene, const RayBatch& b, const BatchLanes& L, 
 
 }  // namespace
 
-void RayScene::IntersectBatch(const RayBatch& b, unsigned* geom_ids, unsigned* prim_ids) const {
+template <class T>
+void RayScene::IntersectBatch(const RayBatchOf<T>& b, unsigned* geom_ids, unsigned* prim_ids) const {
   BatchLanes lanes;
   PrepareLanes(b, own_mount_, &lanes);
   for (int i0 = 0; i0 < b.n; i0 += native16_ ? 16 : 8) {
@@ -662,21 +669,22 @@ namespace {
 // along d, the point p = o + k d and its (s, t) on the rectangle, axis_x.(p - c) and axis_y.(p - c): the
 // operations of the scalar Eigen expressions (Shade; 3-vector dot products sum left to right). f: the
 // rectangle's centre c, normal, axis_x, axis_y (RectFrame::flat).
+template <class T>
 struct RectPlaneRuns {
-  alignas(64) double denom[RayBatch::kMax], k[RayBatch::kMax], px[RayBatch::kMax], py[RayBatch::kMax],
+  alignas(64) T denom[RayBatch::kMax], k[RayBatch::kMax], px[RayBatch::kMax], py[RayBatch::kMax],
       pz[RayBatch::kMax], s[RayBatch::kMax], t[RayBatch::kMax];
 };
-HOVS_VECTOR_CLONES
-void RectPlaneHits(int i0, int m, const double* __restrict ox, const double* __restrict oy, const double* __restrict oz,
-                   const double* __restrict dx, const double* __restrict dy, const double* __restrict dz,
-                   const double* __restrict f, RectPlaneRuns* __restrict out) {
-  const double cx = f[0], cy = f[1], cz = f[2], nx = f[3], ny = f[4], nz = f[5];
-  const double ax = f[6], ay = f[7], az = f[8], bx = f[9], by = f[10], bz = f[11];
+template <class T>
+HOVS_VECTOR_CLONES void RectPlaneHits(int i0, int m, const T* __restrict ox, const T* __restrict oy,
+                                      const T* __restrict oz, const T* __restrict dx, const T* __restrict dy,
+                                      const T* __restrict dz, const T* __restrict f, RectPlaneRuns<T>* __restrict out) {
+  const T cx = f[0], cy = f[1], cz = f[2], nx = f[3], ny = f[4], nz = f[5];
+  const T ax = f[6], ay = f[7], az = f[8], bx = f[9], by = f[10], bz = f[11];
   for (int i = i0; i < i0 + m; ++i) {
-    const double dn = dx[i] * nx + dy[i] * ny + dz[i] * nz;
-    const double k = ((cx - ox[i]) * nx + (cy - oy[i]) * ny + (cz - oz[i]) * nz) / dn;
-    const double px = ox[i] + k * dx[i], py = oy[i] + k * dy[i], pz = oz[i] + k * dz[i];
-    const double X0 = px - cx, X1 = py - cy, X2 = pz - cz;
+    const T dn = dx[i] * nx + dy[i] * ny + dz[i] * nz;
+    const T k = ((cx - ox[i]) * nx + (cy - oy[i]) * ny + (cz - oz[i]) * nz) / dn;
+    const T px = ox[i] + k * dx[i], py = oy[i] + k * dy[i], pz = oz[i] + k * dz[i];
+    const T X0 = px - cx, X1 = py - cy, X2 = pz - cz;
     out->denom[i] = dn, out->k[i] = k, out->px[i] = px, out->py[i] = py, out->pz[i] = pz;
     out->s[i] = ax * X0 + ay * X1 + az * X2;
     out->t[i] = bx * X0 + by * X1 + bz * X2;
@@ -684,11 +692,12 @@ void RectPlaneHits(int i0, int m, const double* __restrict ox, const double* __r
 }
 
 // The sky colour (Sky::Eval) of rays [0, m) from their directions' z, into rgb (3 floats per ray).
-HOVS_VECTOR_CLONES
-void SkyColours(int m, const double* __restrict dz, const float* __restrict horizon, const float* __restrict zenith,
-                const float* __restrict nadir, float* __restrict rgb) {
+template <class T>
+HOVS_VECTOR_CLONES void SkyColours(int m, const T* __restrict dz, const float* __restrict horizon,
+                                   const float* __restrict zenith, const float* __restrict nadir,
+                                   float* __restrict rgb) {
   for (int i = 0; i < m; ++i) {
-    const double z = std::clamp(dz[i], -1.0, 1.0);
+    const T z = std::clamp(dz[i], T(-1), T(1));
     const bool up = z >= 0;
     const float f = static_cast<float>(std::sqrt(up ? z : -z));
     for (int c = 0; c < 3; ++c) {
@@ -698,18 +707,33 @@ void SkyColours(int m, const double* __restrict dz, const float* __restrict hori
   }
 }
 
+// n copies of colour c, interleaved (rgb[3 k + ch]), 16 at a time from a pattern.
+void FillColour(int n, const Rgb& c, float* rgb) {
+  float pattern[48];
+  for (int k = 0; k < 16; ++k) pattern[3 * k] = c[0], pattern[3 * k + 1] = c[1], pattern[3 * k + 2] = c[2];
+  int k = 0;
+  for (; k + 16 <= n; k += 16) std::memcpy(rgb + 3 * k, pattern, sizeof pattern);
+  std::memcpy(rgb + 3 * k, pattern, sizeof(float) * 3 * static_cast<size_t>(n - k));
+}
+
 }  // namespace
 
-void RayScene::Colours(const RayBatch& b, float* rgb) const {
+void RayScene::Colours(const RayBatch& b, float* rgb) const { ColoursOf(b, rgb); }
+void RayScene::Colours(const RayBatchF& b, float* rgb) const { ColoursOf(b, rgb); }
+
+template <class T>
+void RayScene::ColoursOf(const RayBatchOf<T>& b, float* rgb) const {
   const int n = b.n;
   unsigned geom[RayBatch::kMax], prim[RayBatch::kMax];
   IntersectBatch(b, geom, prim);
-  // Runs of consecutive lanes on the sky, or on one rectangle, are evaluated together (vectorised); rectangle
-  // hits with a noise texture are collected per rectangle and evaluated together.
+  // Runs of consecutive lanes on the sky, or on one rectangle, are evaluated together (vectorised); hits with a
+  // noise texture in short runs (or runs with lanes that see the back) are collected per rectangle and evaluated
+  // together.
+  constexpr int kShortNoiseRun = 16;
   int deferred[RayBatch::kMax], n_deferred = 0;
   const auto put = [&](int i, const Rgb& c) { rgb[3 * i] = c[0], rgb[3 * i + 1] = c[1], rgb[3 * i + 2] = c[2]; };
-  RectPlaneRuns planes;
-  const double *s_at = planes.s, *t_at = planes.t, *denom = planes.denom;
+  RectPlaneRuns<T> planes;
+  const T *s_at = planes.s, *t_at = planes.t, *denom = planes.denom;
   for (int i = 0; i < n;) {
     const unsigned g = geom[i];
     if (!b.valid[i]) {
@@ -724,21 +748,27 @@ void RayScene::Colours(const RayBatch& b, float* rgb) const {
       const unsigned p = prim[i];
       while (j < n && b.valid[j] && geom[j] == g && prim[j] == p) ++j;
       const RectFrame& fr = rect_frames_[p];
-      RectPlaneHits(i, j - i, b.ox, b.oy, b.oz, b.dx, b.dy, b.dz, fr.flat, &planes);
+      const T* flat;
+      if constexpr (std::is_same_v<T, float>) flat = fr.flat_f; else flat = fr.flat;
+      RectPlaneHits<T>(i, j - i, b.ox, b.oy, b.oz, b.dx, b.dy, b.dz, flat, &planes);
       const Rect& r = desc_.rects[p];
       const bool noise = r.front.kind == Texture::Kind::kNoise, double_sided = r.double_sided;
       // Edge-on: no hit (as Shade); the back of a single-sided rectangle: its back colour.
       const auto seen = [&](int k) { return !(denom[k] == 0 || (denom[k] > 0 && !double_sided)); };
-      int nd = n_deferred, front = 0;
-      if (noise) {
+      int front = 0;
+      for (int k = i; k < j; ++k) front += seen(k);
+      if (front == j - i && (!noise || j - i >= kShortNoiseRun)) {
+        r.front.EvalInto(j - i, s_at + i, t_at + i, rgb + 3 * i);
+      } else if (noise) {
+        int nd = n_deferred;
         for (int k = i; k < j; ++k) {   // without branches: the lane is kept when seen
           const int keep = seen(k);
-          deferred[nd] = k, nd += keep, front += keep;
+          deferred[nd] = k, nd += keep;
         }
         n_deferred = nd;
       } else {
         for (int k = i; k < j; ++k)
-          if (seen(k)) put(k, r.front.Eval(s_at[k], t_at[k])), ++front;
+          if (seen(k)) put(k, r.front.Eval(s_at[k], t_at[k]));
       }
       if (front < j - i)
         for (int k = i; k < j; ++k)
@@ -748,7 +778,7 @@ void RayScene::Colours(const RayBatch& b, float* rgb) const {
       while (j < n && b.valid[j] && geom[j] == g) ++j;
       const UserGeometry& u = *user_[geom_to_user_[g]];
       const Rgb& c = u.kind == UserGeometry::Kind::kMirror ? u.back_colour : u.colour;
-      for (int k = i; k < j; ++k) put(k, c);
+      FillColour(j - i, c, rgb + 3 * i);
     } else {
       put(i, {0, 0, 0});
     }
@@ -756,9 +786,9 @@ void RayScene::Colours(const RayBatch& b, float* rgb) const {
   }
   // The noise: one batch per rectangle, in order of first appearance (usually one: the floor). Each pass takes
   // the rays of the first rectangle left and keeps the others, in order, for the next.
-  double s_batch[RayBatch::kMax], t_batch[RayBatch::kMax];
+  T s_batch[RayBatch::kMax], t_batch[RayBatch::kMax];
   int lanes[RayBatch::kMax];
-  Rgb colours[RayBatch::kMax];
+  float colours[3 * RayBatch::kMax];
   for (int left = n_deferred; left > 0;) {
     const unsigned p = prim[deferred[0]];
     int m = 0, kept = 0;
@@ -770,8 +800,8 @@ void RayScene::Colours(const RayBatch& b, float* rgb) const {
         deferred[kept++] = i;
       }
     }
-    desc_.rects[p].front.EvalBatch(m, s_batch, t_batch, colours);
-    for (int k = 0; k < m; ++k) put(lanes[k], colours[k]);
+    desc_.rects[p].front.EvalInto(m, s_batch, t_batch, colours);
+    for (int k = 0; k < m; ++k) put(lanes[k], {colours[3 * k], colours[3 * k + 1], colours[3 * k + 2]});
     left = kept;
   }
 }
@@ -781,7 +811,7 @@ namespace {
 // Lanes [i0, i1) of a run on one rectangle into the hits, from their plane points (RectPlaneHits): a hit unless
 // the ray is parallel to the plane (denom 0), with the normal facing the ray (as Shade).
 HOVS_VECTOR_CLONES
-void RectHitLanes(int i0, int i1, const RectPlaneRuns* __restrict planes, const double* __restrict normal, int id,
+void RectHitLanes(int i0, int i1, const RectPlaneRuns<double>* __restrict planes, const double* __restrict normal, int id,
                   HitBatch* __restrict H) {
   const double n0 = normal[0], n1 = normal[1], n2 = normal[2];
   for (int k = i0; k < i1; ++k) {
@@ -817,7 +847,7 @@ void RingHitLanes(int i0, int i1, const double* __restrict ox, const double* __r
 void RayScene::Geometry(const RayBatch& b, HitBatch* H) const {
   unsigned geom[RayBatch::kMax], prim[RayBatch::kMax];
   IntersectBatch(b, geom, prim);
-  RectPlaneRuns planes;
+  RectPlaneRuns<double> planes;
   // Lane k ends on its unit's mount ring at the renderer's analytic distance: the unit, else -1.
   const auto ring_unit = [&](int k) {
     const int u = b.from_camera[k];
@@ -833,7 +863,7 @@ void RayScene::Geometry(const RayBatch& b, HitBatch* H) const {
       const unsigned p = prim[i];
       while (j < b.n && b.valid[j] && geom[j] == rect_geom_ && prim[j] == p) ++j;
       const RectFrame& fr = rect_frames_[p];
-      RectPlaneHits(i, j - i, b.ox, b.oy, b.oz, b.dx, b.dy, b.dz, fr.flat, &planes);
+      RectPlaneHits<double>(i, j - i, b.ox, b.oy, b.oz, b.dx, b.dy, b.dz, fr.flat, &planes);
       RectHitLanes(i, j, &planes, fr.normal.data(), desc_.rects[p].object_id, H);
       i = j;
       continue;

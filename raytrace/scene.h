@@ -89,20 +89,26 @@ struct Hit {
   int unit = -1;      // for mirror / mount / body hits: which unit
 };
 
-// Rays in structure-of-arrays form: the renderer's per-sample path, traced 16 at a time.
-struct RayBatch {
+// Rays in structure-of-arrays form: the renderer's per-sample path, traced 16 at a time. T = double: the
+// ground-truth rays and the general path (thin lens, motion blur, lens distortion, pinhole views); T = float
+// (RayBatchF): the colour samples of a unit's undistorted camera, made and shaded in single precision, which
+// Embree traces in anyway.
+template <class T>
+struct RayBatchOf {
   static constexpr int kMax = 256;
   int n = 0;
-  alignas(64) double ox[kMax], oy[kMax], oz[kMax];  // world
-  alignas(64) double dx[kMax], dy[kMax], dz[kMax];  // world, unit
+  alignas(64) T ox[kMax], oy[kMax], oz[kMax];  // world
+  alignas(64) T dx[kMax], dy[kMax], dz[kMax];  // world, unit
   alignas(64) float tnear[kMax];
   alignas(64) int from_mirror[kMax];                // the unit whose mirror the ray leaves, -1: none
   alignas(64) int from_camera[kMax];                // the unit whose camera it leaves past the mirror, -1: none
   // For rays with from_camera >= 0: where the ray meets that unit's mount ring (t along d), 0 if it does not,
   // < 0 if not computed (RayScene then computes it).
-  alignas(64) double mount_t[kMax];
+  alignas(64) T mount_t[kMax];
   alignas(64) unsigned char valid[kMax];            // 0: no ray (outside the camera's domain): black, no hit
 };
+using RayBatch = RayBatchOf<double>;
+using RayBatchF = RayBatchOf<float>;
 
 // The hits of a batch without colour, in structure-of-arrays form (the ground-truth path): lane i as Hit's
 // hit, object_id, point and normal. Where hit[i] = 0 (no ray, or nothing met): object_id kSkyId, point and
@@ -133,6 +139,8 @@ class RayScene {
   // The colour seen along each ray of a batch (3 floats per ray; black where !valid): Trace16 with colour,
   // without the hit geometry, and with the textures evaluated in batches.
   void Colours(const RayBatch& batch, float* rgb) const;
+  // The same for single-precision rays: the plane hits and texture coordinates in float too.
+  void Colours(const RayBatchF& batch, float* rgb) const;
   // The hits of a batch without colour (point, normal, id): the ground-truth path. The same values as Trace16
   // without colour, lane by lane; runs of lanes on one rectangle or on their unit's mount ring are evaluated
   // together (vectorised).
@@ -176,12 +184,16 @@ class RayScene {
   void DecideMountPaths(const std::vector<std::pair<size_t, size_t>>& body_rects);
   // Intersects the rays of a batch: their Embree lanes set up once, then packets of 16 (rtcIntersect16) where
   // the CPU has native 16-wide packets, else of 8 (rtcIntersect8).
-  void IntersectBatch(const RayBatch& b, unsigned* geom_ids, unsigned* prim_ids) const;
+  template <class T>
+  void IntersectBatch(const RayBatchOf<T>& b, unsigned* geom_ids, unsigned* prim_ids) const;
+  template <class T>
+  void ColoursOf(const RayBatchOf<T>& b, float* rgb) const;
 
   // A rectangle's frame for shading: centre, unit normal and in-plane axes in the world.
   struct RectFrame {
     Vec3d centre, normal, axis_x, axis_y;
     double flat[12];  // the four vectors in this order, as the vectorised plane hits take them
+    float flat_f[12];  // the same rounded to float (single-precision rays)
   };
   std::vector<RectFrame> rect_frames_;
 

@@ -88,16 +88,18 @@ __attribute__((always_inline)) inline float ValueNoise(float x, float y, uint32_
 }
 
 // The noise texture's value in [0, 1] at n <= 256 points: octaves outside, points inside, so the inner loop
-// vectorises. Texture::Eval calls it with n = 1, so both agree to the bit.
-HOVS_VECTOR_CLONES
-void NoiseValues(int n, const double* __restrict s, const double* __restrict t, double scale, int octaves,
-                 uint32_t seed, float* __restrict out) {
+// vectorises. Texture::Eval calls it with n = 1, so both agree to the bit. T: the precision of the points
+// (double, or float for the renderer's single-precision colour samples).
+template <class T>
+HOVS_VECTOR_CLONES void NoiseValues(int n, const T* __restrict s, const T* __restrict t, double scale, int octaves,
+                                    uint32_t seed, float* __restrict out) {
   // Positions in base cells, clamped to +-5e5 so that the finest octave (12 at most, x 2048) stays within int32.
   float x[256], y[256];
+  const T sc = static_cast<T>(scale), lo = static_cast<T>(-5e5), hi = static_cast<T>(5e5);
   for (int i = 0; i < n; ++i) {
     out[i] = 0;
-    x[i] = static_cast<float>(std::min(std::max(s[i] / scale, -5e5), 5e5));
-    y[i] = static_cast<float>(std::min(std::max(t[i] / scale, -5e5), 5e5));
+    x[i] = static_cast<float>(std::min(std::max(s[i] / sc, lo), hi));
+    y[i] = static_cast<float>(std::min(std::max(t[i] / sc, lo), hi));
   }
   float amp = 1, norm = 0, freq = 1;
   for (int o = 0; o < std::min(octaves, 12); ++o) {
@@ -136,25 +138,72 @@ Rgb Texture::Eval(double s, double t) const {
     }
     case Kind::kNoise: {
       float value = 0;
-      NoiseValues(1, &s, &t, scale, octaves, seed, &value);
+      NoiseValues<double>(1, &s, &t, scale, octaves, seed, &value);
       return Mix(colour_a, colour_b, value);
     }
   }
   return colour_a;
 }
 
-void Texture::EvalBatch(int n, const double* s, const double* t, Rgb* out) const {
-  if (kind != Kind::kNoise) {
-    for (int i = 0; i < n; ++i) out[i] = Eval(s[i], t[i]);
-    return;
-  }
-  constexpr int kBlock = 256;
-  float value[kBlock];
-  for (int i0 = 0; i0 < n; i0 += kBlock) {
-    const int m = std::min(kBlock, n - i0);
-    NoiseValues(m, s + i0, t + i0, scale, octaves, seed, value);
-    for (int i = 0; i < m; ++i) out[i0 + i] = Mix(colour_a, colour_b, value[i]);
+namespace {
+
+// Mix for n values into interleaved RGB (out[3k + c]): the same operations as Mix, vectorised.
+HOVS_VECTOR_CLONES
+void MixInto(int n, const float* __restrict v, const float* __restrict a, const float* __restrict b,
+             float* __restrict out) {
+  const float a0 = a[0], a1 = a[1], a2 = a[2], d0 = b[0] - a0, d1 = b[1] - a1, d2 = b[2] - a2;
+  for (int k = 0; k < n; ++k) {
+    out[3 * k] = a0 + v[k] * d0, out[3 * k + 1] = a1 + v[k] * d1, out[3 * k + 2] = a2 + v[k] * d2;
   }
 }
+
+// The checkerboard of Texture::Eval at n points into interleaved RGB, vectorised: the same double arithmetic and
+// decisions (inside the squares; the square's parity), written as selects. Coordinates are clamped before the
+// conversion to int (points outside take the margin colour whatever their square).
+template <class T>
+HOVS_VECTOR_CLONES void CheckerInto(int n, const T* __restrict s, const T* __restrict t, double square, int squares_x,
+                                    int squares_y, const float* __restrict a, const float* __restrict b,
+                                    const float* __restrict margin, float* __restrict out) {
+  const double nx = squares_x, ny = squares_y, hx = 0.5 * squares_x, hy = 0.5 * squares_y;
+  const float a0 = a[0], a1 = a[1], a2 = a[2], b0 = b[0], b1 = b[1], b2 = b[2];
+  const float m0 = margin[0], m1 = margin[1], m2 = margin[2];
+  for (int k = 0; k < n; ++k) {
+    const double x = static_cast<double>(s[k]) / square + hx, y = static_cast<double>(t[k]) / square + hy;
+    int inside = x >= 0 ? 1 : 0;
+    inside = y >= 0 ? inside : 0;
+    inside = x < nx ? inside : 0;
+    inside = y < ny ? inside : 0;
+    const int ix = static_cast<int>(std::min(std::max(x, 0.0), nx)), iy = static_cast<int>(std::min(std::max(y, 0.0), ny));
+    const int light = (ix + iy) & 1;
+    const float c0 = light ? b0 : a0, c1 = light ? b1 : a1, c2 = light ? b2 : a2;
+    out[3 * k] = inside ? c0 : m0, out[3 * k + 1] = inside ? c1 : m1, out[3 * k + 2] = inside ? c2 : m2;
+  }
+}
+
+template <class T>
+void EvalIntoOf(const Texture& x, int n, const T* s, const T* t, float* rgb) {
+  if (x.kind == Texture::Kind::kChecker) {
+    CheckerInto<T>(n, s, t, x.square, x.squares_x, x.squares_y, x.colour_a.data(), x.colour_b.data(), x.margin.data(),
+                   rgb);
+  } else if (x.kind == Texture::Kind::kNoise) {
+    constexpr int kBlock = 256;
+    float value[kBlock];
+    for (int i0 = 0; i0 < n; i0 += kBlock) {
+      const int m = std::min(kBlock, n - i0);
+      NoiseValues<T>(m, s + i0, t + i0, x.scale, x.octaves, x.seed, value);
+      MixInto(m, value, x.colour_a.data(), x.colour_b.data(), rgb + 3 * i0);
+    }
+  } else {
+    for (int i = 0; i < n; ++i) {
+      const Rgb c = x.Eval(s[i], t[i]);
+      rgb[3 * i] = c[0], rgb[3 * i + 1] = c[1], rgb[3 * i + 2] = c[2];
+    }
+  }
+}
+
+}  // namespace
+
+void Texture::EvalInto(int n, const double* s, const double* t, float* rgb) const { EvalIntoOf(*this, n, s, t, rgb); }
+void Texture::EvalInto(int n, const float* s, const float* t, float* rgb) const { EvalIntoOf(*this, n, s, t, rgb); }
 
 }  // namespace hovs::raytrace

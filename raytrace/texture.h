@@ -45,8 +45,11 @@ struct Texture {
   uint32_t seed = 1;
 
   Rgb Eval(double s, double t) const;
-  // Eval at n points (bit-identical to it); the noise is evaluated vectorised.
-  void EvalBatch(int n, const double* s, const double* t, Rgb* out) const;
+  // Eval at n points into interleaved RGB (rgb[3 i + c]), the checkerboard and the noise vectorised: the
+  // renderer's runs of samples on one rectangle. For double points bit-identical to Eval; for single-precision
+  // points (the renderer's colour samples) the noise's cell positions come from float arithmetic.
+  void EvalInto(int n, const double* s, const double* t, float* rgb) const;
+  void EvalInto(int n, const float* s, const float* t, float* rgb) const;
 };
 
 }  // namespace hovs::raytrace

@@ -537,8 +537,8 @@ TEST(Render, SomethingBetweenTheCameraAndItsMountIsSeenInFrontOfIt) {
   }
 }
 
-TEST(Texture, BatchNoiseIsTheScalarNoiseToTheBit) {
-  // The vectorised noise (EvalBatch) and Eval at the same points: identical. The noise spans its colour range,
+TEST(Texture, BatchTexturesAreTheScalarTexturesToTheBit) {
+  // The vectorised noise (EvalInto) and Eval at the same points: identical. The noise spans its colour range,
   // is continuous (a 0.1 mm step changes it little) and stays defined far away (coordinates clamp).
   raytrace::Texture tex;
   tex.kind = raytrace::Texture::Kind::kNoise;
@@ -550,13 +550,13 @@ TEST(Texture, BatchNoiseIsTheScalarNoiseToTheBit) {
   std::vector<double> s(n), t(n);
   for (int i = 0; i < n; ++i) s[i] = U(rng), t[i] = U(rng);
   s[0] = 1e7, t[0] = -3e9;  // far: clamped
-  std::vector<raytrace::Rgb> batch(n);
-  tex.EvalBatch(n, s.data(), t.data(), batch.data());
+  std::vector<float> batch(3 * n);
+  tex.EvalInto(n, s.data(), t.data(), batch.data());
   double lo = 1, hi = 0, step = 0;
   for (int i = 0; i < n; ++i) {
     const raytrace::Rgb one = tex.Eval(s[i], t[i]);
-    for (int c = 0; c < 3; ++c) ASSERT_EQ(batch[i][c], one[c]) << "point " << i;
-    const double v = (batch[i][1] - tex.colour_a[1]) / (tex.colour_b[1] - tex.colour_a[1]);
+    for (int c = 0; c < 3; ++c) ASSERT_EQ(batch[3 * i + c], one[c]) << "point " << i;
+    const double v = (batch[3 * i + 1] - tex.colour_a[1]) / (tex.colour_b[1] - tex.colour_a[1]);
     ASSERT_TRUE(v >= 0 && v <= 1) << v;
     lo = std::min(lo, v), hi = std::max(hi, v);
     step = std::max(step, std::abs(static_cast<double>(tex.Eval(s[i] + 1e-4, t[i])[1] - one[1])));
@@ -564,6 +564,28 @@ TEST(Texture, BatchNoiseIsTheScalarNoiseToTheBit) {
   EXPECT_LT(lo, 0.3);
   EXPECT_GT(hi, 0.7);
   EXPECT_LT(step, 0.02) << "0.1 mm is 1/50 of the finest octave's cell";
+
+  // The vectorised checkerboard likewise, on a 9 x 7 board of 30 mm squares: points inside, on the margin, on
+  // square edges and far away (1e30 m, NaN-free clamping).
+  raytrace::Texture board;
+  board.kind = raytrace::Texture::Kind::kChecker;
+  board.square = 0.03, board.squares_x = 9, board.squares_y = 7;
+  board.colour_a = {0.1f, 0.1f, 0.1f}, board.colour_b = {0.9f, 0.8f, 0.7f}, board.margin = {1.0f, 0.5f, 0.25f};
+  std::uniform_real_distribution<double> B(-0.2, 0.2);
+  for (int i = 0; i < n; ++i) s[i] = B(rng), t[i] = B(rng);
+  s[1] = 0.03, t[1] = 0.0;   // on an edge between squares
+  s[2] = 1e30, t[2] = 0.01;
+  s[3] = -0.135, t[3] = -0.105;   // the board's corner: inside
+  board.EvalInto(n, s.data(), t.data(), batch.data());
+  int margin = 0, dark = 0, light = 0;
+  for (int i = 0; i < n; ++i) {
+    const raytrace::Rgb one = board.Eval(s[i], t[i]);
+    for (int c = 0; c < 3; ++c) ASSERT_EQ(batch[3 * i + c], one[c]) << "point " << i;
+    margin += one == board.margin, dark += one == board.colour_a, light += one == board.colour_b;
+  }
+  EXPECT_GT(margin, 100);
+  EXPECT_GT(dark, 100);
+  EXPECT_GT(light, 100);
 }
 
 TEST(Render, BatchColoursAgreeWithTheScalarTrace) {
@@ -573,8 +595,9 @@ TEST(Render, BatchColoursAgreeWithTheScalarTrace) {
   const RayScene scene(cfg.description);
   const auto& unit = scene.description().units[0];
   raytrace::RayBatch b;
-  std::vector<float> rgb(3 * raytrace::RayBatch::kMax);
-  int compared = 0, differ = 0;
+  raytrace::RayBatchF bf;   // the same rays in single precision (the renderer's colour samples)
+  std::vector<float> rgb(3 * raytrace::RayBatch::kMax), rgb_f(rgb.size());
+  int compared = 0, differ = 0, differ_f = 0;
   for (int y = 50; y < unit.rig.camera.height; y += 37) {
     b.n = 0;
     for (int x = 20; x < unit.rig.camera.width && b.n < raytrace::RayBatch::kMax; x += 11) {
@@ -586,18 +609,33 @@ TEST(Render, BatchColoursAgreeWithTheScalarTrace) {
       b.tnear[i] = 1e-5f, b.from_mirror[i] = 0, b.from_camera[i] = -1, b.mount_t[i] = -1, b.valid[i] = 1;
     }
     if (b.n == 0) continue;
+    bf.n = b.n;
+    for (int i = 0; i < b.n; ++i) {
+      bf.ox[i] = static_cast<float>(b.ox[i]), bf.oy[i] = static_cast<float>(b.oy[i]);
+      bf.oz[i] = static_cast<float>(b.oz[i]), bf.dx[i] = static_cast<float>(b.dx[i]);
+      bf.dy[i] = static_cast<float>(b.dy[i]), bf.dz[i] = static_cast<float>(b.dz[i]);
+      bf.tnear[i] = b.tnear[i], bf.from_mirror[i] = 0, bf.from_camera[i] = -1, bf.mount_t[i] = -1, bf.valid[i] = 1;
+    }
     scene.Colours(b, rgb.data());
+    scene.Colours(bf, rgb_f.data());
     for (int i = 0; i < b.n; ++i) {
       const raytrace::Hit h =
           scene.Trace(Vec3d(b.ox[i], b.oy[i], b.oz[i]), Vec3d(b.dx[i], b.dy[i], b.dz[i]), 1e-5, 0);
       ++compared;
-      double worst = 0;
-      for (int c = 0; c < 3; ++c) worst = std::max(worst, std::abs(static_cast<double>(rgb[3 * i + c] - h.colour[c])));
+      double worst = 0, worst_f = 0;
+      for (int c = 0; c < 3; ++c) {
+        worst = std::max(worst, std::abs(static_cast<double>(rgb[3 * i + c] - h.colour[c])));
+        worst_f = std::max(worst_f, std::abs(static_cast<double>(rgb_f[3 * i + c] - h.colour[c])));
+      }
       differ += worst > 1e-6;
+      // Single precision moves texture coordinates by about 1e-7 m: the floor's noise (finest cell 5 mm) by
+      // at most a few 1e-5 of its range; a checker edge only for rays within that of it.
+      differ_f += worst_f > 1e-3;
     }
   }
   EXPECT_GT(compared, 5000);
   EXPECT_LE(differ, compared / 1000) << differ << " of " << compared;
+  EXPECT_LE(differ_f, compared / 1000) << differ_f << " of " << compared << " (single precision)";
 }
 
 TEST(Render, GroundTruthOfMirrorPixelsIsTheScalarTrace) {
