@@ -51,14 +51,15 @@ uint64_t SplitMix(uint64_t x) {
 }
 double Uniform(uint64_t h) { return (h >> 11) * (1.0 / 9007199254740992.0); }
 
-// The jittered image positions of a chunk of samples: sample k has the hash key key[k] (pixel * 4096 + sample
-// index), lies in the pixel with centre (x[k], y[k]) and, when stratified, in the stratum (sx[k], sy[k]) of a
-// grid of 1 / inv_grid strata per side. The same arithmetic as SplitMix and Uniform above, vectorised (the
-// 53-bit integer becomes a double through its bits, exactly as the conversion in Uniform).
+// The jittered image positions of a chunk's samples: samples s_begin .. s_end - 1 of P pixels, sample s of pixel q
+// at k = (s - s_begin) P + q. It has the hash key pixel[q] * 4096 + s, lies in the pixel with centre (x[q], y[q])
+// and, when stratified, in the stratum (s % grid, s / grid) of a grid of grid x grid strata (inv_grid = 1 /
+// grid). The same arithmetic as SplitMix and Uniform above, vectorised over the pixels (the 53-bit integer
+// becomes a double through its bits, exactly as the conversion in Uniform).
 HOVS_VECTOR_CLONES
-void JitteredSamples(int m, uint64_t seed_mix, bool stratified, double inv_grid, const uint64_t* __restrict key,
-                     const double* __restrict x, const double* __restrict y, const double* __restrict sx,
-                     const double* __restrict sy, double* __restrict u, double* __restrict v) {
+void JitteredSamples(int P, int s_begin, int s_end, int grid, uint64_t seed_mix, bool stratified, double inv_grid,
+                     const int* __restrict pixel, const double* __restrict x, const double* __restrict y,
+                     double* __restrict u, double* __restrict v) {
   const auto mix = [](uint64_t z) {
     z += 0x9E3779B97F4A7C15ull;
     z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ull;
@@ -75,11 +76,16 @@ void JitteredSamples(int m, uint64_t seed_mix, bool stratified, double inv_grid,
            (1.0 / 9007199254740992.0);
   };
   const double g = stratified ? 1.0 : 0.0, scale = stratified ? inv_grid : 1.0;
-  for (int k = 0; k < m; ++k) {
-    const uint64_t h = mix(seed_mix ^ key[k]);
-    const double ju = to_unit(h), jv = to_unit(mix(h));
-    u[k] = x[k] + ((g * sx[k] + ju) * scale - 0.5);
-    v[k] = y[k] + ((g * sy[k] + jv) * scale - 0.5);
+  for (int smp = s_begin; smp < s_end; ++smp) {
+    const double gsx = g * (smp % grid), gsy = g * (smp / grid);
+    double* __restrict us = u + static_cast<ptrdiff_t>(smp - s_begin) * P;
+    double* __restrict vs = v + static_cast<ptrdiff_t>(smp - s_begin) * P;
+    for (int q = 0; q < P; ++q) {
+      const uint64_t h = mix(seed_mix ^ (static_cast<uint64_t>(pixel[q]) * 4096 + static_cast<uint64_t>(smp)));
+      const double ju = to_unit(h), jv = to_unit(mix(h));
+      us[q] = x[q] + ((gsx + ju) * scale - 0.5);
+      vs[q] = y[q] + ((gsy + jv) * scale - 0.5);
+    }
   }
 }
 
@@ -203,6 +209,40 @@ HOVS_VECTOR_CLONES void RayOrigins(int n, const unsigned char* __restrict on_mir
     tnear_out[i] = tnear;
     from_mirror[i] = m ? unit : -1;
     from_camera[i] = m ? -1 : unit;
+  }
+}
+
+// The ground-truth channels (GroundTruth's order) of m pixel-centre rays, channel c of ray k at
+// out[c * RayBatch::kMax + k], from the ray set-up (valid, from_mirror, mirror point M), the hits and the ranges:
+// range, point and normal where the ray hit something (else infinity and zeros), object id (0: sky), mirror mask
+// (the ray left a mirror and did not meet the camera's own body) and the mirror point (where it left a mirror).
+// Selects only, vectorised.
+HOVS_VECTOR_CLONES
+void GroundTruthLanes(int m, const unsigned char* __restrict valid, const int* __restrict from_mirror,
+                      const unsigned char* __restrict hit, const int* __restrict object_id,
+                      const double* __restrict range, const double* __restrict px, const double* __restrict py,
+                      const double* __restrict pz, const double* __restrict nx, const double* __restrict ny,
+                      const double* __restrict nz, const double* __restrict Mx, const double* __restrict My,
+                      const double* __restrict Mz, float* __restrict out) {
+  constexpr int K = RayBatch::kMax;
+  const float inf = std::numeric_limits<float>::infinity();
+  for (int k = 0; k < m; ++k) {
+    const int live = valid[k] != 0 ? 1 : 0;
+    const int met = live & (hit[k] != 0 ? 1 : 0);
+    const int via = live & (from_mirror[k] >= 0 ? 1 : 0);
+    const int seen = via & (object_id[k] != kCameraBodyId ? 1 : 0);
+    out[k] = met ? static_cast<float>(range[k]) : inf;
+    out[K + k] = met ? static_cast<float>(px[k]) : 0.0f;
+    out[2 * K + k] = met ? static_cast<float>(py[k]) : 0.0f;
+    out[3 * K + k] = met ? static_cast<float>(pz[k]) : 0.0f;
+    out[4 * K + k] = met ? static_cast<float>(nx[k]) : 0.0f;
+    out[5 * K + k] = met ? static_cast<float>(ny[k]) : 0.0f;
+    out[6 * K + k] = met ? static_cast<float>(nz[k]) : 0.0f;
+    out[7 * K + k] = met ? static_cast<float>(object_id[k]) : 0.0f;
+    out[8 * K + k] = seen ? 1.0f : 0.0f;
+    out[9 * K + k] = via ? static_cast<float>(Mx[k]) : 0.0f;
+    out[10 * K + k] = via ? static_cast<float>(My[k]) : 0.0f;
+    out[11 * K + k] = via ? static_cast<float>(Mz[k]) : 0.0f;
   }
 }
 
@@ -477,18 +517,15 @@ void RenderInto(const RayScene& scene, const ViewCamera& camera, const RenderOpt
     const auto batch_f = maker.single() ? std::make_unique<RayBatchF>() : nullptr;
     struct Scratch {
       double u[kMax], v[kMax], Mx[kMax], My[kMax], Mz[kMax], tau[kMax];
-      double x[kMax], y[kMax];    // pixel centre of each sample
-      double sx[kMax], sy[kMax];  // its stratum
-      uint64_t key[kMax];         // its hash key: pixel * 4096 + sample index
       Vec2d disc[kMax];
       int px[kMax];
-      // The chunk's pixels: index in the frame, hash key base (index * 4096), centre.
+      // The chunk's pixels: index in the frame, centre.
       int pixel[kMax];
-      uint64_t pixel_key[kMax];
       double pixel_x[kMax], pixel_y[kMax];
       float rgb[3 * kMax], sum[3 * kMax];
       HitBatch hits;            // the ground-truth rays' hits
       double range[kMax];       // and their distances from the viewpoint
+      alignas(64) float truth[GroundTruth::kChannels * kMax];   // their ground truth, channel by channel
     };
     const auto scratch = std::make_unique<Scratch>();
     Scratch& sc = *scratch;
@@ -511,25 +548,17 @@ void RenderInto(const RayScene& scene, const ViewCamera& camera, const RenderOpt
           const int len = std::min(x1 - xq, P - q), base = yq * f.width + xq;
           for (int i = 0; i < len; ++i) {
             sc.pixel[q + i] = base + i;
-            sc.pixel_key[q + i] = static_cast<uint64_t>(base + i) * 4096;
             sc.pixel_x[q + i] = xq + i, sc.pixel_y[q + i] = yq;
           }
           q += len;
           if ((xq += len) == x1) xq = x0, ++yq;
         }
-        for (int smp = s_begin; smp < s_end; ++smp) {
-          const int k0 = (smp - s_begin) * P;
-          const double stratum_x = smp % grid, stratum_y = smp / grid;
-          for (int q = 0; q < P; ++q) {
-            sc.key[k0 + q] = sc.pixel_key[q] + static_cast<uint64_t>(smp);
-            sc.x[k0 + q] = sc.pixel_x[q], sc.y[k0 + q] = sc.pixel_y[q];
-            sc.sx[k0 + q] = stratum_x, sc.sy[k0 + q] = stratum_y;
-          }
-        }
-        JitteredSamples(m, seed_mix, stratified, inv_grid, sc.key, sc.x, sc.y, sc.sx, sc.sy, sc.u, sc.v);
+        JitteredSamples(P, s_begin, s_end, grid, seed_mix, stratified, inv_grid, sc.pixel, sc.pixel_x, sc.pixel_y,
+                        sc.u, sc.v);
         if (lens || blur) {
           for (int k = 0; k < m; ++k) {
-            const uint64_t h2 = SplitMix(SplitMix(seed_mix ^ sc.key[k]) ^ 0xD1B54A32D192ED03ull);
+            const uint64_t key = static_cast<uint64_t>(sc.pixel[k % P]) * 4096 + static_cast<uint64_t>(s_begin + k / P);
+            const uint64_t h2 = SplitMix(SplitMix(seed_mix ^ key) ^ 0xD1B54A32D192ED03ull);
             sc.disc[k] = Vec2d::Zero();
             if (lens) {  // uniform on the unit disc
               const double rr = std::sqrt(Uniform(h2)), phi = 2 * M_PI * Uniform(SplitMix(h2));
@@ -593,33 +622,17 @@ void RenderInto(const RayScene& scene, const ViewCamera& camera, const RenderOpt
           const HitBatch& H = sc.hits;
           ViewRanges(m, H.px, H.py, H.pz, maker.viewpoint().data(), sc.range);
           static_assert(GroundTruth::kChannels == 12, "the pixel below is 12 floats");
-          for (int k = 0; k < m; ++k) {
-            // Every channel of the pixel is written (the buffer is not zeroed first), from values held in
-            // registers. (Built in a local array and copied, the 48 bytes were read back by 16-byte loads each
-            // spanning two of the array's smaller stores: store-to-load forwarding failed on every pixel, about
-            // 3 % of a frame in perf samples.)
-            float view_range = std::numeric_limits<float>::infinity(), point[3] = {0, 0, 0}, normal[3] = {0, 0, 0};
-            float id = 0, mask = 0, mirror[3] = {0, 0, 0};
-            if (batch->valid[k]) {
-              ++task_rays;
-              const bool via_mirror = batch->from_mirror[k] >= 0;
-              mask = via_mirror && H.object_id[k] != kCameraBodyId ? 1.0f : 0.0f;
-              if (via_mirror)
-                mirror[0] = static_cast<float>(sc.Mx[k]), mirror[1] = static_cast<float>(sc.My[k]),
-                mirror[2] = static_cast<float>(sc.Mz[k]);
-              if (H.hit[k]) {
-                view_range = static_cast<float>(sc.range[k]);
-                point[0] = static_cast<float>(H.px[k]), point[1] = static_cast<float>(H.py[k]);
-                point[2] = static_cast<float>(H.pz[k]);
-                normal[0] = static_cast<float>(H.nx[k]), normal[1] = static_cast<float>(H.ny[k]);
-                normal[2] = static_cast<float>(H.nz[k]);
-                id = static_cast<float>(H.object_id[k]);
-              }
-            }
+          GroundTruthLanes(m, batch->valid, batch->from_mirror, H.hit, H.object_id, sc.range, H.px, H.py, H.pz, H.nx,
+                           H.ny, H.nz, sc.Mx, sc.My, sc.Mz, sc.truth);
+          for (int k = 0; k < m; ++k) task_rays += batch->valid[k];
+          // Every channel of every pixel is written (the buffer is not zeroed first), in runs along the tile's rows.
+          for (int k = 0; k < m;) {
+            int e = k + 1;
+            while (e < m && sc.px[e] == sc.px[k] + (e - k)) ++e;
             float* v = &f.truth.data[static_cast<size_t>(sc.px[k]) * GroundTruth::kChannels];
-            v[0] = view_range, v[1] = point[0], v[2] = point[1], v[3] = point[2];
-            v[4] = normal[0], v[5] = normal[1], v[6] = normal[2], v[7] = id;
-            v[8] = mask, v[9] = mirror[0], v[10] = mirror[1], v[11] = mirror[2];
+            for (int i = k; i < e; ++i, v += GroundTruth::kChannels)
+              for (int c = 0; c < GroundTruth::kChannels; ++c) v[c] = sc.truth[c * kMax + i];
+            k = e;
           }
         }
       }

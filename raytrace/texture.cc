@@ -53,8 +53,12 @@ Rgb ImageTexture::Sample(double x, double y) const {
 
 namespace {
 
-__attribute__((always_inline)) inline uint32_t Hash(int32_t x, int32_t y, uint32_t seed) {
-  uint32_t h = seed * 0x9E3779B9u ^ static_cast<uint32_t>(x) * 0x85EBCA6Bu ^ static_cast<uint32_t>(y) * 0xC2B2AE35u;
+// The lattice hash of cell (x, y): seed * 0x9E3779B9 ^ x * 0x85EBCA6B ^ y * 0xC2B2AE35 (mod 2^32), then mixed.
+// Its three products are taken as arguments (hs, hx, hy), so that neighbouring cells reuse them: (x + 1) K is
+// x K + K modulo 2^32.
+constexpr uint32_t kSeedFactor = 0x9E3779B9u, kXFactor = 0x85EBCA6Bu, kYFactor = 0xC2B2AE35u;
+__attribute__((always_inline)) inline uint32_t Hash(uint32_t hs, uint32_t hx, uint32_t hy) {
+  uint32_t h = hs ^ hx ^ hy;
   h ^= h >> 15;
   h *= 0x2C1B3C6Du;
   h ^= h >> 12;
@@ -70,20 +74,23 @@ __attribute__((always_inline)) inline int32_t FloorToInt(float x) {
 
 // The lattice value h / 2^32, h converted through int32, for which there are vector instructions. (Helpers
 // of a HOVS_VECTOR_CLONES function are always_inline and not lambdas: the AVX2 copy does not inline otherwise.)
-__attribute__((always_inline)) inline float LatticeValue(int32_t a, int32_t b, uint32_t seed) {
-  return (static_cast<float>(static_cast<int32_t>(Hash(a, b, seed) ^ 0x80000000u)) + 2147483648.0f) *
+__attribute__((always_inline)) inline float LatticeValue(uint32_t hs, uint32_t hx, uint32_t hy) {
+  return (static_cast<float>(static_cast<int32_t>(Hash(hs, hx, hy) ^ 0x80000000u)) + 2147483648.0f) *
          (1.0f / 4294967296.0f);
 }
 
 // Value noise in single precision (32-bit floats and integers throughout, so that a vector holds as many
 // coordinates as lattice hashes: 8 per AVX2 register). Positions are in cells; single precision places them
 // to 1e-4 cell at 2000 cells from the origin (0.5 um for the reference floor's finest octave).
-__attribute__((always_inline)) inline float ValueNoise(float x, float y, uint32_t seed) {
+// hs: the seed's product (seed * kSeedFactor).
+__attribute__((always_inline)) inline float ValueNoise(float x, float y, uint32_t hs) {
   const int32_t ix = FloorToInt(x), iy = FloorToInt(y);
   const float tx = x - static_cast<float>(ix), ty = y - static_cast<float>(iy);
   const float sx = tx * tx * (3 - 2 * tx), sy = ty * ty * (3 - 2 * ty);
-  const float v00 = LatticeValue(ix, iy, seed), v10 = LatticeValue(ix + 1, iy, seed);
-  const float v01 = LatticeValue(ix, iy + 1, seed), v11 = LatticeValue(ix + 1, iy + 1, seed);
+  const uint32_t hx0 = static_cast<uint32_t>(ix) * kXFactor, hx1 = hx0 + kXFactor;
+  const uint32_t hy0 = static_cast<uint32_t>(iy) * kYFactor, hy1 = hy0 + kYFactor;
+  const float v00 = LatticeValue(hs, hx0, hy0), v10 = LatticeValue(hs, hx1, hy0);
+  const float v01 = LatticeValue(hs, hx0, hy1), v11 = LatticeValue(hs, hx1, hy1);
   return (1 - sy) * ((1 - sx) * v00 + sx * v10) + sy * ((1 - sx) * v01 + sx * v11);
 }
 
@@ -103,8 +110,8 @@ HOVS_VECTOR_CLONES void NoiseValues(int n, const T* __restrict s, const T* __res
   }
   float amp = 1, norm = 0, freq = 1;
   for (int o = 0; o < std::min(octaves, 12); ++o) {
-    const uint32_t so = seed + 7919u * static_cast<uint32_t>(o);
-    for (int i = 0; i < n; ++i) out[i] += amp * ValueNoise(x[i] * freq, y[i] * freq, so);
+    const uint32_t hs = (seed + 7919u * static_cast<uint32_t>(o)) * kSeedFactor;
+    for (int i = 0; i < n; ++i) out[i] += amp * ValueNoise(x[i] * freq, y[i] * freq, hs);
     norm += amp;
     amp *= 0.5f;
     freq *= 2.0f;
