@@ -106,8 +106,8 @@ bool MirrorReflector::MissesRim(const Vec3d& o, int n, const double* vx, const d
 }
 
 template <class T>
-void MirrorReflector::ReflectBatchOf(const Vec3d& o, int n, const T* vx, const T* vy, const T* vz, T* Mx, T* My,
-                                     T* Mz, T* dx, T* dy, T* dz, unsigned char* ok) const {
+int MirrorReflector::ReflectBatchOf(const Vec3d& o, int n, const T* vx, const T* vy, const T* vz, T* Mx, T* My,
+                                    T* Mz, T* dx, T* dy, T* dz, unsigned char* ok) const {
   // In blocks, with the lane flags as T (a byte array among doubles stops GCC 12's vectoriser).
   constexpr int kBlock = 64;
   T flag[kBlock];
@@ -137,18 +137,21 @@ void MirrorReflector::ReflectBatchOf(const Vec3d& o, int n, const T* vx, const T
       dx[i] = static_cast<T>(d(0)), dy[i] = static_cast<T>(d(1)), dz[i] = static_cast<T>(d(2));
     }
   }
+  int hits = 0;
+  for (int i = 0; i < n; ++i) hits += ok[i];
+  return hits;
 }
 
-void MirrorReflector::ReflectBatch(const Vec3d& o, int n, const double* vx, const double* vy, const double* vz,
+int MirrorReflector::ReflectBatch(const Vec3d& o, int n, const double* vx, const double* vy, const double* vz,
                                    double* Mx, double* My, double* Mz, double* dx, double* dy, double* dz,
                                    unsigned char* ok) const {
-  ReflectBatchOf(o, n, vx, vy, vz, Mx, My, Mz, dx, dy, dz, ok);
+  return ReflectBatchOf(o, n, vx, vy, vz, Mx, My, Mz, dx, dy, dz, ok);
 }
 
-void MirrorReflector::ReflectBatch(const Vec3d& o, int n, const float* vx, const float* vy, const float* vz,
+int MirrorReflector::ReflectBatch(const Vec3d& o, int n, const float* vx, const float* vy, const float* vz,
                                    float* Mx, float* My, float* Mz, float* dx, float* dy, float* dz,
                                    unsigned char* ok) const {
-  ReflectBatchOf(o, n, vx, vy, vz, Mx, My, Mz, dx, dy, dz, ok);
+  return ReflectBatchOf(o, n, vx, vy, vz, Mx, My, Mz, dx, dy, dz, ok);
 }
 
 }  // namespace hovs

@@ -167,16 +167,17 @@ class MirrorReflector {
   // Reflect for n rays from one origin o with directions in structure-of-arrays form (any length), written so
   // the compiler vectorises it (AVX2 where the CPU has it, chosen at load time). The results are bit-identical
   // to Reflect's, on every CPU (the same operations in the same order, and no fused multiply-add). ok[i] = 1
-  // where ray i meets the mirror within the rim, else 0; M and d are meaningful only where ok[i] = 1.
+  // where ray i meets the mirror within the rim, else 0; M and d are meaningful only where ok[i] = 1. Returns the
+  // count of rays that meet it.
   // Blocks of rays that all pass the rim plane outside the rim are answered without solving: see MissesRim.
-  void ReflectBatch(const Vec3d& o, int n, const double* vx, const double* vy, const double* vz, double* Mx,
-                    double* My, double* Mz, double* dx, double* dy, double* dz, unsigned char* ok) const;
+  int ReflectBatch(const Vec3d& o, int n, const double* vx, const double* vy, const double* vz, double* Mx,
+                   double* My, double* Mz, double* dx, double* dy, double* dz, unsigned char* ok) const;
   // The same in single precision (twice the lanes per vector): the renderer's colour samples. The same operations
   // in float (the mirror's constants and the origin's terms rounded from double), so M and d carry single
   // precision's relative rounding, about 1e-7 (tests bound them against Reflect); the rim test is made on the
   // float M. Lanes whose quadratic degenerates in float are solved by Reflect in double.
-  void ReflectBatch(const Vec3d& o, int n, const float* vx, const float* vy, const float* vz, float* Mx, float* My,
-                    float* Mz, float* dx, float* dy, float* dz, unsigned char* ok) const;
+  int ReflectBatch(const Vec3d& o, int n, const float* vx, const float* vy, const float* vz, float* Mx, float* My,
+                   float* Mz, float* dx, float* dy, float* dz, unsigned char* ok) const;
 
   // True when every ray o + t v (v any length) of the n given provably misses the mirror within the rim: o lies
   // inside the lower nappe (where the camera of any rig sits, at or near the second focus) and each ray goes down
@@ -205,8 +206,8 @@ class MirrorReflector {
   template <class T>
   bool MissesRimOf(const Vec3d& o, int n, const T* vx, const T* vy, const T* vz) const;
   template <class T>
-  void ReflectBatchOf(const Vec3d& o, int n, const T* vx, const T* vy, const T* vz, T* Mx, T* My, T* Mz, T* dx,
-                      T* dy, T* dz, unsigned char* ok) const;
+  int ReflectBatchOf(const Vec3d& o, int n, const T* vx, const T* vy, const T* vz, T* Mx, T* My, T* Mz, T* dx,
+                     T* dy, T* dz, unsigned char* ok) const;
   double c_, ia2_, ib2_, rim2_, rim_z_;
 };
 

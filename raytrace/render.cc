@@ -5,6 +5,9 @@
 #include <unistd.h>
 
 #include <algorithm>
+#if defined(__SSE__)
+#include <immintrin.h>
+#endif
 #include <atomic>
 #include <memory>
 #include <optional>
@@ -246,6 +249,20 @@ void GroundTruthLanes(int m, const unsigned char* __restrict valid, const int* _
   }
 }
 
+// Pixel k's 12 ground-truth channels (c at t[c * RayBatch::kMax]) into the frame at v (16-byte aligned: frames
+// are, and a pixel is 48 bytes). Streamed past the caches where the CPU can (the frame's 290 MB of ground truth
+// is not read again while rendering; a row of a tile fills whole cache lines), plain stores elsewhere.
+inline void StoreGroundTruthPixel(const float* t, float* v) {
+  constexpr int K = RayBatch::kMax;
+#if defined(__SSE__)
+  _mm_stream_ps(v, _mm_setr_ps(t[0], t[K], t[2 * K], t[3 * K]));
+  _mm_stream_ps(v + 4, _mm_setr_ps(t[4 * K], t[5 * K], t[6 * K], t[7 * K]));
+  _mm_stream_ps(v + 8, _mm_setr_ps(t[8 * K], t[9 * K], t[10 * K], t[11 * K]));
+#else
+  for (int c = 0; c < GroundTruth::kChannels; ++c) v[c] = t[c * K];
+#endif
+}
+
 class RayMaker {
  public:
   RayMaker(const RayScene& scene, const ViewCamera& cam, const RenderOptions& o)
@@ -298,9 +315,9 @@ class RayMaker {
     std::fill(b->valid, b->valid + n, 1);
 #pragma GCC diagnostic push
 #pragma GCC diagnostic ignored "-Wmaybe-uninitialized"
-    reflector_->ReflectBatch(t_mirror_from_cam_, n, vx, vy, vz, Mx, My, Mz, b->dx, b->dy, b->dz, on_mirror);
+    const int on = reflector_->ReflectBatch(t_mirror_from_cam_, n, vx, vy, vz, Mx, My, Mz, b->dx, b->dy, b->dz, on_mirror);
     RayOrigins(n, on_mirror, cam_.unit, 1e-5f, via, b->tnear, b->from_mirror, b->from_camera);
-    if (unit_->mount_outer_radius > 0 && std::find(on_mirror, on_mirror + n, 0) != on_mirror + n) {
+    if (unit_->mount_outer_radius > 0 && on < n) {
       MountRingHits<float>(n, static_cast<float>(unit_->rig.mirror.RimZ()),
                            static_cast<float>(unit_->rig.mirror.RimRadius()),
                            static_cast<float>(unit_->mount_outer_radius), static_cast<float>(t_mirror_from_cam_.x()),
@@ -346,13 +363,14 @@ class RayMaker {
 #pragma GCC diagnostic push
 #pragma GCC diagnostic ignored "-Wmaybe-uninitialized"
     if (unit_) {
-      reflector_->ReflectBatch(t_mirror_from_cam_, n, vx, vy, vz, Mx, My, Mz, b->dx, b->dy, b->dz, on_mirror);
+      const int on =
+          reflector_->ReflectBatch(t_mirror_from_cam_, n, vx, vy, vz, Mx, My, Mz, b->dx, b->dy, b->dz, on_mirror);
       // Camera rays past the rim: where they meet the unit's mount ring, in the mirror frame where the rim test
       // was made (the world ray is the same ray rotated and moved, so the distance along it is the same).
       // RayScene traces them only up to it. tnear 1e-5 as in Make (off the mirror, or off the lens face).
       RayOrigins(n, on_mirror, cam_.unit, 1e-5f, via, b->tnear, b->from_mirror, b->from_camera);
       // (A batch whose rays all meet the mirror, most of them, has no straight ray: no ring test.)
-      if (unit_->mount_outer_radius > 0 && std::find(on_mirror, on_mirror + n, 0) != on_mirror + n) {
+      if (unit_->mount_outer_radius > 0 && on < n) {
         MountRingHits(n, unit_->rig.mirror.RimZ(), unit_->rig.mirror.RimRadius(), unit_->mount_outer_radius,
                       t_mirror_from_cam_.x(), t_mirror_from_cam_.y(), t_mirror_from_cam_.z(), vx, vy, vz, via,
                       b->mount_t);
@@ -630,8 +648,7 @@ void RenderInto(const RayScene& scene, const ViewCamera& camera, const RenderOpt
             int e = k + 1;
             while (e < m && sc.px[e] == sc.px[k] + (e - k)) ++e;
             float* v = &f.truth.data[static_cast<size_t>(sc.px[k]) * GroundTruth::kChannels];
-            for (int i = k; i < e; ++i, v += GroundTruth::kChannels)
-              for (int c = 0; c < GroundTruth::kChannels; ++c) v[c] = sc.truth[c * kMax + i];
+            for (int i = k; i < e; ++i, v += GroundTruth::kChannels) StoreGroundTruthPixel(sc.truth + i, v);
             k = e;
           }
         }
@@ -646,6 +663,9 @@ void RenderInto(const RayScene& scene, const ViewCamera& camera, const RenderOpt
         }
       }
     }
+#if defined(__SSE__)
+    _mm_sfence();   // the streamed ground truth, ordered before the task ends
+#endif
     rays += task_rays;
   });
   f.rays = rays;

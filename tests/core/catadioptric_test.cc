@@ -2,6 +2,7 @@
 // back-projection round trips, the law of reflection, the mirror mask.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <random>
 #include <vector>
@@ -170,8 +171,8 @@ TEST(Catadioptric, BatchReflectionIsBitIdenticalToTheScalarOne) {
     ASSERT_TRUE(fast.MissesRim(o, 64, vx.data(), vy.data(), vz.data()));
     ASSERT_TRUE(fast.MissesRim(o, 64, vx.data() + 64, vy.data() + 64, vz.data() + 64));
     ASSERT_FALSE(fast.MissesRim(o, 64, vx.data() + 128, vy.data() + 128, vz.data() + 128));
-    fast.ReflectBatch(o, n, vx.data(), vy.data(), vz.data(), Mx.data(), My.data(), Mz.data(), dx.data(), dy.data(),
-                      dz.data(), ok.data());
+    const int count = fast.ReflectBatch(o, n, vx.data(), vy.data(), vz.data(), Mx.data(), My.data(), Mz.data(),
+                                        dx.data(), dy.data(), dz.data(), ok.data());
     int hits = 0, misses = 0;
     for (int i = 0; i < n; ++i) {
       Vec3d M, d;
@@ -191,6 +192,7 @@ TEST(Catadioptric, BatchReflectionIsBitIdenticalToTheScalarOne) {
     }
     EXPECT_GT(hits, 300);
     EXPECT_GT(misses, 100);
+    EXPECT_EQ(count, hits) << "ReflectBatch returns the count of rays that meet the mirror";
   }
 }
 
@@ -222,8 +224,9 @@ TEST(Catadioptric, SinglePrecisionBatchReflectionIsWithinFloatRoundingOfTheScala
       v.normalize();
       vx[i] = static_cast<float>(v.x()), vy[i] = static_cast<float>(v.y()), vz[i] = static_cast<float>(v.z());
     }
-    fast.ReflectBatch(o, n, vx.data(), vy.data(), vz.data(), Mx.data(), My.data(), Mz.data(), dx.data(), dy.data(),
-                      dz.data(), ok.data());
+    const int count = fast.ReflectBatch(o, n, vx.data(), vy.data(), vz.data(), Mx.data(), My.data(), Mz.data(),
+                                        dx.data(), dy.data(), dz.data(), ok.data());
+    EXPECT_EQ(count, std::count(ok.begin(), ok.end(), 1));
     int hits = 0, misses = 0;
     double worst_M = 0, worst_d = 0;
     for (int i = 0; i < n; ++i) {
