@@ -85,6 +85,20 @@ HOVS_VECTOR_CLONES int CountRimCrossings(T o0, T o1, T dz, T lim, int n, const T
   return count;
 }
 
+// The kernel's lane flags (0, 1 or 2) as bytes into ok, and how many are 1 (*hits); returns the largest flag.
+template <class T>
+HOVS_VECTOR_CLONES T StoreLaneFlags(int n, const T* __restrict flag, unsigned char* __restrict ok, int* hits) {
+  T most = 0;
+  int count = 0;
+  for (int i = 0; i < n; ++i) {
+    ok[i] = static_cast<unsigned char>(flag[i]);
+    most = flag[i] > most ? flag[i] : most;
+    count += flag[i] == 1 ? 1 : 0;
+  }
+  *hits += count;
+  return most;
+}
+
 }  // namespace
 
 template <class T>
@@ -111,6 +125,7 @@ int MirrorReflector::ReflectBatchOf(const Vec3d& o, int n, const T* vx, const T*
   // In blocks, with the lane flags as T (a byte array among doubles stops GCC 12's vectoriser).
   constexpr int kBlock = 64;
   T flag[kBlock];
+  int hits = 0;
   const double oz = o(2) + c_, C = oz * oz * ia2_ - (o(0) * o(0) + o(1) * o(1)) * ib2_ - 1.0;
   for (int i0 = 0; i0 < n; i0 += kBlock) {
     const int m = std::min(kBlock, n - i0);
@@ -123,22 +138,16 @@ int MirrorReflector::ReflectBatchOf(const Vec3d& o, int n, const T* vx, const T*
                      static_cast<T>(o(0)), static_cast<T>(o(1)), static_cast<T>(o(2)), static_cast<T>(oz),
                      static_cast<T>(C), m, vx + i0, vy + i0, vz + i0, Mx + i0, My + i0, Mz + i0, dx + i0, dy + i0,
                      dz + i0, flag);
-    T most = 0;
-    for (int i = 0; i < m; ++i) {
-      ok[i0 + i] = static_cast<unsigned char>(flag[i]);
-      most = flag[i] > most ? flag[i] : most;
-    }
-    if (most < 2) continue;
+    if (StoreLaneFlags<T>(m, flag, ok + i0, &hits) < 2) continue;
     for (int i = i0; i < i0 + m; ++i) {   // degenerate lanes (flag 2): the scalar solve, in double
       if (ok[i] != 2) continue;
       Vec3d M = Vec3d::Zero(), d = Vec3d::Zero();
       ok[i] = Reflect(o, Vec3d(vx[i], vy[i], vz[i]), &M, &d) ? 1 : 0;
+      hits += ok[i];
       Mx[i] = static_cast<T>(M(0)), My[i] = static_cast<T>(M(1)), Mz[i] = static_cast<T>(M(2));
       dx[i] = static_cast<T>(d(0)), dy[i] = static_cast<T>(d(1)), dz[i] = static_cast<T>(d(2));
     }
   }
-  int hits = 0;
-  for (int i = 0; i < n; ++i) hits += ok[i];
   return hits;
 }
 

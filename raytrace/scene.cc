@@ -610,9 +610,14 @@ void TracePacketOfBatch(RTCScene scene, const RayBatchOf<T>& b, const BatchLanes
                         unsigned* prim_ids, IntersectW intersect) {
   const int count = std::min(W, b.n - i0);
   int any = 0;
-  for (int i = 0; i < count; ++i) any |= L.valid[i0 + i];
-  if (!any) {
-    for (int i = 0; i < count; ++i) geom_ids[i] = L.mount_geom[i0 + i], prim_ids[i] = 0;
+  if (count == W) {
+    for (int i = 0; i < W; ++i) any |= L.valid[i0 + i];   // (a fixed count: vectorised)
+  } else {
+    for (int i = 0; i < count; ++i) any |= L.valid[i0 + i];
+  }
+  if (!any) {   // every lane ends on its ring or is invalid: ResolveMisses gives them the ring
+    std::fill(geom_ids, geom_ids + count, RTC_INVALID_GEOMETRY_ID);
+    std::fill(prim_ids, prim_ids + count, 0u);
     return;
   }
   alignas(64) RayHitW rh;
@@ -639,11 +644,18 @@ void TracePacketOfBatch(RTCScene scene, const RayBatchOf<T>& b, const BatchLanes
     valid = partial_valid;
   }
   TracePacket(scene, valid, &rh, intersect);
-  // A lane Embree found nothing for ends on its ring, if it has one (prim 0; a miss's prim is never read).
-  for (int i = 0; i < count; ++i) {
-    const bool miss = rh.hit.geomID[i] == RTC_INVALID_GEOMETRY_ID;
-    geom_ids[i] = miss ? L.mount_geom[i0 + i] : rh.hit.geomID[i];
-    prim_ids[i] = miss ? 0u : rh.hit.primID[i];
+  std::memcpy(geom_ids, rh.hit.geomID, sizeof(unsigned) * static_cast<size_t>(count));
+  std::memcpy(prim_ids, rh.hit.primID, sizeof(unsigned) * static_cast<size_t>(count));
+}
+
+// After the packets of a batch: a lane Embree found nothing for ends on its ring, if it has one (prim 0; a
+// miss's prim is never read otherwise).
+HOVS_VECTOR_CLONES void ResolveMisses(int n, const unsigned* __restrict mount_geom, unsigned* __restrict geom_ids,
+                                      unsigned* __restrict prim_ids) {
+  for (int i = 0; i < n; ++i) {
+    const bool miss = geom_ids[i] == RTC_INVALID_GEOMETRY_ID;
+    geom_ids[i] = miss ? mount_geom[i] : geom_ids[i];
+    prim_ids[i] = miss ? 0u : prim_ids[i];
   }
 }
 
@@ -661,6 +673,7 @@ void RayScene::IntersectBatch(const RayBatchOf<T>& b, unsigned* geom_ids, unsign
       TracePacketOfBatch<8, RTCRayHit8>(scene_, b, lanes, i0, geom_ids + i0, prim_ids + i0, rtcIntersect8);
     }
   }
+  ResolveMisses(b.n, lanes.mount_geom, geom_ids, prim_ids);
 }
 
 namespace {
