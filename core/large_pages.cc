@@ -1,6 +1,11 @@
 #include "core/large_pages.h"
 
+#include <algorithm>
+#include <charconv>
 #include <cstdint>
+#include <fstream>
+#include <string>
+#include <string_view>
 #include <cstdlib>
 #include <iterator>
 #include <mutex>
@@ -116,6 +121,56 @@ std::size_t KeptLargePageBytes() {
   KeptBuffers& kept = Kept();
   const std::lock_guard<std::mutex> lock(kept.mutex);
   return kept.bytes;
+}
+
+namespace {
+// The first number in a file (e.g. "max" gives nullopt), or the value of `key` in a "key: value kB" file.
+std::optional<std::size_t> ReadNumber(const char* path, const std::string& key = "") {
+  std::ifstream in(path);
+  std::string line;
+  while (std::getline(in, line)) {
+    std::string_view rest(line);
+    if (!key.empty()) {
+      if (rest.substr(0, key.size() + 1) != key + ":") continue;
+      rest.remove_prefix(key.size() + 1);
+    }
+    while (!rest.empty() && rest.front() == ' ') rest.remove_prefix(1);
+    std::size_t value = 0;
+    const auto [end, ec] = std::from_chars(rest.data(), rest.data() + rest.size(), value);
+    if (ec != std::errc() || end == rest.data()) return std::nullopt;
+    rest.remove_prefix(static_cast<std::size_t>(end - rest.data()));
+    while (!rest.empty() && rest.front() == ' ') rest.remove_prefix(1);
+    if (rest == "kB") value *= 1024;
+    return value;
+  }
+  return std::nullopt;
+}
+}  // namespace
+
+std::optional<std::size_t> AvailableMemoryBytes() {
+  std::optional<std::size_t> available;
+  if (const auto kb = ReadNumber("/proc/meminfo", "MemAvailable")) available = *kb + KeptLargePageBytes();
+  // The process's memory cgroup: v2 ("0::<path>" in /proc/self/cgroup; memory.max, "max" when unlimited, and
+  // memory.current) or v1 ("<n>:memory:<path>"; memory.limit_in_bytes and memory.usage_in_bytes).
+  std::ifstream in("/proc/self/cgroup");
+  for (std::string line; std::getline(in, line);) {
+    std::string dir, max_file, current_file;
+    if (line.rfind("0::", 0) == 0) {
+      dir = "/sys/fs/cgroup" + line.substr(3), max_file = "memory.max", current_file = "memory.current";
+    } else if (const auto at = line.find(":memory:"); at != std::string::npos) {
+      dir = "/sys/fs/cgroup/memory" + line.substr(at + 8), max_file = "memory.limit_in_bytes",
+      current_file = "memory.usage_in_bytes";
+    } else {
+      continue;
+    }
+    if (!dir.empty() && dir.back() == '/') dir.pop_back();
+    const auto max = ReadNumber((dir + "/" + max_file).c_str());
+    const auto current = ReadNumber((dir + "/" + current_file).c_str());
+    if (!max || !current) continue;
+    const std::size_t room = *max > *current ? *max - *current : 0;
+    available = available ? std::min(*available, room) : room;
+  }
+  return available;
 }
 
 bool KeepFreedMemoryForReuse() {

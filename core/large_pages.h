@@ -9,6 +9,7 @@
 
 #include <cstddef>
 #include <new>
+#include <optional>
 
 namespace hovs {
 
@@ -45,6 +46,14 @@ std::size_t KeptLargePageBytes();
 // buffers are kept all the same.
 bool KeepFreedMemoryForReuse();
 inline constexpr std::size_t kKeptFreedBytes = std::size_t(1) << 30;
+
+// The memory this process can still take without the kernel's out-of-memory killer ending it, in bytes: the
+// kernel's MemAvailable (/proc/meminfo) plus the freed large buffers kept for reuse, and no more than the room left
+// under the process's cgroup limit (cgroup v2 memory.max less memory.current) where there is one; nullopt where
+// neither is known (not Linux). Linux overcommits, so an allocation larger than this succeeds and the process is
+// killed when it touches the memory: callers that allocate by the user's request (the renderer's frames) check
+// first and report the request instead.
+std::optional<std::size_t> AvailableMemoryBytes();
 
 // A std::allocator whose large allocations use AllocateLargePages; UninitialisedConstruct leaves elements
 // default-initialised (no zeroing on resize: the renderer fills its frames in parallel).

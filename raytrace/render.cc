@@ -466,6 +466,27 @@ class RayMaker {
 
 }  // namespace
 
+std::size_t FrameMemoryBytes(int width, int height, bool ground_truth) {
+  const std::size_t npx = static_cast<std::size_t>(std::max(width, 0)) * static_cast<std::size_t>(std::max(height, 0));
+  return npx * sizeof(float) * (3 + (ground_truth ? GroundTruth::kChannels : 0) + 3);
+}
+
+void CheckFrameMemory(const std::string& where, int width, int height, bool ground_truth, std::size_t held,
+                      std::optional<std::size_t> available) {
+  if (!available) return;
+  const std::size_t need = FrameMemoryBytes(width, height, ground_truth);
+  const auto gb = [](std::size_t b) {
+    char text[32];
+    std::snprintf(text, sizeof text, "%.2f GB", static_cast<double>(b) * 1e-9);
+    return std::string(text);
+  };
+  HOVS_REQUIRE(need <= held || need - held <= *available, where, "a ", width, " x ", height, " frame",
+               ground_truth ? " with ground truth" : "", " needs ", gb(need),
+               " of memory (its buffers and the sensor image)",
+               held > 0 ? ", " + gb(held) + " of it already held" : std::string(), "; ", gb(*available),
+               " are available: render fewer pixels or free memory");
+}
+
 Frame Render(const RayScene& scene, const ViewCamera& camera, const RenderOptions& options) {
   Frame f;
   RenderInto(scene, camera, options, &f);
@@ -484,6 +505,10 @@ void RenderInto(const RayScene& scene, const ViewCamera& camera, const RenderOpt
                  " moves beyond ", kWorldExtent, " m of the world origin during the exposure");
   }
   Frame& f = *frame;
+  CheckFrameMemory(camera.unit >= 0 ? "render (unit " + scene.description().units[camera.unit].name + "'s camera)"
+                                    : std::string("render (pinhole camera)"),
+                   maker.width(), maker.height(), options.ground_truth,
+                   sizeof(float) * (f.rgb.capacity() + f.truth.data.capacity()), AvailableMemoryBytes());
   f.width = maker.width(), f.height = maker.height();
   if (!options.ground_truth) f.truth.data.clear();
   const size_t npx = static_cast<size_t>(f.width) * f.height;

@@ -8,6 +8,7 @@
 #include <map>
 #include <string>
 #include <memory>
+#include <optional>
 #include <utility>
 #include <vector>
 
@@ -94,6 +95,16 @@ Frame Render(const RayScene& scene, const ViewCamera& camera, const RenderOption
 // memory once. At 2750 x 2200 with ground truth that first touch (362 MB, in huge pages) cost 90-250 ms per
 // frame on a Zen 5 VM (in 4 KiB pages, before core/large_pages.h, ~650 ms there).
 void RenderInto(const RayScene& scene, const ViewCamera& camera, const RenderOptions& options, Frame* frame);
+
+// The memory a width x height frame takes with what is made from it: its RGB and, with ground truth, its 12
+// channels as floats, and the sensor image (ApplySensor: up to 3 floats per pixel). 2750 x 2200 with ground
+// truth: 436 MB.
+std::size_t FrameMemoryBytes(int width, int height, bool ground_truth);
+// RenderInto's check before it takes a frame's memory: a frame whose FrameMemoryBytes, less the `held` bytes its
+// buffers already have, exceeds `available` (core's AvailableMemoryBytes; nullopt: unknown, no check) is refused
+// with an error naming its size and both amounts, where Linux would let it start and kill the process later.
+void CheckFrameMemory(const std::string& where, int width, int height, bool ground_truth, std::size_t held,
+                      std::optional<std::size_t> available);
 
 // The sensor model applied to a frame: 3 channels (or 1 for Bayer), values in [0, 1] before quantisation.
 // The result is a PixelBuffer: written in parallel, in huge pages (no single-threaded zeroing of 72 MB first).

@@ -14,6 +14,8 @@
 #include <random>
 #include <filesystem>
 
+#include <unistd.h>
+
 #include "calib/checkerboard_edges.h"
 #include "core/error.h"
 #include "core/large_pages.h"
@@ -720,6 +722,43 @@ TEST(RayScene, RawPacketsHitWhatTheDoublePathHits) {
         scene.IntersectRaw(RayScene::RawPacket16{}, 0, 4, ids);
       },
       Error);
+}
+
+// A frame larger than the memory left is refused before any of it is taken, with its size and both amounts in
+// the message (Linux would let the allocation succeed and kill the process when it touches the pages), and the
+// memory a frame's buffers already hold counts.
+TEST(Render, FramesLargerThanTheMemoryLeftAreRefusedWithTheirSize) {
+  const std::size_t full = raytrace::FrameMemoryBytes(2750, 2200, true);
+  EXPECT_EQ(full, std::size_t(2750) * 2200 * 4 * 18);   // RGB, 12 ground-truth channels, the sensor image
+  EXPECT_EQ(raytrace::FrameMemoryBytes(2750, 2200, false), std::size_t(2750) * 2200 * 4 * 6);
+  try {
+    raytrace::CheckFrameMemory("render (unit u)", 2750, 2200, true, 0, full - 1);
+    ADD_FAILURE() << "a frame one byte too large was accepted";
+  } catch (const Error& e) {
+    const std::string what = e.what();
+    for (const char* needle : {"render (unit u)", "2750 x 2200", "with ground truth", "0.44 GB", "are available"})
+      EXPECT_NE(what.find(needle), std::string::npos) << needle << " in: " << what;
+  }
+  EXPECT_NO_THROW(raytrace::CheckFrameMemory("render", 2750, 2200, true, 0, full));
+  EXPECT_NO_THROW(raytrace::CheckFrameMemory("render", 2750, 2200, true, full / 2, full / 2));   // reused buffers
+  EXPECT_THROW(raytrace::CheckFrameMemory("render", 2750, 2200, true, full / 2, full / 2 - 1), Error);
+  EXPECT_NO_THROW(raytrace::CheckFrameMemory("render", 20000, 20000, true, 0, std::nullopt));   // unknown: no check
+  // This machine's figure exists (Linux) and is no more than its physical memory plus what the process keeps.
+  const auto available = AvailableMemoryBytes();
+  ASSERT_TRUE(available.has_value());
+  EXPECT_GT(*available, std::size_t(0));
+  EXPECT_LE(*available, static_cast<std::size_t>(sysconf(_SC_PHYS_PAGES)) * static_cast<std::size_t>(sysconf(_SC_PAGE_SIZE)) +
+                            KeptLargePageBytes());
+  // A render of a camera past it is refused by RenderInto itself, before the frame changes.
+  SceneConfig cfg = BoardScene(false);
+  cfg.description.units[0].rig.camera = PinholeCamera<double>::FromPhysical(0.016, 4.54e-6, 20000, 20000);
+  if (raytrace::FrameMemoryBytes(20000, 20000, true) > *available) {
+    raytrace::Frame f;
+    raytrace::RenderOptions ro;
+    ro.samples = 1;
+    EXPECT_THROW(raytrace::RenderInto(RayScene(cfg.description), raytrace::ViewCamera::Unit(0), ro, &f), Error);
+    EXPECT_TRUE(f.rgb.empty());
+  }
 }
 
 // Frames rendered into memory that held another frame (RenderInto's reused buffers, or a freed buffer that
