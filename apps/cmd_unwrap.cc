@@ -20,6 +20,7 @@
 #include "apps/unwrap_viewer.h"
 #include "core/error.h"
 #include "core/io.h"
+#include "core/large_pages.h"
 #include "design/study.h"
 #include "raytrace/render.h"
 #include "scenes/ground_truth.h"
@@ -136,12 +137,17 @@ Runner SetupUnwrap(CLI::App* sub, const GlobalOptions* global) {
     if (!o->map.empty()) {
       table = unwrap::LoadRemapTable(o->map);
       source = "loaded " + o->map;
+      std::vector<unwrap::ViewSpec> specs;
+      for (const auto& v : table.views) specs.push_back(v.spec);
+      unwrap::CheckViewsMemory("--map " + o->map, specs, AvailableMemoryBytes());
     } else {
       const AnyModel model = LoadModelSpec(o->model, o->unit, o->scene_distance);
       unwrap::RemapOptions ro;
       ro.tile = o->tile;
       const nlohmann::json versions = design::DesignVersions();
-      table = unwrap::BuildRemapTable(model, unwrap::ResolveLayout(o->layout), ro, versions.dump());
+      const unwrap::Layout layout = unwrap::ResolveLayout(o->layout);
+      unwrap::CheckViewsMemory("--layout " + o->layout, layout.views, AvailableMemoryBytes());
+      table = unwrap::BuildRemapTable(model, layout, ro, versions.dump());
       source = std::string("built from the ") + model.KindName() + " model in " + o->model;
     }
     // The mapping file is saved once everything else has succeeded: a failed run leaves no new file.

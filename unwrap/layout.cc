@@ -1,5 +1,7 @@
 #include "unwrap/layout.h"
 
+#include <algorithm>
+#include <cstdio>
 #include <set>
 
 #include "core/error.h"
@@ -45,6 +47,29 @@ void Layout::Check(const std::string& where) const {
 }
 
 std::vector<std::string> PresetNames() { return {"article", "panorama", "longlat"}; }
+
+std::size_t ViewsMemoryBytes(const std::vector<ViewSpec>& views) {
+  std::size_t total = 0, largest = 0;
+  for (const ViewSpec& v : views) {
+    const std::size_t px = static_cast<std::size_t>(std::max(v.width, 0)) * static_cast<std::size_t>(std::max(v.height, 0));
+    total += px, largest = std::max(largest, px);
+  }
+  return total * (3 + 8) + largest * 12;
+}
+
+void CheckViewsMemory(const std::string& where, const std::vector<ViewSpec>& views,
+                      std::optional<std::size_t> available) {
+  if (!available) return;
+  const std::size_t need = ViewsMemoryBytes(views);
+  if (need <= *available) return;
+  std::size_t px = 0;
+  for (const ViewSpec& v : views) px += static_cast<std::size_t>(v.width) * static_cast<std::size_t>(v.height);
+  char text[160];
+  std::snprintf(text, sizeof text, "%zu views of %.1f megapixels in all need up to %.2f GB of memory; %.2f GB are available",
+                views.size(), static_cast<double>(px) * 1e-6, static_cast<double>(need) * 1e-9,
+                static_cast<double>(*available) * 1e-9);
+  throw Error(where, std::string(text) + ": make the views smaller or fewer, or free memory");
+}
 
 Layout PresetLayout(const std::string& name) {
   Layout l;

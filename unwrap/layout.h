@@ -13,7 +13,9 @@
 //   longlat     one longitude-latitude panorama, 3600 x 1800, the whole sphere
 #pragma once
 
+#include <cstddef>
 #include <filesystem>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -41,6 +43,17 @@ struct Layout {
   std::vector<ViewSpec> views;
   void Check(const std::string& where) const;  // at least one view, unique names, every view valid
 };
+
+// An upper bound of the memory a run over these views takes beyond its input, in bytes: per pixel of every view
+// its 8-bit RGB output (3 bytes) and its mapping (at most 8 bytes, a dense tile's coordinates; interpolated tiles
+// take far less), and the float copy of the largest view that the image writer takes (12 bytes per pixel).
+// Measured: one 8192 x 8192 panorama, 1.24 GB peak for `hovs unwrap` of one image; the bound says 1.54 GB.
+std::size_t ViewsMemoryBytes(const std::vector<ViewSpec>& views);
+// Refuses views whose ViewsMemoryBytes exceeds `available` (core's AvailableMemoryBytes; nullopt: no check), with
+// an error naming the views' size and both amounts, before any mapping is built (a 2 x 32768 x 32768 layout
+// spent 208 s building its mapping before it ran out of memory).
+void CheckViewsMemory(const std::string& where, const std::vector<ViewSpec>& views,
+                      std::optional<std::size_t> available);
 
 Layout PresetLayout(const std::string& name);                 // throws listing the known presets
 Layout LoadLayout(const std::filesystem::path& path);         // YAML, validated (file:line)

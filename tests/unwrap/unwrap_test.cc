@@ -556,6 +556,27 @@ TEST(Remap, RejectsBadInput) {
   EXPECT_THROW(o.Check("test"), Error);
 }
 
+// Views that need more memory than is left are refused before any mapping is built, with their size and both
+// amounts; the bound counts every view's output and mapping and the largest view's float copy.
+TEST(Layout, ViewsLargerThanTheMemoryLeftAreRefused) {
+  ViewSpec a, b;
+  a.name = "a", a.width = 1000, a.height = 500;
+  b.name = "b", b.width = 2000, b.height = 1000;
+  const std::vector<ViewSpec> views = {a, b};
+  const std::size_t need = ViewsMemoryBytes(views);
+  EXPECT_EQ(need, std::size_t(2500000) * 11 + std::size_t(2000000) * 12);
+  EXPECT_NO_THROW(CheckViewsMemory("--layout x", views, need));
+  EXPECT_NO_THROW(CheckViewsMemory("--layout x", views, std::nullopt));
+  try {
+    CheckViewsMemory("--layout x.yaml", views, need - 1);
+    ADD_FAILURE() << "views one byte too large were accepted";
+  } catch (const Error& e) {
+    const std::string what = e.what();
+    for (const char* needle : {"--layout x.yaml", "2 views", "2.5 megapixels", "0.05 GB", "are available"})
+      EXPECT_NE(what.find(needle), std::string::npos) << needle << " in: " << what;
+  }
+}
+
 TEST(Layout, YamlFileIsValidated) {
   const auto dir = TempDir();
   const auto write = [&](const std::string& name, const std::string& text) {
