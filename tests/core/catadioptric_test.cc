@@ -143,31 +143,41 @@ TEST(Catadioptric, FastReflectorAgreesWithTheTemplatedReflection) {
   }
 }
 
+// Rays from a rig's camera centre for the batch reflection tests (not unit length): every 97th parallel to the
+// asymptotic cone (A = 0, the degenerate quadratic); rays 1-127 27-45 degrees off the axis (past the rim, which is
+// about 17 degrees off it from the camera); the rest within 22 degrees of it, every 50th pointing away.
+std::vector<Vec3d> BatchTestRays(const CatadioptricCamera<double>& rig, int n, std::mt19937* rng) {
+  std::uniform_real_distribution<double> U(-1, 1);
+  const double a = rig.mirror.a, b = rig.mirror.b;
+  std::vector<Vec3d> v(n);
+  for (int i = 0; i < n; ++i) {
+    if (i % 97 == 0) {
+      const double phi = U(*rng) * M_PI;
+      v[i] = Vec3d(b * std::cos(phi), b * std::sin(phi), a);
+    } else if (i < 128) {
+      const double phi = U(*rng) * M_PI, r = 0.75 + 0.25 * U(*rng);
+      v[i] = Vec3d(r * std::cos(phi), r * std::sin(phi), 1.0);
+    } else {
+      v[i] = Vec3d(0.4 * U(*rng), 0.4 * U(*rng), i % 50 == 1 ? -1.0 : 1.0);
+    }
+  }
+  return v;
+}
+
 TEST(Catadioptric, BatchReflectionIsBitIdenticalToTheScalarOne) {
   // ReflectBatch (vectorised; the renderer's per-sample path) against Reflect, exactly: every decision and
-  // every bit of M and d. Rays: spread past the rim, pointing away, and along the asymptotic cone where the
+  // every bit of M and d. Rays (BatchTestRays): spread past the rim, pointing away, and along the asymptotic cone where the
   // quadratic degenerates (those lanes take the scalar code); 1001 rays, so the vector loop has a remainder. The
   // first two blocks of 64 rays all pass outside the rim, so ReflectBatch answers them without solving.
   std::mt19937 rng(5);
-  std::uniform_real_distribution<double> U(-1, 1);
   for (const auto& rig : {test::AlignedRig(), test::MisalignedRig()}) {
     const MirrorReflector fast(rig.mirror);
     const Vec3d o = rig.CameraCentre();
     const int n = 1001;
     std::vector<double> vx(n), vy(n), vz(n), Mx(n), My(n), Mz(n), dx(n), dy(n), dz(n);
     std::vector<unsigned char> ok(n);
-    const double a = rig.mirror.a, b = rig.mirror.b;
-    for (int i = 0; i < n; ++i) {
-      if (i % 97 == 0) {  // parallel to the asymptotic cone: A = 0
-        const double phi = U(rng) * M_PI;
-        vx[i] = b * std::cos(phi), vy[i] = b * std::sin(phi), vz[i] = a;
-      } else if (i < 128) {  // 27-45 degrees off the axis; the rim is about 17 degrees off it from the camera
-        const double phi = U(rng) * M_PI, r = 0.75 + 0.25 * U(rng);
-        vx[i] = r * std::cos(phi), vy[i] = r * std::sin(phi), vz[i] = 1.0;
-      } else {
-        vx[i] = 0.4 * U(rng), vy[i] = 0.4 * U(rng), vz[i] = i % 50 == 1 ? -1.0 : 1.0;
-      }
-    }
+    const std::vector<Vec3d> rays = BatchTestRays(rig, n, &rng);
+    for (int i = 0; i < n; ++i) vx[i] = rays[i].x(), vy[i] = rays[i].y(), vz[i] = rays[i].z();
     ASSERT_TRUE(fast.MissesRim(o, 64, vx.data(), vy.data(), vz.data()));
     ASSERT_TRUE(fast.MissesRim(o, 64, vx.data() + 64, vy.data() + 64, vz.data() + 64));
     ASSERT_FALSE(fast.MissesRim(o, 64, vx.data() + 128, vy.data() + 128, vz.data() + 128));
@@ -175,7 +185,7 @@ TEST(Catadioptric, BatchReflectionIsBitIdenticalToTheScalarOne) {
                                         dx.data(), dy.data(), dz.data(), ok.data());
     int hits = 0, misses = 0;
     for (int i = 0; i < n; ++i) {
-      Vec3d M, d;
+      Vec3d M = Vec3d::Zero(), d = Vec3d::Zero();
       const bool hit = fast.Reflect(o, Vec3d(vx[i], vy[i], vz[i]), &M, &d);
       ASSERT_EQ(ok[i], hit ? 1 : 0) << "ray " << i;
       if (!hit) {
@@ -200,28 +210,17 @@ TEST(Catadioptric, SinglePrecisionBatchReflectionIsWithinFloatRoundingOfTheScala
   // The float ReflectBatch (the renderer's colour samples) against Reflect in double on the same (float) rays:
   // the same decision except for rays within 1e-5 of the rim; M within 1e-7 m (float's spacing at the camera,
   // 0.13 m from F1, is 1.5e-8 m) and d within 1e-6 rad (a few thousandths of a pixel of the reference rig).
-  // Rays as above, degenerate lanes included.
+  // Rays as above (BatchTestRays, made unit), degenerate lanes included.
   std::mt19937 rng(6);
-  std::uniform_real_distribution<double> U(-1, 1);
   for (const auto& rig : {test::AlignedRig(), test::MisalignedRig()}) {
     const MirrorReflector fast(rig.mirror);
     const Vec3d o = rig.CameraCentre();
     const int n = 1001;
     std::vector<float> vx(n), vy(n), vz(n), Mx(n), My(n), Mz(n), dx(n), dy(n), dz(n);
     std::vector<unsigned char> ok(n);
-    const double a = rig.mirror.a, b = rig.mirror.b;
+    const std::vector<Vec3d> rays = BatchTestRays(rig, n, &rng);
     for (int i = 0; i < n; ++i) {
-      Vec3d v;
-      if (i % 97 == 0) {
-        const double phi = U(rng) * M_PI;
-        v = Vec3d(b * std::cos(phi), b * std::sin(phi), a);
-      } else if (i < 128) {
-        const double phi = U(rng) * M_PI, r = 0.75 + 0.25 * U(rng);
-        v = Vec3d(r * std::cos(phi), r * std::sin(phi), 1.0);
-      } else {
-        v = Vec3d(0.4 * U(rng), 0.4 * U(rng), i % 50 == 1 ? -1.0 : 1.0);
-      }
-      v.normalize();
+      const Vec3d v = rays[i].normalized();
       vx[i] = static_cast<float>(v.x()), vy[i] = static_cast<float>(v.y()), vz[i] = static_cast<float>(v.z());
     }
     const int count = fast.ReflectBatch(o, n, vx.data(), vy.data(), vz.data(), Mx.data(), My.data(), Mz.data(),
@@ -230,7 +229,7 @@ TEST(Catadioptric, SinglePrecisionBatchReflectionIsWithinFloatRoundingOfTheScala
     int hits = 0, misses = 0;
     double worst_M = 0, worst_d = 0;
     for (int i = 0; i < n; ++i) {
-      Vec3d M, d;
+      Vec3d M = Vec3d::Zero(), d = Vec3d::Zero();
       const bool hit = fast.Reflect(o, Vec3d(vx[i], vy[i], vz[i]), &M, &d);
       const double rim = hit ? std::hypot(M.x(), M.y()) / rig.mirror.RimRadius() : 0.0;
       if (hit && rim > 1 - 1e-5) continue;   // at the rim: either answer
