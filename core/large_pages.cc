@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <charconv>
 #include <cstdint>
+#include <cstdio>
 #include <fstream>
 #include <string>
 #include <string_view>
@@ -11,6 +12,8 @@
 #include <mutex>
 #include <utility>
 #include <vector>
+
+#include "core/error.h"
 
 #if defined(__linux__)
 #include <sys/mman.h>
@@ -171,6 +174,15 @@ std::optional<std::size_t> AvailableMemoryBytes() {
     available = available ? std::min(*available, room) : room;
   }
   return available;
+}
+
+void RequireMemory(const std::string& where, const std::string& what, std::size_t need,
+                   std::optional<std::size_t> available, const std::string& remedy) {
+  if (!available || need <= *available) return;
+  char text[96];
+  std::snprintf(text, sizeof text, " needs %.2f GB of memory; %.2f GB are available: ", static_cast<double>(need) * 1e-9,
+                static_cast<double>(*available) * 1e-9);
+  throw Error(where, what + text + remedy);
 }
 
 bool KeepFreedMemoryForReuse() {

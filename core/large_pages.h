@@ -10,6 +10,7 @@
 #include <cstddef>
 #include <new>
 #include <optional>
+#include <string>
 
 namespace hovs {
 
@@ -54,6 +55,11 @@ inline constexpr std::size_t kKeptFreedBytes = std::size_t(1) << 30;
 // killed when it touches the memory: callers that allocate by the user's request (the renderer's frames) check
 // first and report the request instead.
 std::optional<std::size_t> AvailableMemoryBytes();
+// Throws Error(where, "<what> needs <need> GB of memory; <available> GB are available: <remedy>") when need exceeds
+// available (nullopt: unknown, no check): the check of a request whose size the user chose, before any of it is
+// taken.
+void RequireMemory(const std::string& where, const std::string& what, std::size_t need,
+                   std::optional<std::size_t> available, const std::string& remedy);
 
 // A std::allocator whose large allocations use AllocateLargePages; UninitialisedConstruct leaves elements
 // default-initialised (no zeroing on resize: the renderer fills its frames in parallel).

@@ -473,18 +473,12 @@ std::size_t FrameMemoryBytes(int width, int height, bool ground_truth) {
 
 void CheckFrameMemory(const std::string& where, int width, int height, bool ground_truth, std::size_t held,
                       std::optional<std::size_t> available) {
-  if (!available) return;
   const std::size_t need = FrameMemoryBytes(width, height, ground_truth);
-  const auto gb = [](std::size_t b) {
-    char text[32];
-    std::snprintf(text, sizeof text, "%.2f GB", static_cast<double>(b) * 1e-9);
-    return std::string(text);
-  };
-  HOVS_REQUIRE(need <= held || need - held <= *available, where, "a ", width, " x ", height, " frame",
-               ground_truth ? " with ground truth" : "", " needs ", gb(need),
-               " of memory (its buffers and the sensor image)",
-               held > 0 ? ", " + gb(held) + " of it already held" : std::string(), "; ", gb(*available),
-               " are available: render fewer pixels or free memory");
+  if (need <= held) return;
+  const std::string frame = "a " + std::to_string(width) + " x " + std::to_string(height) + " frame" +
+                            (ground_truth ? " with ground truth" : "") + " (its buffers and the sensor image" +
+                            (held > 0 ? ", less what its buffers hold" : "") + ")";
+  RequireMemory(where, frame, need - held, available, "render fewer pixels or free memory");
 }
 
 Frame Render(const RayScene& scene, const ViewCamera& camera, const RenderOptions& options) {

@@ -6,6 +6,7 @@
 
 #include "core/error.h"
 #include "core/io.h"
+#include "core/large_pages.h"
 #include "core/yaml_reader.h"
 
 namespace hovs::unwrap {
@@ -59,16 +60,13 @@ std::size_t ViewsMemoryBytes(const std::vector<ViewSpec>& views) {
 
 void CheckViewsMemory(const std::string& where, const std::vector<ViewSpec>& views,
                       std::optional<std::size_t> available) {
-  if (!available) return;
-  const std::size_t need = ViewsMemoryBytes(views);
-  if (need <= *available) return;
   std::size_t px = 0;
   for (const ViewSpec& v : views) px += static_cast<std::size_t>(v.width) * static_cast<std::size_t>(v.height);
-  char text[160];
-  std::snprintf(text, sizeof text, "%zu views of %.1f megapixels in all need up to %.2f GB of memory; %.2f GB are available",
-                views.size(), static_cast<double>(px) * 1e-6, static_cast<double>(need) * 1e-9,
-                static_cast<double>(*available) * 1e-9);
-  throw Error(where, std::string(text) + ": make the views smaller or fewer, or free memory");
+  char what[80];
+  std::snprintf(what, sizeof what, "a layout of %zu views, %.1f megapixels in all, at worst", views.size(),
+                static_cast<double>(px) * 1e-6);
+  RequireMemory(where, what, ViewsMemoryBytes(views), available,
+                "make the views smaller or fewer, or free memory");
 }
 
 Layout PresetLayout(const std::string& name) {
