@@ -731,6 +731,31 @@ void FillColour(int n, const Rgb& c, float* rgb) {
 
 }  // namespace
 
+namespace {
+
+// Where the lanes of a batch change: brk[k] = 1 where lane k differs from lane k - 1 in validity, geometry or
+// primitive (brk[0] = 1), and brk[n] = 1 as a sentinel; vectorised. RunEnd then finds the end of the run that
+// starts at lane i with memchr (SIMD in glibc) instead of a scalar loop of three loads and compares per lane.
+struct RunBreaks {
+  unsigned char brk[RayBatch::kMax + 1];
+};
+HOVS_VECTOR_CLONES void FindRunBreaks(int n, const unsigned char* __restrict valid, const unsigned* __restrict geom,
+                                      const unsigned* __restrict prim, unsigned char* __restrict brk) {
+  brk[0] = 1;
+  for (int k = 1; k < n; ++k) {
+    const int differ = (valid[k] != valid[k - 1]) | (geom[k] != geom[k - 1]) | (prim[k] != prim[k - 1]);
+    brk[k] = static_cast<unsigned char>(differ);
+  }
+  brk[n] = 1;
+}
+// The first lane after i that starts a new run (n at most).
+inline int RunEnd(const RunBreaks& r, int i) {
+  return static_cast<int>(static_cast<const unsigned char*>(std::memchr(r.brk + i + 1, 1, sizeof r.brk - (i + 1))) -
+                          r.brk);
+}
+
+}  // namespace
+
 void RayScene::Colours(const RayBatch& b, float* rgb) const { ColoursOf(b, rgb); }
 void RayScene::Colours(const RayBatchF& b, float* rgb) const { ColoursOf(b, rgb); }
 
@@ -747,19 +772,21 @@ void RayScene::ColoursOf(const RayBatchOf<T>& b, float* rgb) const {
   const auto put = [&](int i, const Rgb& c) { rgb[3 * i] = c[0], rgb[3 * i + 1] = c[1], rgb[3 * i + 2] = c[2]; };
   RectPlaneRuns<T> planes;
   const T *s_at = planes.s, *t_at = planes.t, *denom = planes.denom;
+  RunBreaks runs;
+  FindRunBreaks(n, b.valid, geom, prim, runs.brk);
   for (int i = 0; i < n;) {
     const unsigned g = geom[i];
     if (!b.valid[i]) {
       put(i++, {0, 0, 0});
       continue;
     }
-    int j = i + 1;   // the run of lanes like lane i
+    // The run of lanes like lane i (valid, the same geometry and primitive; misses and the lanes of an analytic
+    // shape have primitive 0).
+    const int j = RunEnd(runs, i);
     if (g == RTC_INVALID_GEOMETRY_ID) {
-      while (j < n && b.valid[j] && geom[j] == g) ++j;
       SkyColours(j - i, b.dz + i, desc_.sky.horizon.data(), desc_.sky.zenith.data(), desc_.sky.nadir.data(), rgb + 3 * i);
     } else if (g == rect_geom_) {
       const unsigned p = prim[i];
-      while (j < n && b.valid[j] && geom[j] == g && prim[j] == p) ++j;
       const RectFrame& fr = rect_frames_[p];
       const T* flat;
       if constexpr (std::is_same_v<T, float>) flat = fr.flat_f; else flat = fr.flat;
@@ -788,12 +815,11 @@ void RayScene::ColoursOf(const RayBatchOf<T>& b, float* rgb) const {
           if (!seen(k)) put(k, denom[k] == 0 ? Rgb{0, 0, 0} : r.back);
     } else if (g < geom_to_user_.size() && geom_to_user_[g] >= 0) {
       // A run of lanes on one analytic shape (the mount ring past the rim: long runs): one flat colour.
-      while (j < n && b.valid[j] && geom[j] == g) ++j;
       const UserGeometry& u = *user_[geom_to_user_[g]];
       const Rgb& c = u.kind == UserGeometry::Kind::kMirror ? u.back_colour : u.colour;
       FillColour(j - i, c, rgb + 3 * i);
     } else {
-      put(i, {0, 0, 0});
+      for (int k = i; k < j; ++k) put(k, {0, 0, 0});
     }
     i = j;
   }
@@ -869,12 +895,14 @@ void RayScene::Geometry(const RayBatch& b, HitBatch* H) const {
                ? u
                : -1;
   };
+  RunBreaks runs;
+  FindRunBreaks(b.n, b.valid, geom, prim, runs.brk);
   for (int i = 0; i < b.n;) {
     int j = i + 1;
     if (b.valid[i] && geom[i] == rect_geom_) {
       // A run of consecutive lanes on one rectangle: their plane points in one vectorised pass (as Shade).
       const unsigned p = prim[i];
-      while (j < b.n && b.valid[j] && geom[j] == rect_geom_ && prim[j] == p) ++j;
+      j = RunEnd(runs, i);
       const RectFrame& fr = rect_frames_[p];
       RectPlaneHits<double>(i, j - i, b.ox, b.oy, b.oz, b.dx, b.dy, b.dz, fr.flat, &planes);
       RectHitLanes(i, j, &planes, fr.normal.data(), desc_.rects[p].object_id, H);
