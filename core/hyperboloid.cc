@@ -86,14 +86,15 @@ HOVS_VECTOR_CLONES int CountRimCrossings(T o0, T o1, T dz, T lim, int n, const T
 }
 
 // The kernel's lane flags (0, 1 or 2) as bytes into ok, and how many are 1 (*hits); returns the largest flag.
+// (In integers: GCC vectorises integer reductions, not a floating-point maximum.)
 template <class T>
-HOVS_VECTOR_CLONES T StoreLaneFlags(int n, const T* __restrict flag, unsigned char* __restrict ok, int* hits) {
-  T most = 0;
-  int count = 0;
+HOVS_VECTOR_CLONES int StoreLaneFlags(int n, const T* __restrict flag, unsigned char* __restrict ok, int* hits) {
+  int most = 0, count = 0;
   for (int i = 0; i < n; ++i) {
-    ok[i] = static_cast<unsigned char>(flag[i]);
-    most = flag[i] > most ? flag[i] : most;
-    count += flag[i] == 1 ? 1 : 0;
+    const int f = static_cast<int>(flag[i]);
+    ok[i] = static_cast<unsigned char>(f);
+    most = std::max(most, f);
+    count += f == 1 ? 1 : 0;
   }
   *hits += count;
   return most;
