@@ -101,48 +101,58 @@ struct RayRequest {
   Vec3d mirror_point = Vec3d::Zero();  // mirror frame
 };
 
-// Where the camera rays (from c along v, mirror frame; v need not be a unit vector) that missed the mirror
-// (via[i] = 0) meet the mount ring: the annulus r0 <= r <= r1 in the plane z = zr. t[i]: the distance from c
-// (along the unit direction of v, as the world ray is traced), 0 where they miss the ring, -1 for rays on the
-// mirror.
+// What UnitRays needs of a unit, in T: the mount ring (the annulus r0 <= r <= r1 in the plane z = zr of the
+// mirror frame) and the camera centre c_m there; world_from_mirror (column-major R, t) and the camera centre c_w in
+// the world.
+template <class T>
+struct UnitRayFrame {
+  T zr = 0, r0 = 0, r1 = 0, c_m[3] = {0, 0, 0}, R[9] = {1, 0, 0, 0, 1, 0, 0, 0, 1}, t[3] = {0, 0, 0},
+    c_w[3] = {0, 0, 0};
+};
+
+// A unit's batch of rays finished in one pass, from the camera rays v (mirror frame, unit length) and where
+// on_mirror[i], their reflections (mirror point M, direction d in dx, dy, dz):
+// - origins: tnear, from_mirror = unit on the mirror (else -1), from_camera = unit past it (else -1);
+// - mount_t: for a camera ray past the mirror, where it meets the mount ring (the distance from c along v, as the
+//   world ray is traced), 0 where it misses the ring; -1 on the mirror, and everywhere without ring_test;
+// - the world rays: from M along d on the mirror, else from the camera centre along v, mapped by
+//   world_from_mirror (d is replaced by the world direction).
 // T: double, or float for single-precision colour samples.
 template <class T>
-HOVS_VECTOR_CLONES void MountRingHits(int n, T zr, T r0, T r1, T cx, T cy, T cz, const T* __restrict vx,
-                                      const T* __restrict vy, const T* __restrict vz, const T* __restrict via,
-                                      T* __restrict t_out) {
-  const T r02 = r0 * r0, r12 = r1 * r1, dz = zr - cz, one = 1, zero = 0, near = static_cast<T>(1e-5);
+HOVS_VECTOR_CLONES void UnitRays(int n, const unsigned char* __restrict on_mirror, int unit, float tnear,
+                                 int ring_test, const UnitRayFrame<T>* __restrict f, const T* __restrict vx,
+                                 const T* __restrict vy, const T* __restrict vz, const T* __restrict Mx,
+                                 const T* __restrict My, const T* __restrict Mz, T* __restrict dx, T* __restrict dy,
+                                 T* __restrict dz, T* __restrict ox, T* __restrict oy, T* __restrict oz,
+                                 float* __restrict tnear_out, int* __restrict from_mirror, int* __restrict from_camera,
+                                 T* __restrict mount_t) {
+  // Loaded once: a load inside a select stops if-conversion.
+  const T r02 = f->r0 * f->r0, r12 = f->r1 * f->r1, dzr = f->zr - f->c_m[2], cx = f->c_m[0], cy = f->c_m[1];
+  const T one = 1, zero = 0, half = static_cast<T>(0.5), near = static_cast<T>(1e-5);
+  const T R0 = f->R[0], R1 = f->R[1], R2 = f->R[2], R3 = f->R[3], R4 = f->R[4], R5 = f->R[5], R6 = f->R[6],
+          R7 = f->R[7], R8 = f->R[8], t0 = f->t[0], t1 = f->t[1], t2 = f->t[2];
+  const T c0 = f->c_w[0], c1 = f->c_w[1], c2 = f->c_w[2];
+  const T no_ring = ring_test ? zero : one;
   for (int i = 0; i < n; ++i) {
+    // One comparison per select: GCC 12 if-converts these, not several selects on one bool.
+    const T via = on_mirror[i] != 0 ? one : zero;
+    tnear_out[i] = tnear;
+    from_mirror[i] = via > half ? unit : -1;
+    from_camera[i] = via > half ? -1 : unit;
     const T w = vz[i] != 0 ? vz[i] : one;
-    const T t = dz / w, px = cx + t * vx[i], py = cy + t * vy[i], r2 = px * px + py * py;
+    const T t = dzr / w, px = cx + t * vx[i], py = cy + t * vy[i], r2 = px * px + py * py;
     const bool ring = vz[i] != 0 && t > near && r2 >= r02 && r2 <= r12;   // v is unit: t is the distance
-    t_out[i] = via[i] != 0 ? -one : ring ? t : zero;
-  }
-}
-
-// The world rays of a batch, mapped by world_from_source (column-major R, t): where via[i] = 1, from mirror point
-// M along the reflected direction d (given in dx, dy, dz); elsewhere from the camera centre c (world frame) along
-// the camera ray v (unit, source frame). d is replaced by the world direction. T: double, or float for
-// single-precision colour samples.
-template <class T>
-HOVS_VECTOR_CLONES void WorldRays(int n, const T* __restrict R, const T* __restrict tm, const T* __restrict c,
-                                  const T* __restrict via, const T* __restrict vx, const T* __restrict vy,
-                                  const T* __restrict vz, const T* __restrict Mx, const T* __restrict My,
-                                  const T* __restrict Mz, T* __restrict dx, T* __restrict dy, T* __restrict dz,
-                                  T* __restrict ox, T* __restrict oy, T* __restrict oz) {
-  const T c0 = c[0], c1 = c[1], c2 = c[2];  // loaded once: a load inside a select stops if-conversion
-  const T half = static_cast<T>(0.5);
-  for (int i = 0; i < n; ++i) {
-    // One comparison per select: GCC 12 if-converts these, not six selects on one bool.
-    const T sx = via[i] > half ? dx[i] : vx[i], sy = via[i] > half ? dy[i] : vy[i], sz = via[i] > half ? dz[i] : vz[i];
-    dx[i] = R[0] * sx + R[3] * sy + R[6] * sz;
-    dy[i] = R[1] * sx + R[4] * sy + R[7] * sz;
-    dz[i] = R[2] * sx + R[5] * sy + R[8] * sz;
-    const T mox = R[0] * Mx[i] + R[3] * My[i] + R[6] * Mz[i] + tm[0],
-            moy = R[1] * Mx[i] + R[4] * My[i] + R[7] * Mz[i] + tm[1],
-            moz = R[2] * Mx[i] + R[5] * My[i] + R[8] * Mz[i] + tm[2];
-    ox[i] = via[i] > half ? mox : c0;
-    oy[i] = via[i] > half ? moy : c1;
-    oz[i] = via[i] > half ? moz : c2;
+    const T off = via + no_ring;   // > 0: no ring distance
+    mount_t[i] = off > half ? -one : ring ? t : zero;
+    const T sx = via > half ? dx[i] : vx[i], sy = via > half ? dy[i] : vy[i], sz = via > half ? dz[i] : vz[i];
+    dx[i] = R0 * sx + R3 * sy + R6 * sz;
+    dy[i] = R1 * sx + R4 * sy + R7 * sz;
+    dz[i] = R2 * sx + R5 * sy + R8 * sz;
+    const T mox = R0 * Mx[i] + R3 * My[i] + R6 * Mz[i] + t0, moy = R1 * Mx[i] + R4 * My[i] + R7 * Mz[i] + t1,
+            moz = R2 * Mx[i] + R5 * My[i] + R8 * Mz[i] + t2;
+    ox[i] = via > half ? mox : c0;
+    oy[i] = via > half ? moy : c1;
+    oz[i] = via > half ? moz : c2;
   }
 }
 
@@ -283,9 +293,7 @@ class RayMaker {
       // The single-precision colour path: a unit's camera without distortion, at time 0, through a pinhole.
       single_ = unit_->rig.camera.distortion.IsZero() && !(o.lens_radius > 0) && !(o.exposure_time > 0);
       R_mirror_from_cam_f_ = R_mirror_from_cam_.cast<float>();
-      R_world_from_mirror_f_ = R_world_from_mirror_.cast<float>();
-      t_world_from_mirror_f_ = t_world_from_mirror_.cast<float>();
-      camera_centre_f_ = world_from_cam_.translation.cast<float>();
+      SetFrame(&frame_d_), SetFrame(&frame_f_);
     } else {
       cam.pinhole.Check("render camera");
       world_from_cam_ = cam.world_from_cam;
@@ -308,7 +316,7 @@ class RayMaker {
     b->n = n;
     const PinholeCamera<double>& cam = unit_->rig.camera;
     alignas(64) float vx[RayBatch::kMax], vy[RayBatch::kMax], vz[RayBatch::kMax];
-    alignas(64) float Mx[RayBatch::kMax], My[RayBatch::kMax], Mz[RayBatch::kMax], via[RayBatch::kMax];
+    alignas(64) float Mx[RayBatch::kMax], My[RayBatch::kMax], Mz[RayBatch::kMax];
     unsigned char on_mirror[RayBatch::kMax];
     PixelRaysF(n, cam.cx, cam.cy, static_cast<float>(1.0 / cam.fx), static_cast<float>(1.0 / cam.fy),
                R_mirror_from_cam_f_.data(), u, v, vx, vy, vz);
@@ -316,18 +324,10 @@ class RayMaker {
 #pragma GCC diagnostic push
 #pragma GCC diagnostic ignored "-Wmaybe-uninitialized"
     const int on = reflector_->ReflectBatch(t_mirror_from_cam_, n, vx, vy, vz, Mx, My, Mz, b->dx, b->dy, b->dz, on_mirror);
-    RayOrigins(n, on_mirror, cam_.unit, 1e-5f, via, b->tnear, b->from_mirror, b->from_camera);
-    if (unit_->mount_outer_radius > 0 && on < n) {
-      MountRingHits<float>(n, static_cast<float>(unit_->rig.mirror.RimZ()),
-                           static_cast<float>(unit_->rig.mirror.RimRadius()),
-                           static_cast<float>(unit_->mount_outer_radius), static_cast<float>(t_mirror_from_cam_.x()),
-                           static_cast<float>(t_mirror_from_cam_.y()), static_cast<float>(t_mirror_from_cam_.z()), vx,
-                           vy, vz, via, b->mount_t);
-    } else {
-      std::fill(b->mount_t, b->mount_t + n, -1.0f);
-    }
-    WorldRays<float>(n, R_world_from_mirror_f_.data(), t_world_from_mirror_f_.data(), camera_centre_f_.data(), via,
-                     vx, vy, vz, Mx, My, Mz, b->dx, b->dy, b->dz, b->ox, b->oy, b->oz);
+    // (A batch whose rays all meet the mirror, most of them, has no straight ray: no ring test.)
+    UnitRays<float>(n, on_mirror, cam_.unit, 1e-5f, unit_->mount_outer_radius > 0 && on < n, &frame_f_, vx, vy, vz,
+                    Mx, My, Mz, b->dx, b->dy, b->dz, b->ox, b->oy, b->oz, b->tnear, b->from_mirror, b->from_camera,
+                    b->mount_t);
 #pragma GCC diagnostic pop
   }
 
@@ -368,18 +368,11 @@ class RayMaker {
       // Camera rays past the rim: where they meet the unit's mount ring, in the mirror frame where the rim test
       // was made (the world ray is the same ray rotated and moved, so the distance along it is the same).
       // RayScene traces them only up to it. tnear 1e-5 as in Make (off the mirror, or off the lens face).
-      RayOrigins(n, on_mirror, cam_.unit, 1e-5f, via, b->tnear, b->from_mirror, b->from_camera);
-      // (A batch whose rays all meet the mirror, most of them, has no straight ray: no ring test.)
-      if (unit_->mount_outer_radius > 0 && on < n) {
-        MountRingHits(n, unit_->rig.mirror.RimZ(), unit_->rig.mirror.RimRadius(), unit_->mount_outer_radius,
-                      t_mirror_from_cam_.x(), t_mirror_from_cam_.y(), t_mirror_from_cam_.z(), vx, vy, vz, via,
-                      b->mount_t);
-      } else {
-        std::fill(b->mount_t, b->mount_t + n, -1.0);
-      }
-      // Both kinds of ray from the mirror frame to the world in one rotation.
-      WorldRays(n, R_world_from_mirror_.data(), t_world_from_mirror_.data(), world_from_cam_.translation.data(), via,
-                vx, vy, vz, Mx, My, Mz, b->dx, b->dy, b->dz, b->ox, b->oy, b->oz);
+      // (A batch whose rays all meet the mirror, most of them, has no straight ray: no ring test.) Both kinds of
+      // ray from the mirror frame to the world in one rotation.
+      UnitRays<double>(n, on_mirror, cam_.unit, 1e-5f, unit_->mount_outer_radius > 0 && on < n, &frame_d_, vx, vy,
+                       vz, Mx, My, Mz, b->dx, b->dy, b->dz, b->ox, b->oy, b->oz, b->tnear, b->from_mirror,
+                       b->from_camera, b->mount_t);
     } else {
       std::fill(on_mirror, on_mirror + n, 0);
       RayOrigins(n, on_mirror, -1, 0.0f, via, b->tnear, b->from_mirror, b->from_camera);
@@ -459,8 +452,23 @@ class RayMaker {
   Vec3d viewpoint_ = Vec3d::Zero();
   Eigen::Matrix3d R_world_from_cam_ = Eigen::Matrix3d::Identity();
   bool single_ = false;
-  Eigen::Matrix3f R_mirror_from_cam_f_ = Eigen::Matrix3f::Identity(), R_world_from_mirror_f_ = Eigen::Matrix3f::Identity();
-  Eigen::Vector3f t_world_from_mirror_f_ = Eigen::Vector3f::Zero(), camera_centre_f_ = Eigen::Vector3f::Zero();
+  Eigen::Matrix3f R_mirror_from_cam_f_ = Eigen::Matrix3f::Identity();
+  UnitRayFrame<double> frame_d_;   // UnitRays' view of the unit, in double and in float
+  UnitRayFrame<float> frame_f_;
+
+  // The unit's ring, camera centre and world_from_mirror, rounded to T.
+  template <class T>
+  void SetFrame(UnitRayFrame<T>* f) const {
+    f->zr = static_cast<T>(unit_->rig.mirror.RimZ());
+    f->r0 = static_cast<T>(unit_->rig.mirror.RimRadius());
+    f->r1 = static_cast<T>(unit_->mount_outer_radius);
+    for (int k = 0; k < 3; ++k) {
+      f->c_m[k] = static_cast<T>(t_mirror_from_cam_(k));
+      f->t[k] = static_cast<T>(t_world_from_mirror_(k));
+      f->c_w[k] = static_cast<T>(world_from_cam_.translation(k));
+    }
+    for (int k = 0; k < 9; ++k) f->R[k] = static_cast<T>(R_world_from_mirror_.data()[k]);
+  }
   int width_ = 0, height_ = 0;
 };
 
