@@ -358,7 +358,6 @@ class RayMaker {
       RotateRays(n, R, mx, my, vx, vy, vz);
     }
     unsigned char on_mirror[RayBatch::kMax];
-    double via[RayBatch::kMax];  // on_mirror as 0 / 1
     // (GCC 12 reports the arrays as maybe uninitialised when n could be 0; the callees read only [0, n).)
 #pragma GCC diagnostic push
 #pragma GCC diagnostic ignored "-Wmaybe-uninitialized"
@@ -375,6 +374,7 @@ class RayMaker {
                        b->from_camera, b->mount_t);
     } else {
       std::fill(on_mirror, on_mirror + n, 0);
+      double via[RayBatch::kMax];  // on_mirror as 0 / 1 (the pinhole camera has no mirror: all 0)
       RayOrigins(n, on_mirror, -1, 0.0f, via, b->tnear, b->from_mirror, b->from_camera);
       std::fill(b->mount_t, b->mount_t + n, -1.0);
       std::copy(vx, vx + n, b->dx), std::copy(vy, vy + n, b->dy), std::copy(vz, vz + n, b->dz);
