@@ -117,15 +117,16 @@ struct UnitRayFrame {
 //   world ray is traced), 0 where it misses the ring; -1 on the mirror, and everywhere without ring_test;
 // - the world rays: from M along d on the mirror, else from the camera centre along v, mapped by
 //   world_from_mirror (d is replaced by the world direction).
-// T: double, or float for single-precision colour samples.
-template <class T>
-HOVS_VECTOR_CLONES void UnitRays(int n, const unsigned char* __restrict on_mirror, int unit, float tnear,
-                                 int ring_test, const UnitRayFrame<T>* __restrict f, const T* __restrict vx,
-                                 const T* __restrict vy, const T* __restrict vz, const T* __restrict Mx,
-                                 const T* __restrict My, const T* __restrict Mz, T* __restrict dx, T* __restrict dy,
-                                 T* __restrict dz, T* __restrict ox, T* __restrict oy, T* __restrict oz,
-                                 float* __restrict tnear_out, int* __restrict from_mirror, int* __restrict from_camera,
-                                 T* __restrict mount_t) {
+// T: double, or float for single-precision colour samples. kMode: 0 any mix of rays on and past the mirror, 1
+// every ray on the mirror (no ring test, v not read), 2 every ray past it (M and d not read); the same values
+// in each.
+template <class T, int kMode>
+__attribute__((always_inline)) inline void UnitRaysOf(
+    int n, const unsigned char* __restrict on_mirror, int unit, float tnear, int ring_test,
+    const UnitRayFrame<T>* __restrict f, const T* __restrict vx, const T* __restrict vy, const T* __restrict vz,
+    const T* __restrict Mx, const T* __restrict My, const T* __restrict Mz, T* __restrict dx, T* __restrict dy,
+    T* __restrict dz, T* __restrict ox, T* __restrict oy, T* __restrict oz, float* __restrict tnear_out,
+    int* __restrict from_mirror, int* __restrict from_camera, T* __restrict mount_t) {
   // Loaded once: a load inside a select stops if-conversion.
   const T r02 = f->r0 * f->r0, r12 = f->r1 * f->r1, dzr = f->zr - f->c_m[2], cx = f->c_m[0], cy = f->c_m[1];
   const T one = 1, zero = 0, half = static_cast<T>(0.5), near = static_cast<T>(1e-5);
@@ -133,6 +134,39 @@ HOVS_VECTOR_CLONES void UnitRays(int n, const unsigned char* __restrict on_mirro
           R7 = f->R[7], R8 = f->R[8], t0 = f->t[0], t1 = f->t[1], t2 = f->t[2];
   const T c0 = f->c_w[0], c1 = f->c_w[1], c2 = f->c_w[2];
   const T no_ring = ring_test ? zero : one;
+  if (kMode == 1) {
+    for (int i = 0; i < n; ++i) {
+      tnear_out[i] = tnear;
+      from_mirror[i] = unit;
+      from_camera[i] = -1;
+      mount_t[i] = -one;
+      const T sx = dx[i], sy = dy[i], sz = dz[i];
+      dx[i] = R0 * sx + R3 * sy + R6 * sz;
+      dy[i] = R1 * sx + R4 * sy + R7 * sz;
+      dz[i] = R2 * sx + R5 * sy + R8 * sz;
+      ox[i] = R0 * Mx[i] + R3 * My[i] + R6 * Mz[i] + t0;
+      oy[i] = R1 * Mx[i] + R4 * My[i] + R7 * Mz[i] + t1;
+      oz[i] = R2 * Mx[i] + R5 * My[i] + R8 * Mz[i] + t2;
+    }
+    return;
+  }
+  if (kMode == 2) {
+    for (int i = 0; i < n; ++i) {
+      tnear_out[i] = tnear;
+      from_mirror[i] = -1;
+      from_camera[i] = unit;
+      const T w = vz[i] != 0 ? vz[i] : one;
+      const T t = dzr / w, px = cx + t * vx[i], py = cy + t * vy[i], r2 = px * px + py * py;
+      const bool ring = vz[i] != 0 && t > near && r2 >= r02 && r2 <= r12;   // v is unit: t is the distance
+      mount_t[i] = no_ring > half ? -one : ring ? t : zero;
+      const T sx = vx[i], sy = vy[i], sz = vz[i];
+      dx[i] = R0 * sx + R3 * sy + R6 * sz;
+      dy[i] = R1 * sx + R4 * sy + R7 * sz;
+      dz[i] = R2 * sx + R5 * sy + R8 * sz;
+      ox[i] = c0, oy[i] = c1, oz[i] = c2;
+    }
+    return;
+  }
   for (int i = 0; i < n; ++i) {
     // One comparison per select: GCC 12 if-converts these, not several selects on one bool.
     const T via = on_mirror[i] != 0 ? one : zero;
@@ -153,6 +187,46 @@ HOVS_VECTOR_CLONES void UnitRays(int n, const unsigned char* __restrict on_mirro
     ox[i] = via > half ? mox : c0;
     oy[i] = via > half ? moy : c1;
     oz[i] = via > half ? moz : c2;
+  }
+}
+
+// UnitRaysOf for a batch of which `on` rays meet the mirror.
+template <class T>
+HOVS_VECTOR_CLONES void UnitRays(int n, int on, const unsigned char* __restrict on_mirror, int unit, float tnear,
+                                 int ring_test, const UnitRayFrame<T>* __restrict f, const T* __restrict vx,
+                                 const T* __restrict vy, const T* __restrict vz, const T* __restrict Mx,
+                                 const T* __restrict My, const T* __restrict Mz, T* __restrict dx, T* __restrict dy,
+                                 T* __restrict dz, T* __restrict ox, T* __restrict oy, T* __restrict oz,
+                                 float* __restrict tnear_out, int* __restrict from_mirror, int* __restrict from_camera,
+                                 T* __restrict mount_t) {
+  if (on == n) {
+    UnitRaysOf<T, 1>(n, on_mirror, unit, tnear, ring_test, f, vx, vy, vz, Mx, My, Mz, dx, dy, dz, ox, oy, oz,
+                     tnear_out, from_mirror, from_camera, mount_t);
+  } else if (on == 0) {
+    UnitRaysOf<T, 2>(n, on_mirror, unit, tnear, ring_test, f, vx, vy, vz, Mx, My, Mz, dx, dy, dz, ox, oy, oz,
+                     tnear_out, from_mirror, from_camera, mount_t);
+  } else {
+    UnitRaysOf<T, 0>(n, on_mirror, unit, tnear, ring_test, f, vx, vy, vz, Mx, My, Mz, dx, dy, dz, ox, oy, oz,
+                     tnear_out, from_mirror, from_camera, mount_t);
+  }
+}
+
+// The colours of a run of neighbouring pixels (len floats: 3 per pixel) from a chunk's samples (samples rows of
+// `row` floats, the run's first colour at rgb), each weighted and summed in sample order (w r0 + w r1 + ...),
+// into out, or added to it (add: a pixel split over chunks adds to what its earlier chunks left).
+HOVS_VECTOR_CLONES
+void SumSamples(int len, int samples, int row, float weight, const float* __restrict rgb, bool add,
+                float* __restrict out) {
+  float sum[3 * RayBatch::kMax];
+  for (int j = 0; j < len; ++j) sum[j] = weight * rgb[j];
+  for (int smp = 1; smp < samples; ++smp) {
+    const float* __restrict r = rgb + static_cast<ptrdiff_t>(smp) * row;
+    for (int j = 0; j < len; ++j) sum[j] += weight * r[j];
+  }
+  if (add) {
+    for (int j = 0; j < len; ++j) out[j] += sum[j];
+  } else {
+    for (int j = 0; j < len; ++j) out[j] = sum[j];
   }
 }
 
@@ -306,6 +380,8 @@ class RayMaker {
   int width() const { return width_; }
   int height() const { return height_; }
   const Vec3d& viewpoint() const { return viewpoint_; }
+  // The camera whose pixels the rays leave.
+  const PinholeCamera<double>& camera() const { return unit_ ? unit_->rig.camera : cam_.pinhole; }
   // True when the colour samples take MakeBatchF (single precision).
   bool single() const { return single_; }
 
@@ -325,7 +401,7 @@ class RayMaker {
 #pragma GCC diagnostic ignored "-Wmaybe-uninitialized"
     const int on = reflector_->ReflectBatch(t_mirror_from_cam_, n, vx, vy, vz, Mx, My, Mz, b->dx, b->dy, b->dz, on_mirror);
     // (A batch whose rays all meet the mirror, most of them, has no straight ray: no ring test.)
-    UnitRays<float>(n, on_mirror, cam_.unit, 1e-5f, unit_->mount_outer_radius > 0 && on < n, &frame_f_, vx, vy, vz,
+    UnitRays<float>(n, on, on_mirror, cam_.unit, 1e-5f, unit_->mount_outer_radius > 0 && on < n, &frame_f_, vx, vy, vz,
                     Mx, My, Mz, b->dx, b->dy, b->dz, b->ox, b->oy, b->oz, b->tnear, b->from_mirror, b->from_camera,
                     b->mount_t);
 #pragma GCC diagnostic pop
@@ -334,8 +410,11 @@ class RayMaker {
   // The rays of n image points (n <= RayBatch::kMax) into a batch, with each ray's mirror point (mirror frame;
   // meaningful where from_mirror >= 0). lens, tau: per point as in Make, or null for a pinhole at time 0, the
   // vectorised path: the camera rays of the batch are reflected together (MirrorReflector::ReflectBatch).
+  //
+  // nx, ny (with u, v still given): the points' normalised coordinates ((u - cx) / fx, (v - cy) / fy), already
+  // computed (pixel centres: one division per column and per row of a tile), for a camera without distortion.
   void MakeBatch(int n, const double* u, const double* v, const Vec2d* lens, const double* tau, RayBatch* b,
-                 double* Mx, double* My, double* Mz) const {
+                 double* Mx, double* My, double* Mz, const double* nx = nullptr, const double* ny = nullptr) const {
     b->n = n;
     if (lens || tau) {
       for (int i = 0; i < n; ++i) {
@@ -349,7 +428,10 @@ class RayMaker {
     // The unit camera rays, in the mirror frame for a unit (reflected together), in the world for a pinhole.
     double vx[RayBatch::kMax], vy[RayBatch::kMax], vz[RayBatch::kMax];
     const double* R = unit_ ? R_mirror_from_cam_.data() : R_world_from_cam_.data();
-    if (cam.distortion.IsZero()) {
+    if (nx && ny && cam.distortion.IsZero()) {
+      RotateRays(n, R, nx, ny, vx, vy, vz);
+      std::fill(b->valid, b->valid + n, 1);
+    } else if (cam.distortion.IsZero()) {
       PixelRays(n, cam.fx, cam.fy, cam.cx, cam.cy, R, u, v, vx, vy, vz);
       std::fill(b->valid, b->valid + n, 1);
     } else {
@@ -369,7 +451,7 @@ class RayMaker {
       // RayScene traces them only up to it. tnear 1e-5 as in Make (off the mirror, or off the lens face).
       // (A batch whose rays all meet the mirror, most of them, has no straight ray: no ring test.) Both kinds of
       // ray from the mirror frame to the world in one rotation.
-      UnitRays<double>(n, on_mirror, cam_.unit, 1e-5f, unit_->mount_outer_radius > 0 && on < n, &frame_d_, vx, vy,
+      UnitRays<double>(n, on, on_mirror, cam_.unit, 1e-5f, unit_->mount_outer_radius > 0 && on < n, &frame_d_, vx, vy,
                        vz, Mx, My, Mz, b->dx, b->dy, b->dz, b->ox, b->oy, b->oz, b->tnear, b->from_mirror,
                        b->from_camera, b->mount_t);
     } else {
@@ -562,12 +644,13 @@ void RenderInto(const RayScene& scene, const ViewCamera& camera, const RenderOpt
     const auto batch_f = maker.single() ? std::make_unique<RayBatchF>() : nullptr;
     struct Scratch {
       double u[kMax], v[kMax], Mx[kMax], My[kMax], Mz[kMax], tau[kMax];
+      double nx[kMax], ny[kMax], col_x[kMax], row_y[kMax];   // pixel centres' normalised coordinates
       Vec2d disc[kMax];
       int px[kMax];
       // The chunk's pixels: index in the frame, centre.
       int pixel[kMax];
       double pixel_x[kMax], pixel_y[kMax];
-      float rgb[3 * kMax], sum[3 * kMax];
+      float rgb[3 * kMax];
       HitBatch hits;            // the ground-truth rays' hits
       double range[kMax];       // and their distances from the viewpoint
       alignas(64) float truth[GroundTruth::kChannels * kMax];   // their ground truth, channel by channel
@@ -625,22 +708,11 @@ void RenderInto(const RayScene& scene, const ViewCamera& camera, const RenderOpt
         // Each pixel's samples summed in order, weighted (w r0 + w r1 + ...: the first sample starts the sum, so
         // the frame needs no zeroing; a pixel split over chunks adds to what its earlier chunks left): over the
         // chunk's colour rows at once, then written per run of neighbouring pixels.
-        const int row = 3 * P;
-        for (int j = 0; j < row; ++j) sc.sum[j] = weight * sc.rgb[j];
-        for (int smp = 1; smp < s_end - s_begin; ++smp) {
-          const float* r = sc.rgb + static_cast<size_t>(smp) * row;
-          for (int j = 0; j < row; ++j) sc.sum[j] += weight * r[j];
-        }
         for (int qa = 0; qa < P;) {
           int qb = qa + 1;
           while (qb < P && sc.pixel[qb] == sc.pixel[qa] + (qb - qa)) ++qb;
-          float* c = &f.rgb[3 * static_cast<size_t>(sc.pixel[qa])];
-          const float* add = sc.sum + 3 * qa;
-          if (s_begin == 0) {
-            std::copy(add, add + 3 * (qb - qa), c);
-          } else {
-            for (int j = 0; j < 3 * (qb - qa); ++j) c[j] += add[j];
-          }
+          SumSamples(3 * (qb - qa), s_end - s_begin, 3 * P, weight, sc.rgb + 3 * qa, s_begin > 0,
+                     &f.rgb[3 * static_cast<size_t>(sc.pixel[qa])]);
           qa = qb;
         }
         if (per_chunk > 0) {
@@ -652,17 +724,29 @@ void RenderInto(const RayScene& scene, const ViewCamera& camera, const RenderOpt
         }
       }
       if (options.ground_truth) {
-        // The pixel-centre rays of the tile, without colour.
+        // The pixel-centre rays of the tile, without colour. Without distortion their normalised coordinates
+        // are a column's and a row's (the same divisions as PixelRays, once per column and row).
+        const PinholeCamera<double>& gc = maker.camera();
+        const bool separable = gc.distortion.IsZero();
+        if (separable) {
+          for (int i = 0; i < tw; ++i) sc.col_x[i] = (static_cast<double>(x0 + i) - gc.cx) / gc.fx;
+          for (int j = 0; j < y1 - y0; ++j) sc.row_y[j] = (static_cast<double>(y0 + j) - gc.cy) / gc.fy;
+        }
         int gx = x0, gy = y0;
         for (int p0 = 0; p0 < tile_px; p0 += kMax) {
           const int m = std::min(kMax, tile_px - p0);
           for (int k = 0; k < m;) {   // in runs along the tile's rows
             const int len = std::min(x1 - gx, m - k), base = gy * f.width + gx;
             for (int i = 0; i < len; ++i) sc.u[k + i] = gx + i, sc.v[k + i] = gy, sc.px[k + i] = base + i;
+            if (separable) {
+              std::copy(sc.col_x + (gx - x0), sc.col_x + (gx - x0) + len, sc.nx + k);
+              std::fill(sc.ny + k, sc.ny + k + len, sc.row_y[gy - y0]);
+            }
             k += len;
             if ((gx += len) == x1) gx = x0, ++gy;
           }
-          maker.MakeBatch(m, sc.u, sc.v, nullptr, nullptr, batch.get(), sc.Mx, sc.My, sc.Mz);
+          maker.MakeBatch(m, sc.u, sc.v, nullptr, nullptr, batch.get(), sc.Mx, sc.My, sc.Mz,
+                          separable ? sc.nx : nullptr, separable ? sc.ny : nullptr);
           scene.Geometry(*batch, &sc.hits);
           const HitBatch& H = sc.hits;
           ViewRanges(m, H.px, H.py, H.pz, maker.viewpoint().data(), sc.range);
