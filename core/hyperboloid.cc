@@ -131,8 +131,12 @@ int MirrorReflector::ReflectBatchOf(const Vec3d& o, int n, const T* vx, const T*
   for (int i0 = 0; i0 < n; i0 += kBlock) {
     const int m = std::min(kBlock, n - i0);
     if (MissesRimOf(o, m, vx + i0, vy + i0, vz + i0)) {
-      for (T* a : {Mx, My, Mz, dx, dy, dz}) std::fill(a + i0, a + i0 + m, T(0));
-      std::fill(ok + i0, ok + i0 + m, 0);
+      if (m == kBlock) {   // (a constant size: vector stores, not seven library calls)
+        for (int i = i0; i < i0 + kBlock; ++i) Mx[i] = My[i] = Mz[i] = dx[i] = dy[i] = dz[i] = T(0), ok[i] = 0;
+      } else {
+        for (T* a : {Mx, My, Mz, dx, dy, dz}) std::fill(a + i0, a + i0 + m, T(0));
+        std::fill(ok + i0, ok + i0 + m, 0);
+      }
       continue;
     }
     ReflectKernel<T>(static_cast<T>(c_), static_cast<T>(ia2_), static_cast<T>(ib2_), static_cast<T>(rim2_),

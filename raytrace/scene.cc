@@ -505,8 +505,10 @@ namespace {
 // Packet fields of w full lanes from batch arrays (already offset to the packet's first ray): the conversions
 // to float (copies for T = float), the masks (RayMask less mask_off) and ids; tfar is infinite except where
 // tfar_in > 0.
-template <class T>
-HOVS_VECTOR_CLONES void FillPacket(int w, const T* __restrict ox, const T* __restrict oy, const T* __restrict oz,
+// W: the packet width, a constant (for T = float the conversions are copies, which GCC otherwise turns into a
+// library memcpy call each).
+template <class T, int W>
+HOVS_VECTOR_CLONES void FillPacket(const T* __restrict ox, const T* __restrict oy, const T* __restrict oz,
                 const T* __restrict dx, const T* __restrict dy, const T* __restrict dz,
                 const float* __restrict tnear, const int* __restrict from_mirror, const int* __restrict from_camera,
                 const float* __restrict tfar_in, const unsigned* __restrict mask_off, float* __restrict org_x,
@@ -514,7 +516,7 @@ HOVS_VECTOR_CLONES void FillPacket(int w, const T* __restrict ox, const T* __res
                 float* __restrict dir_z, float* __restrict tnear_out, float* __restrict tfar, unsigned* __restrict mask,
                 unsigned* __restrict id, unsigned* __restrict flags, float* __restrict time, unsigned* __restrict geom,
                 unsigned* __restrict inst) {
-  for (int i = 0; i < w; ++i) {
+  for (int i = 0; i < W; ++i) {
     org_x[i] = static_cast<float>(ox[i]), org_y[i] = static_cast<float>(oy[i]), org_z[i] = static_cast<float>(oz[i]);
     dir_x[i] = static_cast<float>(dx[i]), dir_y[i] = static_cast<float>(dy[i]), dir_z[i] = static_cast<float>(dz[i]);
     tnear_out[i] = tnear[i];
@@ -616,15 +618,19 @@ void TracePacketOfBatch(RTCScene scene, const RayBatchOf<T>& b, const BatchLanes
     for (int i = 0; i < count; ++i) any |= L.valid[i0 + i];
   }
   if (!any) {   // every lane ends on its ring or is invalid: ResolveMisses gives them the ring
-    std::fill(geom_ids, geom_ids + count, RTC_INVALID_GEOMETRY_ID);
-    std::fill(prim_ids, prim_ids + count, 0u);
+    if (count == W) {   // (a constant size: vector stores, not library calls)
+      for (int i = 0; i < W; ++i) geom_ids[i] = RTC_INVALID_GEOMETRY_ID, prim_ids[i] = 0u;
+    } else {
+      std::fill(geom_ids, geom_ids + count, RTC_INVALID_GEOMETRY_ID);
+      std::fill(prim_ids, prim_ids + count, 0u);
+    }
     return;
   }
   alignas(64) RayHitW rh;
   alignas(64) int partial_valid[W];
   const int* valid = L.valid + i0;   // 64-byte aligned for W = 16 (i0 a multiple of 16), 32-byte for W = 8
   if (count == W) {
-    FillPacket(W, b.ox + i0, b.oy + i0, b.oz + i0, b.dx + i0, b.dy + i0, b.dz + i0, b.tnear + i0, b.from_mirror + i0,
+    FillPacket<T, W>(b.ox + i0, b.oy + i0, b.oz + i0, b.dx + i0, b.dy + i0, b.dz + i0, b.tnear + i0, b.from_mirror + i0,
                b.from_camera + i0, L.tfar + i0, L.mask_off + i0, rh.ray.org_x, rh.ray.org_y, rh.ray.org_z,
                rh.ray.dir_x, rh.ray.dir_y, rh.ray.dir_z, rh.ray.tnear, rh.ray.tfar, rh.ray.mask, rh.ray.id,
                rh.ray.flags, rh.ray.time, rh.hit.geomID, rh.hit.instID[0]);
@@ -644,8 +650,13 @@ void TracePacketOfBatch(RTCScene scene, const RayBatchOf<T>& b, const BatchLanes
     valid = partial_valid;
   }
   TracePacket(scene, valid, &rh, intersect);
-  std::memcpy(geom_ids, rh.hit.geomID, sizeof(unsigned) * static_cast<size_t>(count));
-  std::memcpy(prim_ids, rh.hit.primID, sizeof(unsigned) * static_cast<size_t>(count));
+  if (count == W) {   // (a constant size: vector moves, not a library call)
+    std::memcpy(geom_ids, rh.hit.geomID, sizeof(unsigned) * W);
+    std::memcpy(prim_ids, rh.hit.primID, sizeof(unsigned) * W);
+  } else {
+    std::memcpy(geom_ids, rh.hit.geomID, sizeof(unsigned) * static_cast<size_t>(count));
+    std::memcpy(prim_ids, rh.hit.primID, sizeof(unsigned) * static_cast<size_t>(count));
+  }
 }
 
 // After the packets of a batch: a lane Embree found nothing for ends on its ring, if it has one (prim 0; a
