@@ -13,11 +13,13 @@
 // the folder's CMakeLists.txt): without the first two, sqrt and branches over arithmetic stop the vectoriser;
 // none of the three changes a result.
 //
-// Under AddressSanitizer, or on other architectures, it expands to nothing (one plain copy).
+// Under AddressSanitizer, or on other architectures, it expands to nothing (one plain copy), and
+// HOVS_VECTOR_CLONES_ENABLED is not defined (code that picks an x86-64-v4 function itself tests it).
 #pragma once
 
 #if defined(__x86_64__) && defined(__GNUC__) && !defined(__clang__) && !defined(__SANITIZE_ADDRESS__)
 #define HOVS_VECTOR_CLONES __attribute__((target_clones("arch=x86-64-v4", "avx2", "default")))
+#define HOVS_VECTOR_CLONES_ENABLED 1
 #else
 #define HOVS_VECTOR_CLONES
 #endif

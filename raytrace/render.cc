@@ -57,21 +57,26 @@ double Uniform(uint64_t h) { return (h >> 11) * (1.0 / 9007199254740992.0); }
 // The jittered image positions of a chunk's samples: samples s_begin .. s_end - 1 of P pixels, sample s of pixel q
 // at k = (s - s_begin) P + q. It has the hash key pixel[q] * 4096 + s, lies in the pixel with centre (x[q], y[q])
 // and, when stratified, in the stratum (s % grid, s / grid) of a grid of grid x grid strata (inv_grid = 1 /
-// grid). The same arithmetic as SplitMix and Uniform above, vectorised over the pixels (the 53-bit integer
-// becomes a double through its bits, exactly as the conversion in Uniform).
-HOVS_VECTOR_CLONES
-void JitteredSamples(int P, int s_begin, int s_end, int grid, uint64_t seed_mix, bool stratified, double inv_grid,
-                     const int* __restrict pixel, const double* __restrict x, const double* __restrict y,
-                     double* __restrict u, double* __restrict v) {
+// grid). The same arithmetic as SplitMix and Uniform above, vectorised over the pixels. The 53-bit integer
+// becomes a double exactly, as the conversion in Uniform: kDirect, by the 64-bit integer conversion (an AVX-512DQ
+// instruction; without it GCC does not vectorise the loop), else through its bits (the same value).
+template <bool kDirect>
+__attribute__((always_inline)) inline void JitteredSamplesOf(int P, int s_begin, int s_end, int grid,
+                                                             uint64_t seed_mix, bool stratified, double inv_grid,
+                                                             const int* __restrict pixel, const int* __restrict x,
+                                                             const int* __restrict y, double* __restrict u,
+                                                             double* __restrict v) {
   const auto mix = [](uint64_t z) {
     z += 0x9E3779B97F4A7C15ull;
     z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ull;
     z = (z ^ (z >> 27)) * 0x94D049BB133111EBull;
     return z ^ (z >> 31);
   };
-  // q < 2^53: its low 52 bits as the mantissa of 2^52 + q_low, minus 2^52, plus the top bit's 2^52 (all exact).
+  // q < 2^53: directly, or its low 52 bits as the mantissa of 2^52 + q_low, minus 2^52, plus the top bit's 2^52
+  // (all exact).
   const auto to_unit = [](uint64_t h) {
     const uint64_t q = h >> 11;
+    if (kDirect) return static_cast<double>(static_cast<int64_t>(q)) * (1.0 / 9007199254740992.0);
     double low;
     const uint64_t bits = 0x4330000000000000ull | (q & 0xFFFFFFFFFFFFFull);
     __builtin_memcpy(&low, &bits, sizeof low);
@@ -86,10 +91,40 @@ void JitteredSamples(int P, int s_begin, int s_end, int grid, uint64_t seed_mix,
     for (int q = 0; q < P; ++q) {
       const uint64_t h = mix(seed_mix ^ (static_cast<uint64_t>(pixel[q]) * 4096 + static_cast<uint64_t>(smp)));
       const double ju = to_unit(h), jv = to_unit(mix(h));
-      us[q] = x[q] + ((gsx + ju) * scale - 0.5);
-      vs[q] = y[q] + ((gsy + jv) * scale - 0.5);
+      us[q] = static_cast<double>(x[q]) + ((gsx + ju) * scale - 0.5);
+      vs[q] = static_cast<double>(y[q]) + ((gsy + jv) * scale - 0.5);
     }
   }
+}
+
+HOVS_VECTOR_CLONES
+void JitteredSamplesBits(int P, int s_begin, int s_end, int grid, uint64_t seed_mix, bool stratified, double inv_grid,
+                         const int* __restrict pixel, const int* __restrict x, const int* __restrict y,
+                         double* __restrict u, double* __restrict v) {
+  JitteredSamplesOf<false>(P, s_begin, s_end, grid, seed_mix, stratified, inv_grid, pixel, x, y, u, v);
+}
+
+#if defined(HOVS_VECTOR_CLONES_ENABLED)
+__attribute__((target("arch=x86-64-v4"))) void JitteredSamplesDirect(
+    int P, int s_begin, int s_end, int grid, uint64_t seed_mix, bool stratified, double inv_grid,
+    const int* __restrict pixel, const int* __restrict x, const int* __restrict y, double* __restrict u,
+    double* __restrict v) {
+  JitteredSamplesOf<true>(P, s_begin, s_end, grid, seed_mix, stratified, inv_grid, pixel, x, y, u, v);
+}
+#endif
+
+void JitteredSamples(int P, int s_begin, int s_end, int grid, uint64_t seed_mix, bool stratified, double inv_grid,
+                     const int* pixel, const int* x, const int* y, double* u, double* v) {
+#if defined(HOVS_VECTOR_CLONES_ENABLED)
+  static const bool direct = __builtin_cpu_supports("avx512f") && __builtin_cpu_supports("avx512dq") &&
+                             __builtin_cpu_supports("avx512vl") && __builtin_cpu_supports("avx512bw") &&
+                             __builtin_cpu_supports("avx512cd");
+  if (direct) {
+    JitteredSamplesDirect(P, s_begin, s_end, grid, seed_mix, stratified, inv_grid, pixel, x, y, u, v);
+    return;
+  }
+#endif
+  JitteredSamplesBits(P, s_begin, s_end, grid, seed_mix, stratified, inv_grid, pixel, x, y, u, v);
 }
 
 struct RayRequest {
@@ -649,7 +684,7 @@ void RenderInto(const RayScene& scene, const ViewCamera& camera, const RenderOpt
       int px[kMax];
       // The chunk's pixels: index in the frame, centre.
       int pixel[kMax];
-      double pixel_x[kMax], pixel_y[kMax];
+      int pixel_x[kMax], pixel_y[kMax];
       float rgb[3 * kMax];
       HitBatch hits;            // the ground-truth rays' hits
       double range[kMax];       // and their distances from the viewpoint
@@ -737,8 +772,10 @@ void RenderInto(const RayScene& scene, const ViewCamera& camera, const RenderOpt
           const int m = std::min(kMax, tile_px - p0);
           for (int k = 0; k < m;) {   // in runs along the tile's rows
             const int len = std::min(x1 - gx, m - k), base = gy * f.width + gx;
-            for (int i = 0; i < len; ++i) sc.u[k + i] = gx + i, sc.v[k + i] = gy, sc.px[k + i] = base + i;
-            if (separable) {
+            for (int i = 0; i < len; ++i) sc.px[k + i] = base + i;
+            if (!separable) {
+              for (int i = 0; i < len; ++i) sc.u[k + i] = gx + i, sc.v[k + i] = gy;
+            } else {
               std::copy(sc.col_x + (gx - x0), sc.col_x + (gx - x0) + len, sc.nx + k);
               std::fill(sc.ny + k, sc.ny + k + len, sc.row_y[gy - y0]);
             }
