@@ -100,6 +100,18 @@ HOVS_VECTOR_CLONES int StoreLaneFlags(int n, const T* __restrict flag, unsigned 
   return most;
 }
 
+// The lanes of a block that misses the rim: zero (the caller's z, 0: a value GCC cannot see, or it turns the
+// loop into seven memset calls or rep stos, slow for 64 lanes; so vector stores).
+template <class T>
+HOVS_VECTOR_CLONES void ZeroLanes(int m, T z, T* __restrict Mx, T* __restrict My, T* __restrict Mz,
+                                  T* __restrict dx, T* __restrict dy, T* __restrict dz, unsigned char* __restrict ok) {
+  const unsigned char zb = z != 0 ? 1 : 0;
+  for (int i = 0; i < m; ++i) {
+    Mx[i] = z, My[i] = z, Mz[i] = z, dx[i] = z, dy[i] = z, dz[i] = z;
+    ok[i] = zb;
+  }
+}
+
 }  // namespace
 
 template <class T>
@@ -131,12 +143,7 @@ int MirrorReflector::ReflectBatchOf(const Vec3d& o, int n, const T* vx, const T*
   for (int i0 = 0; i0 < n; i0 += kBlock) {
     const int m = std::min(kBlock, n - i0);
     if (MissesRimOf(o, m, vx + i0, vy + i0, vz + i0)) {
-      if (m == kBlock) {   // (a constant size: vector stores, not seven library calls)
-        for (int i = i0; i < i0 + kBlock; ++i) Mx[i] = My[i] = Mz[i] = dx[i] = dy[i] = dz[i] = T(0), ok[i] = 0;
-      } else {
-        for (T* a : {Mx, My, Mz, dx, dy, dz}) std::fill(a + i0, a + i0 + m, T(0));
-        std::fill(ok + i0, ok + i0 + m, 0);
-      }
+      ZeroLanes<T>(m, T(0), Mx + i0, My + i0, Mz + i0, dx + i0, dy + i0, dz + i0, ok + i0);
       continue;
     }
     ReflectKernel<T>(static_cast<T>(c_), static_cast<T>(ia2_), static_cast<T>(ib2_), static_cast<T>(rim2_),

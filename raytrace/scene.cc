@@ -619,7 +619,8 @@ void TracePacketOfBatch(RTCScene scene, const RayBatchOf<T>& b, const BatchLanes
   }
   if (!any) {   // every lane ends on its ring or is invalid: ResolveMisses gives them the ring
     if (count == W) {   // (a constant size: vector stores, not library calls)
-      for (int i = 0; i < W; ++i) geom_ids[i] = RTC_INVALID_GEOMETRY_ID, prim_ids[i] = 0u;
+      for (int i = 0; i < W; ++i) geom_ids[i] = RTC_INVALID_GEOMETRY_ID;   // (two loops: the arrays may alias)
+      for (int i = 0; i < W; ++i) prim_ids[i] = 0u;
     } else {
       std::fill(geom_ids, geom_ids + count, RTC_INVALID_GEOMETRY_ID);
       std::fill(prim_ids, prim_ids + count, 0u);
@@ -805,7 +806,12 @@ void RayScene::ColoursOf(const RayBatchOf<T>& b, float* rgb) const {
       const Rect& r = desc_.rects[p];
       const bool noise = r.front.kind == Texture::Kind::kNoise, double_sided = r.double_sided;
       // Edge-on: no hit (as Shade); the back of a single-sided rectangle: its back colour.
-      const auto seen = [&](int k) { return !(denom[k] == 0 || (denom[k] > 0 && !double_sided)); };
+      // (In integers, without branches: the count below vectorises.)
+      const int ds = double_sided ? 1 : 0;
+      const auto seen = [&](int k) {
+        const int nonzero = denom[k] != 0 ? 1 : 0, not_facing_away = denom[k] > 0 ? 0 : 1;
+        return nonzero & (not_facing_away | ds);
+      };
       int front = 0;
       for (int k = i; k < j; ++k) front += seen(k);
       if (front == j - i && (!noise || j - i >= kShortNoiseRun)) {
