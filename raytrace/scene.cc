@@ -760,10 +760,23 @@ struct RunBreaks {
 };
 HOVS_VECTOR_CLONES void FindRunBreaks(int n, const unsigned char* __restrict valid, const unsigned* __restrict geom,
                                       const unsigned* __restrict prim, unsigned char* __restrict brk) {
+  // In blocks of a constant 32 lanes (the last one overlapping the one before: the same values again), so that
+  // the loop is vectorised without a scalar remainder.
+  constexpr int kB = 32;
+  const auto block = [&](int k0) {
+    for (int k = k0; k < k0 + kB; ++k) {
+      const int differ = (valid[k] != valid[k - 1]) | (geom[k] != geom[k - 1]) | (prim[k] != prim[k - 1]);
+      brk[k] = static_cast<unsigned char>(differ);
+    }
+  };
   brk[0] = 1;
-  for (int k = 1; k < n; ++k) {
-    const int differ = (valid[k] != valid[k - 1]) | (geom[k] != geom[k - 1]) | (prim[k] != prim[k - 1]);
-    brk[k] = static_cast<unsigned char>(differ);
+  if (n > kB) {
+    for (int k0 = 1; k0 < n; k0 += kB) block(std::min(k0, n - kB));
+  } else {
+    for (int k = 1; k < n; ++k) {
+      const int differ = (valid[k] != valid[k - 1]) | (geom[k] != geom[k - 1]) | (prim[k] != prim[k - 1]);
+      brk[k] = static_cast<unsigned char>(differ);
+    }
   }
   brk[n] = 1;
 }
