@@ -72,25 +72,25 @@ __attribute__((always_inline)) inline int32_t FloorToInt(float x) {
   return x < static_cast<float>(i) ? i - 1 : i;
 }
 
-// The lattice value h / 2^32, h converted through int32, for which there are vector instructions. (Helpers
+// The lattice value times 2^32: h converted through int32, for which there are vector instructions. (Helpers
 // of a HOVS_VECTOR_CLONES function are always_inline and not lambdas: the AVX2 copy does not inline otherwise.)
-__attribute__((always_inline)) inline float LatticeValue(uint32_t hs, uint32_t hx, uint32_t hy) {
-  return (static_cast<float>(static_cast<int32_t>(Hash(hs, hx, hy) ^ 0x80000000u)) + 2147483648.0f) *
-         (1.0f / 4294967296.0f);
+__attribute__((always_inline)) inline float LatticeValue32(uint32_t hs, uint32_t hx, uint32_t hy) {
+  return static_cast<float>(static_cast<int32_t>(Hash(hs, hx, hy) ^ 0x80000000u)) + 2147483648.0f;
 }
 
 // Value noise in single precision (32-bit floats and integers throughout, so that a vector holds as many
-// coordinates as lattice hashes: 8 per AVX2 register). Positions are in cells; single precision places them
-// to 1e-4 cell at 2000 cells from the origin (0.5 um for the reference floor's finest octave).
-// hs: the seed's product (seed * kSeedFactor).
-__attribute__((always_inline)) inline float ValueNoise(float x, float y, uint32_t hs) {
+// coordinates as lattice hashes: 8 per AVX2 register), times 2^32: the lattice values h / 2^32 blended, with the
+// power of two left to the caller (it scales every rounded result exactly, so the blend of h / 2^32 is this
+// blend / 2^32 to the bit). Positions are in cells; single precision places them to 1e-4 cell at 2000 cells from
+// the origin (0.5 um for the reference floor's finest octave). hs: the seed's product (seed * kSeedFactor).
+__attribute__((always_inline)) inline float ValueNoise32(float x, float y, uint32_t hs) {
   const int32_t ix = FloorToInt(x), iy = FloorToInt(y);
   const float tx = x - static_cast<float>(ix), ty = y - static_cast<float>(iy);
   const float sx = tx * tx * (3 - 2 * tx), sy = ty * ty * (3 - 2 * ty);
   const uint32_t hx0 = static_cast<uint32_t>(ix) * kXFactor, hx1 = hx0 + kXFactor;
   const uint32_t hy0 = static_cast<uint32_t>(iy) * kYFactor, hy1 = hy0 + kYFactor;
-  const float v00 = LatticeValue(hs, hx0, hy0), v10 = LatticeValue(hs, hx1, hy0);
-  const float v01 = LatticeValue(hs, hx0, hy1), v11 = LatticeValue(hs, hx1, hy1);
+  const float v00 = LatticeValue32(hs, hx0, hy0), v10 = LatticeValue32(hs, hx1, hy0);
+  const float v01 = LatticeValue32(hs, hx0, hy1), v11 = LatticeValue32(hs, hx1, hy1);
   return (1 - sy) * ((1 - sx) * v00 + sx * v10) + sy * ((1 - sx) * v01 + sx * v11);
 }
 
@@ -111,7 +111,9 @@ HOVS_VECTOR_CLONES void NoiseValues(int n, const T* __restrict s, const T* __res
   float amp = 1, norm = 0, freq = 1;
   for (int o = 0; o < std::min(octaves, 12); ++o) {
     const uint32_t hs = (seed + 7919u * static_cast<uint32_t>(o)) * kSeedFactor;
-    for (int i = 0; i < n; ++i) out[i] += amp * ValueNoise(x[i] * freq, y[i] * freq, hs);
+    // amp (a power of two) / 2^32 times the blend: amp times the octave's value in [0, 1], to the bit.
+    const float amp32 = amp * (1.0f / 4294967296.0f);
+    for (int i = 0; i < n; ++i) out[i] += amp32 * ValueNoise32(x[i] * freq, y[i] * freq, hs);
     norm += amp;
     amp *= 0.5f;
     freq *= 2.0f;
