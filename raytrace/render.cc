@@ -684,6 +684,7 @@ void RenderInto(const RayScene& scene, const ViewCamera& camera, const RenderOpt
       int px[kMax];
       // The chunk's pixels: index in the frame, centre.
       int pixel[kMax];
+      int run_at[kMax], run_len[kMax];   // runs of neighbouring pixels (along a tile row) in the chunk
       int pixel_x[kMax], pixel_y[kMax];
       float rgb[3 * kMax];
       HitBatch hits;            // the ground-truth rays' hits
@@ -706,13 +707,15 @@ void RenderInto(const RayScene& scene, const ViewCamera& camera, const RenderOpt
         const int pixels = std::min(per_chunk, tile_px - p0), count = std::min(n - s0, kMax);
         const int P = per_chunk > 0 ? pixels : 1, m = per_chunk > 0 ? pixels * n : count;
         const int s_begin = per_chunk > 0 ? 0 : s0, s_end = per_chunk > 0 ? n : s0 + count;
-        int xq = x, yq = y;   // the chunk's pixels, in runs along the tile's rows
+        int xq = x, yq = y;   // the chunk's pixels, in runs along the tile's rows (run r: run_at[r] .. + run_len[r])
+        int runs = 0;
         for (int q = 0; q < P;) {
           const int len = std::min(x1 - xq, P - q), base = yq * f.width + xq;
           for (int i = 0; i < len; ++i) {
             sc.pixel[q + i] = base + i;
             sc.pixel_x[q + i] = xq + i, sc.pixel_y[q + i] = yq;
           }
+          sc.run_at[runs] = q, sc.run_len[runs++] = len;
           q += len;
           if ((xq += len) == x1) xq = x0, ++yq;
         }
@@ -743,12 +746,10 @@ void RenderInto(const RayScene& scene, const ViewCamera& camera, const RenderOpt
         // Each pixel's samples summed in order, weighted (w r0 + w r1 + ...: the first sample starts the sum, so
         // the frame needs no zeroing; a pixel split over chunks adds to what its earlier chunks left): over the
         // chunk's colour rows at once, then written per run of neighbouring pixels.
-        for (int qa = 0; qa < P;) {
-          int qb = qa + 1;
-          while (qb < P && sc.pixel[qb] == sc.pixel[qa] + (qb - qa)) ++qb;
-          SumSamples(3 * (qb - qa), s_end - s_begin, 3 * P, weight, sc.rgb + 3 * qa, s_begin > 0,
+        for (int r = 0; r < runs; ++r) {
+          const int qa = sc.run_at[r];
+          SumSamples(3 * sc.run_len[r], s_end - s_begin, 3 * P, weight, sc.rgb + 3 * qa, s_begin > 0,
                      &f.rgb[3 * static_cast<size_t>(sc.pixel[qa])]);
-          qa = qb;
         }
         if (per_chunk > 0) {
           p0 += pixels;
@@ -770,8 +771,10 @@ void RenderInto(const RayScene& scene, const ViewCamera& camera, const RenderOpt
         int gx = x0, gy = y0;
         for (int p0 = 0; p0 < tile_px; p0 += kMax) {
           const int m = std::min(kMax, tile_px - p0);
+          int runs = 0;
           for (int k = 0; k < m;) {   // in runs along the tile's rows
             const int len = std::min(x1 - gx, m - k), base = gy * f.width + gx;
+            sc.run_at[runs] = k, sc.run_len[runs++] = len;
             for (int i = 0; i < len; ++i) sc.px[k + i] = base + i;
             if (!separable) {
               for (int i = 0; i < len; ++i) sc.u[k + i] = gx + i, sc.v[k + i] = gy;
@@ -792,12 +795,10 @@ void RenderInto(const RayScene& scene, const ViewCamera& camera, const RenderOpt
                            H.ny, H.nz, sc.Mx, sc.My, sc.Mz, sc.truth);
           for (int k = 0; k < m; ++k) task_rays += batch->valid[k];
           // Every channel of every pixel is written (the buffer is not zeroed first), in runs along the tile's rows.
-          for (int k = 0; k < m;) {
-            int e = k + 1;
-            while (e < m && sc.px[e] == sc.px[k] + (e - k)) ++e;
+          for (int r = 0; r < runs; ++r) {
+            const int k = sc.run_at[r], e = k + sc.run_len[r];
             float* v = &f.truth.data[static_cast<size_t>(sc.px[k]) * GroundTruth::kChannels];
             for (int i = k; i < e; ++i, v += GroundTruth::kChannels) StoreGroundTruthPixel(sc.truth + i, v);
-            k = e;
           }
         }
       }
