@@ -421,7 +421,7 @@ class RayMaker {
   bool single() const { return single_; }
 
   // MakeBatch's vectorised path in single precision, for the colour samples when single(): the same steps in
-  // float (PixelRaysF, the float MirrorReflector::ReflectBatch, MountRingHits and WorldRays on floats). Rays
+  // float (PixelRaysF, the float MirrorReflector::ReflectBatch, UnitRays on floats). Rays
   // within about 1e-7 relative of MakeBatch's (tests bound them), the precision Embree traces them in.
   void MakeBatchF(int n, const double* u, const double* v, RayBatchF* b) const {
     b->n = n;
