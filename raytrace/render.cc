@@ -307,18 +307,6 @@ void PixelRaysF(int n, double cx, double cy, float ifx, float ify, const float* 
   }
 }
 
-// The distance of n points from the viewpoint c: (p - c).norm() as Eigen sums it, ((x^2 + y^2) + z^2), then the
-// square root.
-HOVS_VECTOR_CLONES
-void ViewRanges(int n, const double* __restrict px, const double* __restrict py, const double* __restrict pz,
-                const double* __restrict c, double* __restrict range) {
-  const double c0 = c[0], c1 = c[1], c2 = c[2];
-  for (int i = 0; i < n; ++i) {
-    const double x = px[i] - c0, y = py[i] - c1, z = pz[i] - c2;
-    range[i] = std::sqrt(x * x + y * y + z * z);
-  }
-}
-
 // Where each ray of a batch starts: via[i] = 1 on unit's mirror (on_mirror[i]), else 0 (unit's camera, or a
 // pinhole camera when unit < 0); the matching from_mirror / from_camera (-1: none) and tnear.
 template <class T>
@@ -335,25 +323,27 @@ HOVS_VECTOR_CLONES void RayOrigins(int n, const unsigned char* __restrict on_mir
 }
 
 // The ground-truth channels (GroundTruth's order) of m pixel-centre rays, channel c of ray k at
-// out[c * RayBatch::kMax + k], from the ray set-up (valid, from_mirror, mirror point M), the hits and the ranges:
-// range, point and normal where the ray hit something (else infinity and zeros), object id (0: sky), mirror mask
-// (the ray left a mirror and did not meet the camera's own body) and the mirror point (where it left a mirror).
-// Selects only, vectorised.
+// out[c * RayBatch::kMax + k], from the ray set-up (valid, from_mirror, mirror point M), the hits and the
+// viewpoint c: range, point and normal where the ray hit something (else infinity and zeros), object id (0: sky),
+// mirror mask (the ray left a mirror and did not meet the camera's own body) and the mirror point (where it left
+// a mirror). The range is (p - c).norm() as Eigen sums it, ((x^2 + y^2) + z^2), then the square root. Vectorised.
 HOVS_VECTOR_CLONES
 void GroundTruthLanes(int m, const unsigned char* __restrict valid, const int* __restrict from_mirror,
                       const unsigned char* __restrict hit, const int* __restrict object_id,
-                      const double* __restrict range, const double* __restrict px, const double* __restrict py,
+                      const double* __restrict c, const double* __restrict px, const double* __restrict py,
                       const double* __restrict pz, const double* __restrict nx, const double* __restrict ny,
                       const double* __restrict nz, const double* __restrict Mx, const double* __restrict My,
                       const double* __restrict Mz, float* __restrict out) {
   constexpr int K = RayBatch::kMax;
   const float inf = std::numeric_limits<float>::infinity();
+  const double c0 = c[0], c1 = c[1], c2 = c[2];
   for (int k = 0; k < m; ++k) {
+    const double x = px[k] - c0, y = py[k] - c1, z = pz[k] - c2, range = std::sqrt(x * x + y * y + z * z);
     const int live = valid[k] != 0 ? 1 : 0;
     const int met = live & (hit[k] != 0 ? 1 : 0);
     const int via = live & (from_mirror[k] >= 0 ? 1 : 0);
     const int seen = via & (object_id[k] != kCameraBodyId ? 1 : 0);
-    out[k] = met ? static_cast<float>(range[k]) : inf;
+    out[k] = met ? static_cast<float>(range) : inf;
     out[K + k] = met ? static_cast<float>(px[k]) : 0.0f;
     out[2 * K + k] = met ? static_cast<float>(py[k]) : 0.0f;
     out[3 * K + k] = met ? static_cast<float>(pz[k]) : 0.0f;
@@ -688,7 +678,6 @@ void RenderInto(const RayScene& scene, const ViewCamera& camera, const RenderOpt
       int pixel_x[kMax], pixel_y[kMax];
       float rgb[3 * kMax];
       HitBatch hits;            // the ground-truth rays' hits
-      double range[kMax];       // and their distances from the viewpoint
       alignas(64) float truth[GroundTruth::kChannels * kMax];   // their ground truth, channel by channel
     };
     const auto scratch = std::make_unique<Scratch>();
@@ -789,9 +778,8 @@ void RenderInto(const RayScene& scene, const ViewCamera& camera, const RenderOpt
                           separable ? sc.nx : nullptr, separable ? sc.ny : nullptr);
           scene.Geometry(*batch, &sc.hits);
           const HitBatch& H = sc.hits;
-          ViewRanges(m, H.px, H.py, H.pz, maker.viewpoint().data(), sc.range);
           static_assert(GroundTruth::kChannels == 12, "the pixel below is 12 floats");
-          GroundTruthLanes(m, batch->valid, batch->from_mirror, H.hit, H.object_id, sc.range, H.px, H.py, H.pz, H.nx,
+          GroundTruthLanes(m, batch->valid, batch->from_mirror, H.hit, H.object_id, maker.viewpoint().data(), H.px, H.py, H.pz, H.nx,
                            H.ny, H.nz, sc.Mx, sc.My, sc.Mz, sc.truth);
           for (int k = 0; k < m; ++k) task_rays += batch->valid[k];
           // Every channel of every pixel is written (the buffer is not zeroed first), in runs along the tile's rows.
