@@ -949,7 +949,16 @@ void RayScene::Geometry(const RayBatch& b, HitBatch* H) const {
     if (const int u = ring_unit(i); u >= 0) {
       // A run of straight camera rays that ended on their own mount ring: the ring's distance is already known
       // (in double); Shade would solve it again. The ring's normal is its local z.
-      while (j < b.n && ring_unit(j) == u) ++j;
+      // Usually the whole run of lanes on the ring geometry is the camera's straight rays: tested in one pass
+      // over the run, else lane by lane.
+      const int e = RunEnd(runs, i);
+      int straight = 0;
+      for (int k = i; k < e; ++k) straight += (b.from_camera[k] == u ? 1 : 0) & (b.mount_t[k] > 0 ? 1 : 0);
+      if (straight == e - i) {
+        j = e;
+      } else {
+        while (j < b.n && ring_unit(j) == u) ++j;
+      }
       const UserGeometry& g = *own_mount_[u].geometry;
       const Vec3d n = g.R_world_from_local.col(2);
       RingHitLanes(i, j, b.ox, b.oy, b.oz, b.dx, b.dy, b.dz, b.mount_t, n.data(), g.object_id, H);
