@@ -252,16 +252,26 @@ HOVS_VECTOR_CLONES void UnitRays(int n, int on, const unsigned char* __restrict 
 HOVS_VECTOR_CLONES
 void SumSamples(int len, int samples, int row, float weight, const float* __restrict rgb, bool add,
                 float* __restrict out) {
+  // The last sample is added as the result is stored (a plain copy loop would become a library memcpy call).
   float sum[3 * RayBatch::kMax];
+  const float* __restrict last = rgb + static_cast<ptrdiff_t>(samples - 1) * row;
+  if (samples == 1) {
+    if (add) {
+      for (int j = 0; j < len; ++j) out[j] += weight * last[j];
+    } else {
+      for (int j = 0; j < len; ++j) out[j] = weight * last[j];
+    }
+    return;
+  }
   for (int j = 0; j < len; ++j) sum[j] = weight * rgb[j];
-  for (int smp = 1; smp < samples; ++smp) {
+  for (int smp = 1; smp < samples - 1; ++smp) {
     const float* __restrict r = rgb + static_cast<ptrdiff_t>(smp) * row;
     for (int j = 0; j < len; ++j) sum[j] += weight * r[j];
   }
   if (add) {
-    for (int j = 0; j < len; ++j) out[j] += sum[j];
+    for (int j = 0; j < len; ++j) out[j] += sum[j] + weight * last[j];
   } else {
-    for (int j = 0; j < len; ++j) out[j] = sum[j];
+    for (int j = 0; j < len; ++j) out[j] = sum[j] + weight * last[j];
   }
 }
 
