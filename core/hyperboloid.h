@@ -179,6 +179,12 @@ class MirrorReflector {
   int ReflectBatch(const Vec3d& o, int n, const float* vx, const float* vy, const float* vz, float* Mx, float* My,
                    float* Mz, float* dx, float* dy, float* dz, unsigned char* ok) const;
 
+  // ReflectBatch (double) with an origin per ray, (ox[i], oy[i], oz[i]): thin-lens samples, which leave points of
+  // the aperture. Bit-identical to Reflect on each ray; no block is skipped (MissesRim needs one origin).
+  int ReflectRays(int n, const double* ox, const double* oy, const double* oz, const double* vx, const double* vy,
+                  const double* vz, double* Mx, double* My, double* Mz, double* dx, double* dy, double* dz,
+                  unsigned char* ok) const;
+
   // True when every ray o + t v (v any length) of the n given provably misses the mirror within the rim: o lies
   // inside the lower nappe (where the camera of any rig sits, at or near the second focus) and each ray goes down
   // or passes the rim plane z = RimZ at least 1e-4 % outside the rim. Why that suffices: from inside the lower

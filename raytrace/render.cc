@@ -18,6 +18,7 @@
 #include <limits>
 
 #include "core/error.h"
+#include "core/sincos.h"
 #include "core/vector_clones.h"
 
 namespace hovs::raytrace {
@@ -52,7 +53,38 @@ uint64_t SplitMix(uint64_t x) {
   x = (x ^ (x >> 27)) * 0x94D049BB133111EBull;
   return x ^ (x >> 31);
 }
-double Uniform(uint64_t h) { return (h >> 11) * (1.0 / 9007199254740992.0); }
+
+// True where the x86-64-v4 copies of the functions below (picked by hand, not by target_clones) can run.
+bool CpuHasX86_64V4() {
+#if defined(HOVS_VECTOR_CLONES_ENABLED)
+  static const bool v4 = __builtin_cpu_supports("avx512f") && __builtin_cpu_supports("avx512dq") &&
+                         __builtin_cpu_supports("avx512vl") && __builtin_cpu_supports("avx512bw") &&
+                         __builtin_cpu_supports("avx512cd");
+  return v4;
+#else
+  return false;
+#endif
+}
+
+// SplitMix and Uniform for the vectorised loops below (helpers of target-specific functions are always_inline).
+__attribute__((always_inline)) inline uint64_t SplitMixInline(uint64_t z) {
+  z += 0x9E3779B97F4A7C15ull;
+  z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ull;
+  z = (z ^ (z >> 27)) * 0x94D049BB133111EBull;
+  return z ^ (z >> 31);
+}
+// Uniform(h): q = h >> 11 < 2^53 as a double, exactly: kDirect, by the 64-bit integer conversion (AVX-512DQ),
+// else its low 52 bits as the mantissa of 2^52 + q_low, minus 2^52, plus the top bit's 2^52 (all exact).
+template <bool kDirect>
+__attribute__((always_inline)) inline double UniformOf(uint64_t h) {
+  const uint64_t q = h >> 11;
+  if (kDirect) return static_cast<double>(static_cast<int64_t>(q)) * (1.0 / 9007199254740992.0);
+  double low;
+  const uint64_t bits = 0x4330000000000000ull | (q & 0xFFFFFFFFFFFFFull);
+  __builtin_memcpy(&low, &bits, sizeof low);
+  return ((low - 4503599627370496.0) + static_cast<double>(static_cast<int>(q >> 52)) * 4503599627370496.0) *
+         (1.0 / 9007199254740992.0);
+}
 
 // The jittered image positions of a chunk's samples: samples s_begin .. s_end - 1 of P pixels, sample s of pixel q
 // at k = (s - s_begin) P + q. It has the hash key pixel[q] * 4096 + s, lies in the pixel with centre (x[q], y[q])
@@ -66,23 +98,8 @@ __attribute__((always_inline)) inline void JitteredSamplesOf(int P, int s_begin,
                                                              const int* __restrict pixel, const int* __restrict x,
                                                              const int* __restrict y, double* __restrict u,
                                                              double* __restrict v) {
-  const auto mix = [](uint64_t z) {
-    z += 0x9E3779B97F4A7C15ull;
-    z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ull;
-    z = (z ^ (z >> 27)) * 0x94D049BB133111EBull;
-    return z ^ (z >> 31);
-  };
-  // q < 2^53: directly, or its low 52 bits as the mantissa of 2^52 + q_low, minus 2^52, plus the top bit's 2^52
-  // (all exact).
-  const auto to_unit = [](uint64_t h) {
-    const uint64_t q = h >> 11;
-    if (kDirect) return static_cast<double>(static_cast<int64_t>(q)) * (1.0 / 9007199254740992.0);
-    double low;
-    const uint64_t bits = 0x4330000000000000ull | (q & 0xFFFFFFFFFFFFFull);
-    __builtin_memcpy(&low, &bits, sizeof low);
-    return ((low - 4503599627370496.0) + static_cast<double>(static_cast<int>(q >> 52)) * 4503599627370496.0) *
-           (1.0 / 9007199254740992.0);
-  };
+  const auto mix = [](uint64_t z) { return SplitMixInline(z); };
+  const auto to_unit = [](uint64_t h) { return UniformOf<kDirect>(h); };
   const double g = stratified ? 1.0 : 0.0, scale = stratified ? inv_grid : 1.0;
   for (int smp = s_begin; smp < s_end; ++smp) {
     const double gsx = g * (smp % grid), gsy = g * (smp / grid);
@@ -116,15 +133,65 @@ __attribute__((target("arch=x86-64-v4"))) void JitteredSamplesDirect(
 void JitteredSamples(int P, int s_begin, int s_end, int grid, uint64_t seed_mix, bool stratified, double inv_grid,
                      const int* pixel, const int* x, const int* y, double* u, double* v) {
 #if defined(HOVS_VECTOR_CLONES_ENABLED)
-  static const bool direct = __builtin_cpu_supports("avx512f") && __builtin_cpu_supports("avx512dq") &&
-                             __builtin_cpu_supports("avx512vl") && __builtin_cpu_supports("avx512bw") &&
-                             __builtin_cpu_supports("avx512cd");
-  if (direct) {
+  if (CpuHasX86_64V4()) {
     JitteredSamplesDirect(P, s_begin, s_end, grid, seed_mix, stratified, inv_grid, pixel, x, y, u, v);
     return;
   }
 #endif
   JitteredSamplesBits(P, s_begin, s_end, grid, seed_mix, stratified, inv_grid, pixel, x, y, u, v);
+}
+
+// The thin-lens aperture points and exposure times of a chunk's samples (laid out as JitteredSamples'): sample
+// smp of pixel q has the key pixel[q] * 4096 + smp and the hash h2 = SplitMix(SplitMix(seed_mix ^ key) ^
+// 0xD1B54A32D192ED03); its aperture point is uniform on the unit disc, radius sqrt(Uniform(h2)) at
+// Uniform(SplitMix(h2)) turns (0 without a lens), its time exposure * Uniform(SplitMix(h2 ^ 0x9E3779B97F4A7C15))
+// (0 without blur). Vectorised: the angle's sine and cosine from core/sincos.h.
+template <bool kDirect>
+__attribute__((always_inline)) inline void LensSamplesOf(int P, int s_begin, int s_end, uint64_t seed_mix, bool lens,
+                                                         double exposure, const int* __restrict pixel,
+                                                         double* __restrict disc_x, double* __restrict disc_y,
+                                                         double* __restrict tau) {
+  const double on = lens ? 1.0 : 0.0;
+  for (int smp = s_begin; smp < s_end; ++smp) {
+    const ptrdiff_t k0 = static_cast<ptrdiff_t>(smp - s_begin) * P;
+    for (int q = 0; q < P; ++q) {
+      const uint64_t key = static_cast<uint64_t>(pixel[q]) * 4096 + static_cast<uint64_t>(smp);
+      const uint64_t h2 = SplitMixInline(SplitMixInline(seed_mix ^ key) ^ 0xD1B54A32D192ED03ull);
+      const double rr = std::sqrt(UniformOf<kDirect>(h2)) * on;
+      double sn, cs;
+      SinCosOfTurns(UniformOf<kDirect>(SplitMixInline(h2)), &sn, &cs);
+      disc_x[k0 + q] = rr * cs, disc_y[k0 + q] = rr * sn;
+      tau[k0 + q] = exposure * UniformOf<kDirect>(SplitMixInline(h2 ^ 0x9E3779B97F4A7C15ull));
+    }
+  }
+}
+
+HOVS_VECTOR_CLONES
+void LensSamplesBits(int P, int s_begin, int s_end, uint64_t seed_mix, bool lens, double exposure,
+                     const int* __restrict pixel, double* __restrict disc_x, double* __restrict disc_y,
+                     double* __restrict tau) {
+  LensSamplesOf<false>(P, s_begin, s_end, seed_mix, lens, exposure, pixel, disc_x, disc_y, tau);
+}
+
+#if defined(HOVS_VECTOR_CLONES_ENABLED)
+__attribute__((target("arch=x86-64-v4"))) void LensSamplesDirect(int P, int s_begin, int s_end, uint64_t seed_mix,
+                                                                 bool lens, double exposure,
+                                                                 const int* __restrict pixel,
+                                                                 double* __restrict disc_x,
+                                                                 double* __restrict disc_y, double* __restrict tau) {
+  LensSamplesOf<true>(P, s_begin, s_end, seed_mix, lens, exposure, pixel, disc_x, disc_y, tau);
+}
+#endif
+
+void LensSamples(int P, int s_begin, int s_end, uint64_t seed_mix, bool lens, double exposure, const int* pixel,
+                 double* disc_x, double* disc_y, double* tau) {
+#if defined(HOVS_VECTOR_CLONES_ENABLED)
+  if (CpuHasX86_64V4()) {
+    LensSamplesDirect(P, s_begin, s_end, seed_mix, lens, exposure, pixel, disc_x, disc_y, tau);
+    return;
+  }
+#endif
+  LensSamplesBits(P, s_begin, s_end, seed_mix, lens, exposure, pixel, disc_x, disc_y, tau);
 }
 
 struct RayRequest {
@@ -382,6 +449,105 @@ inline void StoreGroundTruthPixel(const float* t, float* v) {
 #endif
 }
 
+// Thin-lens camera rays of n image points of an undistorted camera, in the mirror frame:
+// the pinhole bearing b of (u, v) (CamFromImg: ((u - cx) / fx, (v - cy) / fy, 1), normalised); with thin = 1, the
+// ray from the aperture point o = lens_radius (disc_x, disc_y, 0) towards b's point on the plane z = focus_distance,
+// normalised; with thin = 0, from the centre along b. Out: origin and unit direction mapped by mirror_from_cam
+// (R column-major, t).
+HOVS_VECTOR_CLONES
+void ThinLensRays(int n, double fx, double fy, double cx, double cy, double lens_radius, double focus_distance,
+                  int thin, const double* __restrict R, const double* __restrict t, const double* __restrict u,
+                  const double* __restrict v, const double* __restrict disc_x, const double* __restrict disc_y,
+                  double* __restrict omx, double* __restrict omy, double* __restrict omz,
+                  double* __restrict vmx, double* __restrict vmy, double* __restrict vmz) {
+  for (int i = 0; i < n; ++i) {
+    const double x = (u[i] - cx) / fx, y = (v[i] - cy) / fy;
+    const double nb = std::sqrt(x * x + y * y + 1.0);
+    const double bx = x / nb, by = y / nb, bz = 1.0 / nb;
+    const double ox = thin ? lens_radius * disc_x[i] : 0.0, oy = thin ? lens_radius * disc_y[i] : 0.0;
+    const double s = focus_distance / bz;
+    const double ex = bx * s - ox, ey = by * s - oy, ez = bz * s;
+    const double ne = std::sqrt(ex * ex + ey * ey + ez * ez);
+    const double dx = thin ? ex / ne : bx, dy = thin ? ey / ne : by, dz = thin ? ez / ne : bz;
+    omx[i] = R[0] * ox + R[3] * oy + t[0];
+    omy[i] = R[1] * ox + R[4] * oy + t[1];
+    omz[i] = R[2] * ox + R[5] * oy + t[2];
+    vmx[i] = R[0] * dx + R[3] * dy + R[6] * dz;
+    vmy[i] = R[1] * dx + R[4] * dy + R[7] * dz;
+    vmz[i] = R[2] * dx + R[5] * dy + R[8] * dz;
+  }
+}
+
+// A unit's motion during the exposure (CatadioptricUnit::WorldFromMirrorAt): at time tau its world_from_mirror is
+// the rotation by angle rate * tau about the unit axis (ax, ay, az) after world_from_mirror at 0, and its
+// translation moves by velocity * tau.
+struct UnitMotion {
+  double rate = 0, axis[3] = {0, 0, 1}, velocity[3] = {0, 0, 0};
+};
+
+// The world rays of thin-lens samples (ThinLensRays, then the mirror): where on_mirror[i], from the mirror point M
+// along the reflected direction, else from the aperture point along the camera ray (both in the mirror frame),
+// mapped by world_from_mirror (R column-major, t) at the sample's time tau[i]: kMoving, the rotation by rate *
+// tau about the axis (Rodrigues' formula; its sine and cosine from core/sincos.h) after R, and t + velocity *
+// tau; else at time 0.
+template <bool kMoving>
+__attribute__((always_inline)) inline void ThinLensWorldRaysOf(
+    int n, const unsigned char* __restrict on_mirror, int unit, const double* __restrict R, const double* __restrict t,
+    const UnitMotion& motion, const double* __restrict tau, const double* __restrict Mx, const double* __restrict My,
+    const double* __restrict Mz, const double* __restrict mdx, const double* __restrict mdy,
+    const double* __restrict mdz, const double* __restrict omx, const double* __restrict omy,
+    const double* __restrict omz, const double* __restrict vmx, const double* __restrict vmy,
+    const double* __restrict vmz, double* __restrict ox, double* __restrict oy, double* __restrict oz,
+    double* __restrict dx, double* __restrict dy, double* __restrict dz, int* __restrict from_mirror) {
+  const double a0 = motion.axis[0], a1 = motion.axis[1], a2 = motion.axis[2], turns = motion.rate / (2 * M_PI);
+  const double w0 = motion.velocity[0], w1 = motion.velocity[1], w2 = motion.velocity[2];
+  for (int i = 0; i < n; ++i) {
+    const bool m = on_mirror[i] != 0;
+    const double X0 = m ? Mx[i] : omx[i], X1 = m ? My[i] : omy[i], X2 = m ? Mz[i] : omz[i];
+    const double D0 = m ? mdx[i] : vmx[i], D1 = m ? mdy[i] : vmy[i], D2 = m ? mdz[i] : vmz[i];
+    double p0 = R[0] * X0 + R[3] * X1 + R[6] * X2, p1 = R[1] * X0 + R[4] * X1 + R[7] * X2,
+           p2 = R[2] * X0 + R[5] * X1 + R[8] * X2;
+    double q0 = R[0] * D0 + R[3] * D1 + R[6] * D2, q1 = R[1] * D0 + R[4] * D1 + R[7] * D2,
+           q2 = R[2] * D0 + R[5] * D1 + R[8] * D2;
+    double e0 = t[0], e1 = t[1], e2 = t[2];
+    if (kMoving) {
+      double sn, cs;
+      SinCosOfTurns(turns * tau[i], &sn, &cs);
+      const double k = 1 - cs;
+      const double ap = a0 * p0 + a1 * p1 + a2 * p2, aq = a0 * q0 + a1 * q1 + a2 * q2;
+      const double r0 = cs * p0 + sn * (a1 * p2 - a2 * p1) + k * ap * a0;
+      const double r1 = cs * p1 + sn * (a2 * p0 - a0 * p2) + k * ap * a1;
+      const double r2 = cs * p2 + sn * (a0 * p1 - a1 * p0) + k * ap * a2;
+      const double s0 = cs * q0 + sn * (a1 * q2 - a2 * q1) + k * aq * a0;
+      const double s1 = cs * q1 + sn * (a2 * q0 - a0 * q2) + k * aq * a1;
+      const double s2 = cs * q2 + sn * (a0 * q1 - a1 * q0) + k * aq * a2;
+      p0 = r0, p1 = r1, p2 = r2, q0 = s0, q1 = s1, q2 = s2;
+      e0 += w0 * tau[i], e1 += w1 * tau[i], e2 += w2 * tau[i];
+    }
+    ox[i] = p0 + e0, oy[i] = p1 + e1, oz[i] = p2 + e2;
+    dx[i] = q0, dy[i] = q1, dz[i] = q2;
+    from_mirror[i] = m ? unit : -1;
+  }
+}
+
+HOVS_VECTOR_CLONES
+void ThinLensWorldRays(int n, const unsigned char* __restrict on_mirror, int unit, const double* __restrict R,
+                       const double* __restrict t, const UnitMotion& motion, const double* __restrict tau,
+                       const double* __restrict Mx, const double* __restrict My, const double* __restrict Mz,
+                       const double* __restrict mdx, const double* __restrict mdy, const double* __restrict mdz,
+                       const double* __restrict omx, const double* __restrict omy, const double* __restrict omz,
+                       const double* __restrict vmx, const double* __restrict vmy, const double* __restrict vmz,
+                       double* __restrict ox, double* __restrict oy, double* __restrict oz, double* __restrict dx,
+                       double* __restrict dy, double* __restrict dz, int* __restrict from_mirror) {
+  if (tau) {
+    ThinLensWorldRaysOf<true>(n, on_mirror, unit, R, t, motion, tau, Mx, My, Mz, mdx, mdy, mdz, omx, omy, omz, vmx,
+                              vmy, vmz, ox, oy, oz, dx, dy, dz, from_mirror);
+  } else {
+    ThinLensWorldRaysOf<false>(n, on_mirror, unit, R, t, motion, tau, Mx, My, Mz, mdx, mdy, mdz, omx, omy, omz, vmx,
+                               vmy, vmz, ox, oy, oz, dx, dy, dz, from_mirror);
+  }
+}
+
 class RayMaker {
  public:
   RayMaker(const RayScene& scene, const ViewCamera& cam, const RenderOptions& o)
@@ -403,6 +569,10 @@ class RayMaker {
       single_ = unit_->rig.camera.distortion.IsZero() && !(o.lens_radius > 0) && !(o.exposure_time > 0);
       R_mirror_from_cam_f_ = R_mirror_from_cam_.cast<float>();
       SetFrame(&frame_d_), SetFrame(&frame_f_);
+      motion_.rate = unit_->angular_velocity.norm();
+      if (motion_.rate > 0)
+        for (int k = 0; k < 3; ++k) motion_.axis[k] = unit_->angular_velocity(k) / motion_.rate;
+      for (int k = 0; k < 3; ++k) motion_.velocity[k] = unit_->velocity(k);
     } else {
       cam.pinhole.Check("render camera");
       world_from_cam_ = cam.world_from_cam;
@@ -448,12 +618,18 @@ class RayMaker {
   //
   // nx, ny (with u, v still given): the points' normalised coordinates ((u - cx) / fx, (v - cy) / fy), already
   // computed (pixel centres: one division per column and per row of a tile), for a camera without distortion.
-  void MakeBatch(int n, const double* u, const double* v, const Vec2d* lens, const double* tau, RayBatch* b,
-                 double* Mx, double* My, double* Mz, const double* nx = nullptr, const double* ny = nullptr) const {
+  void MakeBatch(int n, const double* u, const double* v, const double* lens_x, const double* lens_y,
+                 const double* tau, RayBatch* b, double* Mx, double* My, double* Mz, const double* nx = nullptr,
+                 const double* ny = nullptr) const {
     b->n = n;
-    if (lens || tau) {
+    if ((lens_x || tau) && unit_ && unit_->rig.camera.distortion.IsZero()) {
+      MakeLensBatch(n, u, v, lens_x, lens_y, tau, b, Mx, My, Mz);
+      return;
+    }
+    if (lens_x || tau) {
       for (int i = 0; i < n; ++i) {
-        const RayRequest r = Make(Vec2d(u[i], v[i]), lens ? lens[i] : Vec2d::Zero(), tau ? tau[i] : 0.0);
+        const RayRequest r = Make(Vec2d(u[i], v[i]), lens_x ? Vec2d(lens_x[i], lens_y[i]) : Vec2d::Zero(),
+                                  tau ? tau[i] : 0.0);
         Store(r, i, b);
         Mx[i] = r.mirror_point.x(), My[i] = r.mirror_point.y(), Mz[i] = r.mirror_point.z();
       }
@@ -500,6 +676,37 @@ class RayMaker {
       std::fill(b->oz, b->oz + n, world_from_cam_.translation.z());
     }
 #pragma GCC diagnostic pop
+  }
+
+  // MakeBatch's thin-lens and motion-blur path for a unit's camera without distortion, vectorised: the camera
+  // rays from the aperture (ThinLensRays), the mirror with an origin per ray (MirrorReflector::ReflectRays, to the
+  // bit as Reflect), then the world rays at each sample's time (ThinLensWorldRays). The same rays as Make to
+  // rounding (tests bound them against the core's ReflectCameraRay and WorldFromMirrorAt); the straight rays past
+  // the rim are traced up to the mount by RayScene, as Make's.
+  void MakeLensBatch(int n, const double* u, const double* v, const double* lens_x, const double* lens_y,
+                     const double* tau, RayBatch* b, double* Mx, double* My, double* Mz) const {
+    const PinholeCamera<double>& cam = unit_->rig.camera;
+    alignas(64) double omx[RayBatch::kMax], omy[RayBatch::kMax], omz[RayBatch::kMax], vmx[RayBatch::kMax],
+        vmy[RayBatch::kMax], vmz[RayBatch::kMax];
+    alignas(64) double mdx[RayBatch::kMax], mdy[RayBatch::kMax], mdz[RayBatch::kMax];
+    alignas(64) double zeros[RayBatch::kMax];
+    unsigned char on_mirror[RayBatch::kMax];
+    const bool thin = lens_x && lens_radius_ > 0;
+    if (!thin) std::fill(zeros, zeros + n, 0.0);
+    ThinLensRays(n, cam.fx, cam.fy, cam.cx, cam.cy, lens_radius_, focus_distance_, thin ? 1 : 0,
+                 R_mirror_from_cam_.data(), t_mirror_from_cam_.data(), u, v, thin ? lens_x : zeros,
+                 thin ? lens_y : zeros, omx, omy, omz, vmx, vmy, vmz);
+    reflector_->ReflectRays(n, omx, omy, omz, vmx, vmy, vmz, Mx, My, Mz, mdx, mdy, mdz, on_mirror);
+    ThinLensWorldRays(n, on_mirror, cam_.unit, R_world_from_mirror_.data(), t_world_from_mirror_.data(), motion_, tau,
+                      Mx, My, Mz, mdx, mdy, mdz, omx, omy, omz, vmx, vmy, vmz, b->ox, b->oy, b->oz, b->dx, b->dy,
+                      b->dz, b->from_mirror);
+    // tnear 1e-5 as in Make: off the mirror's sheet (float rounding of the origin), or off the camera's lens face.
+    for (int i = 0; i < n; ++i) {
+      b->valid[i] = 1;
+      b->tnear[i] = 1e-5f;
+      b->from_camera[i] = -1;
+      b->mount_t[i] = -1;
+    }
   }
 
   static void Store(const RayRequest& r, int i, RayBatch* b) {
@@ -570,6 +777,7 @@ class RayMaker {
   Eigen::Matrix3d R_world_from_cam_ = Eigen::Matrix3d::Identity();
   bool single_ = false;
   Eigen::Matrix3f R_mirror_from_cam_f_ = Eigen::Matrix3f::Identity();
+  UnitMotion motion_;              // the unit's motion during the exposure
   UnitRayFrame<double> frame_d_;   // UnitRays' view of the unit, in double and in float
   UnitRayFrame<float> frame_f_;
 
@@ -604,6 +812,16 @@ void CheckFrameMemory(const std::string& where, int width, int height, bool grou
                             (ground_truth ? " with ground truth" : "") + " (its buffers and the sensor image" +
                             (held > 0 ? ", less what its buffers hold" : "") + ")";
   RequireMemory(where, frame, need - held, available, "render fewer pixels or free memory");
+}
+
+void SampleRays(const RayScene& scene, const ViewCamera& camera, const RenderOptions& options, int n, const double* u,
+                const double* v, const double* disc_x, const double* disc_y, const double* tau, RayBatch* out) {
+  HOVS_REQUIRE(n >= 0 && n <= RayBatch::kMax, "SampleRays", "at most ", RayBatch::kMax, " points (got ", n, ")");
+  HOVS_REQUIRE((disc_x == nullptr) == (disc_y == nullptr), "SampleRays", "aperture points need both coordinates");
+  options.Check("render");
+  const RayMaker maker(scene, camera, options);
+  double Mx[RayBatch::kMax], My[RayBatch::kMax], Mz[RayBatch::kMax];
+  maker.MakeBatch(n, u, v, disc_x, disc_y, tau, out, Mx, My, Mz);
 }
 
 Frame Render(const RayScene& scene, const ViewCamera& camera, const RenderOptions& options) {
@@ -680,7 +898,7 @@ void RenderInto(const RayScene& scene, const ViewCamera& camera, const RenderOpt
     struct Scratch {
       double u[kMax], v[kMax], Mx[kMax], My[kMax], Mz[kMax], tau[kMax];
       double nx[kMax], ny[kMax], col_x[kMax], row_y[kMax];   // pixel centres' normalised coordinates
-      Vec2d disc[kMax];
+      double disc_x[kMax], disc_y[kMax];   // thin-lens aperture points (unit disc)
       int px[kMax];
       // The chunk's pixels: index in the frame, centre.
       int pixel[kMax];
@@ -720,25 +938,17 @@ void RenderInto(const RayScene& scene, const ViewCamera& camera, const RenderOpt
         }
         JitteredSamples(P, s_begin, s_end, grid, seed_mix, stratified, inv_grid, sc.pixel, sc.pixel_x, sc.pixel_y,
                         sc.u, sc.v);
-        if (lens || blur) {
-          for (int k = 0; k < m; ++k) {
-            const uint64_t key = static_cast<uint64_t>(sc.pixel[k % P]) * 4096 + static_cast<uint64_t>(s_begin + k / P);
-            const uint64_t h2 = SplitMix(SplitMix(seed_mix ^ key) ^ 0xD1B54A32D192ED03ull);
-            sc.disc[k] = Vec2d::Zero();
-            if (lens) {  // uniform on the unit disc
-              const double rr = std::sqrt(Uniform(h2)), phi = 2 * M_PI * Uniform(SplitMix(h2));
-              sc.disc[k] = Vec2d(rr * std::cos(phi), rr * std::sin(phi));
-            }
-            sc.tau[k] = blur ? options.exposure_time * Uniform(SplitMix(h2 ^ 0x9E3779B97F4A7C15ull)) : 0.0;
-          }
+        if (lens || blur) {   // aperture points (uniform on the unit disc) and exposure times
+          LensSamples(P, s_begin, s_end, seed_mix, lens, blur ? options.exposure_time : 0.0, sc.pixel, sc.disc_x,
+                      sc.disc_y, sc.tau);
         }
         if (batch_f) {   // (every ray of this path is valid: MakeBatchF has no domain limit)
           maker.MakeBatchF(m, sc.u, sc.v, batch_f.get());
           scene.Colours(*batch_f, sc.rgb);
           task_rays += static_cast<uint64_t>(m);
         } else {
-          maker.MakeBatch(m, sc.u, sc.v, lens || blur ? sc.disc : nullptr, lens || blur ? sc.tau : nullptr,
-                          batch.get(), sc.Mx, sc.My, sc.Mz);
+          maker.MakeBatch(m, sc.u, sc.v, lens ? sc.disc_x : nullptr, lens ? sc.disc_y : nullptr,
+                          blur ? sc.tau : nullptr, batch.get(), sc.Mx, sc.My, sc.Mz);
           scene.Colours(*batch, sc.rgb);
           for (int k = 0; k < m; ++k) task_rays += batch->valid[k];
         }
@@ -784,7 +994,7 @@ void RenderInto(const RayScene& scene, const ViewCamera& camera, const RenderOpt
             k += len;
             if ((gx += len) == x1) gx = x0, ++gy;
           }
-          maker.MakeBatch(m, sc.u, sc.v, nullptr, nullptr, batch.get(), sc.Mx, sc.My, sc.Mz,
+          maker.MakeBatch(m, sc.u, sc.v, nullptr, nullptr, nullptr, batch.get(), sc.Mx, sc.My, sc.Mz,
                           separable ? sc.nx : nullptr, separable ? sc.ny : nullptr);
           scene.Geometry(*batch, &sc.hits);
           const HitBatch& H = sc.hits;

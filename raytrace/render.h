@@ -96,6 +96,14 @@ Frame Render(const RayScene& scene, const ViewCamera& camera, const RenderOption
 // frame on a Zen 5 VM (in 4 KiB pages, before core/large_pages.h, ~650 ms there).
 void RenderInto(const RayScene& scene, const ViewCamera& camera, const RenderOptions& options, Frame* frame);
 
+// The rays RenderInto traces for n <= RayBatch::kMax image points (u, v) of a camera, with thin-lens aperture
+// points (disc_x[i], disc_y[i]) on the unit disc (null: the aperture centre) and times tau[i] in the exposure
+// (null: 0), made as the renderer makes its double-precision samples (thin lens, motion blur; without either, the
+// ground-truth rays of pixel centres): for tests and tools that check the renderer's geometry. out->from_mirror
+// tells which rays leave the unit's mirror.
+void SampleRays(const RayScene& scene, const ViewCamera& camera, const RenderOptions& options, int n, const double* u,
+                const double* v, const double* disc_x, const double* disc_y, const double* tau, RayBatch* out);
+
 // The memory a width x height frame takes with what is made from it: its RGB and, with ground truth, its 12
 // channels as floats, and the sensor image (ApplySensor: up to 3 floats per pixel). 2750 x 2200 with ground
 // truth: 436 MB.

@@ -424,6 +424,86 @@ TEST(RayScene, RejectsAWorldBeyondSinglePrecision) {
   expect(nan_pose, "unit unit0");
 }
 
+TEST(Render, ThinLensAndMotionBlurRaysAreTheCoresGeometry) {
+  // The vectorised thin-lens and motion-blur rays (SampleRays, as RenderInto makes them) against the same rays
+  // built from the core, sample by sample: the pinhole bearing (CamFromImg), the ray from the aperture point
+  // towards the bearing's point on the plane in focus, the exact mirror (ReflectCameraRay), the unit's pose at
+  // the sample's time (WorldFromMirrorAt). A misaligned rig on a unit moving and turning about a tilted axis;
+  // samples over the whole image (on the mirror and past the rim), aperture points over the unit disc, times over
+  // the exposure; with and without the lens, with and without the motion.
+  SceneConfig cfg = BoardScene(true);
+  auto& u0 = cfg.description.units[0];
+  const RayScene still(cfg.description);
+  u0.velocity = Vec3d(1.5, -0.4, 0.2);
+  u0.angular_velocity = Vec3d(0.3, -0.2, 0.9);
+  const RayScene moving(cfg.description);
+  std::mt19937 rng(12);
+  std::uniform_real_distribution<double> U(0, 1);
+  const int n = 256;
+  const auto& cam = u0.rig.camera;
+  std::vector<double> us(n), vs(n), dx(n), dy(n), tau(n);
+  for (int i = 0; i < n; ++i) {
+    us[i] = -0.5 + cam.width * U(rng), vs[i] = -0.5 + cam.height * U(rng);
+    const double r = std::sqrt(U(rng)), phi = 2 * M_PI * U(rng);
+    dx[i] = r * std::cos(phi), dy[i] = r * std::sin(phi);
+    tau[i] = 0.05 * U(rng);
+  }
+  tau[0] = 0;
+  for (const double lens : {0.0, 0.003}) {
+    for (const bool blur : {false, true}) {
+      const RayScene& scene = blur ? moving : still;
+      const auto& unit = scene.description().units[0];
+      raytrace::RenderOptions ro;
+      ro.lens_radius = lens;
+      ro.focus_distance = 0.8;
+      ro.exposure_time = blur ? 0.05 : 0.0;
+      raytrace::RayBatch b;
+      raytrace::SampleRays(scene, raytrace::ViewCamera::Unit(0), ro, n, us.data(), vs.data(), dx.data(), dy.data(),
+                           blur ? tau.data() : nullptr, &b);
+      ASSERT_EQ(b.n, n);
+      const Rigid3d mirror_from_cam = unit.rig.cam_from_mirror.Inverse();
+      int on_mirror = 0, past_rim = 0;
+      double worst_o = 0, worst_d = 0;
+      for (int i = 0; i < n; ++i) {
+        Vec3d bearing;
+        ASSERT_TRUE(cam.CamFromImg(Vec2d(us[i], vs[i]), &bearing));
+        const Vec3d origin_cam(lens * dx[i], lens * dy[i], 0);
+        const Vec3d dir_cam = lens > 0 ? Vec3d((bearing * (ro.focus_distance / bearing.z()) - origin_cam).normalized())
+                                       : bearing;
+        const Rigid3d world_from_mirror = unit.WorldFromMirrorAt(blur ? tau[i] : 0.0);
+        Vec3d M, d, o_world, d_world;
+        const bool hit = unit.rig.ReflectCameraRay(mirror_from_cam * origin_cam, mirror_from_cam.Rotate(dir_cam), &M, &d);
+        if (hit) {
+          o_world = world_from_mirror * M, d_world = world_from_mirror.Rotate(d);
+          ++on_mirror;
+        } else {
+          const Rigid3d world_from_cam = world_from_mirror * mirror_from_cam;
+          o_world = world_from_cam * origin_cam, d_world = world_from_cam.Rotate(dir_cam);
+          ++past_rim;
+        }
+        ASSERT_EQ(b.from_mirror[i], hit ? 0 : -1) << "sample " << i;
+        EXPECT_EQ(b.valid[i], 1);
+        EXPECT_EQ(b.tnear[i], 1e-5f);
+        worst_o = std::max(worst_o, (Vec3d(b.ox[i], b.oy[i], b.oz[i]) - o_world).norm());
+        worst_d = std::max(worst_d, (Vec3d(b.dx[i], b.dy[i], b.dz[i]) - d_world).norm());
+      }
+      EXPECT_LT(worst_o, 1e-12) << "lens " << lens << " blur " << blur;
+      EXPECT_LT(worst_d, 1e-12) << "lens " << lens << " blur " << blur;
+      EXPECT_GT(on_mirror, 50);
+      EXPECT_GT(past_rim, 50);
+    }
+  }
+  // Bad input: more points than a batch holds, an aperture point without its second coordinate.
+  raytrace::RayBatch b;
+  std::vector<double> many(raytrace::RayBatch::kMax + 1, 100.0);
+  EXPECT_THROW(raytrace::SampleRays(still, raytrace::ViewCamera::Unit(0), {}, static_cast<int>(many.size()),
+                                    many.data(), many.data(), nullptr, nullptr, nullptr, &b),
+               Error);
+  EXPECT_THROW(raytrace::SampleRays(still, raytrace::ViewCamera::Unit(0), {}, 1, many.data(), many.data(),
+                                    many.data(), nullptr, nullptr, &b),
+               Error);
+}
+
 TEST(Render, PastTheRimTheCameraSeesTheMountNotItsOwnLens) {
   // A camera ray that misses the mirror leaves the camera's own lens face; it used to meet that face again at
   // t = 0 (float rounding), which painted everything past the rim in the body's colour with the body's id.
