@@ -37,8 +37,8 @@ void SensorOptions::Check(const std::string& where) const {
 
 void RenderOptions::Check(const std::string& where) const {
   HOVS_REQUIRE(samples >= 1 && samples <= 4096, where + ".samples", "must be in 1..4096 (got ", samples, ")");
-  HOVS_REQUIRE(std::isfinite(lens_radius) && lens_radius >= 0 && lens_radius <= 0.1, where + ".lens_radius",
-               "must be in [0, 0.1] m (got ", lens_radius, ")");
+  HOVS_REQUIRE(std::isfinite(lens_radius) && lens_radius >= 0 && lens_radius <= kMaxApertureRadius,
+               where + ".lens_radius", "must be in [0, ", kMaxApertureRadius, "] m (got ", lens_radius, ")");
   HOVS_REQUIRE(std::isfinite(focus_distance) && focus_distance > 0, where + ".focus_distance", "must be positive");
   HOVS_REQUIRE(std::isfinite(exposure_time) && exposure_time >= 0 && exposure_time <= 10, where + ".exposure_time",
                "must be in [0, 10] s (got ", exposure_time, ")");
@@ -485,6 +485,15 @@ struct UnitMotion {
   double rate = 0, axis[3] = {0, 0, 1}, velocity[3] = {0, 0, 0};
 };
 
+// How thin-lens samples past the rim are traced. own = 1: as the unit's own straight camera rays (from_camera =
+// unit: RayScene masks off the unit's mirror and lens face, which they cannot meet, and ends them on the mount
+// ring at mount_t, here computed in the mirror frame: the annulus r0 <= r <= r1 of the plane z = zr, where
+// ring = 1); own = 0: as any ray (from_camera = -1, mount_t = -1: Embree finds what they meet).
+struct LensRayRing {
+  int own = 0, ring = 0;
+  double zr = 0, r02 = 0, r12 = 0;
+};
+
 // The world rays of thin-lens samples (ThinLensRays, then the mirror): where on_mirror[i], from the mirror point M
 // along the reflected direction, else from the aperture point along the camera ray (both in the mirror frame),
 // mapped by world_from_mirror (R column-major, t) at the sample's time tau[i]: kMoving, the rotation by rate *
@@ -493,12 +502,16 @@ struct UnitMotion {
 template <bool kMoving>
 __attribute__((always_inline)) inline void ThinLensWorldRaysOf(
     int n, const unsigned char* __restrict on_mirror, int unit, const double* __restrict R, const double* __restrict t,
-    const UnitMotion& motion, const double* __restrict tau, const double* __restrict Mx, const double* __restrict My,
+    const UnitMotion& motion, const LensRayRing& ring, const double* __restrict tau, const double* __restrict Mx,
+    const double* __restrict My,
     const double* __restrict Mz, const double* __restrict mdx, const double* __restrict mdy,
     const double* __restrict mdz, const double* __restrict omx, const double* __restrict omy,
     const double* __restrict omz, const double* __restrict vmx, const double* __restrict vmy,
     const double* __restrict vmz, double* __restrict ox, double* __restrict oy, double* __restrict oz,
-    double* __restrict dx, double* __restrict dy, double* __restrict dz, int* __restrict from_mirror) {
+    double* __restrict dx, double* __restrict dy, double* __restrict dz, int* __restrict from_mirror,
+    int* __restrict from_camera, double* __restrict mount_t) {
+  const double zr = ring.zr, r02 = ring.r02, r12 = ring.r12;
+  const int own_unit = ring.own ? unit : -1, ring_test = ring.own & ring.ring;
   const double a0 = motion.axis[0], a1 = motion.axis[1], a2 = motion.axis[2], turns = motion.rate / (2 * M_PI);
   const double w0 = motion.velocity[0], w1 = motion.velocity[1], w2 = motion.velocity[2];
   for (int i = 0; i < n; ++i) {
@@ -527,24 +540,34 @@ __attribute__((always_inline)) inline void ThinLensWorldRaysOf(
     ox[i] = p0 + e0, oy[i] = p1 + e1, oz[i] = p2 + e2;
     dx[i] = q0, dy[i] = q1, dz[i] = q2;
     from_mirror[i] = m ? unit : -1;
+    // A straight ray's distance to the mount ring (the mirror-frame ray: vm is unit, so t is the distance along
+    // the world ray, at any time); 0 where it misses the ring, -1 where not computed.
+    const double w = vmz[i] != 0 ? vmz[i] : 1.0;
+    const double tr = (zr - omz[i]) / w, px = omx[i] + tr * vmx[i], py = omy[i] + tr * vmy[i];
+    const double r2 = px * px + py * py;
+    const bool hits_ring = vmz[i] != 0 && tr > 1e-5 && r2 >= r02 && r2 <= r12;
+    from_camera[i] = m ? -1 : own_unit;
+    mount_t[i] = m ? -1.0 : (ring_test ? (hits_ring ? tr : 0.0) : -1.0);
   }
 }
 
 HOVS_VECTOR_CLONES
 void ThinLensWorldRays(int n, const unsigned char* __restrict on_mirror, int unit, const double* __restrict R,
-                       const double* __restrict t, const UnitMotion& motion, const double* __restrict tau,
+                       const double* __restrict t, const UnitMotion& motion, const LensRayRing& ring,
+                       const double* __restrict tau,
                        const double* __restrict Mx, const double* __restrict My, const double* __restrict Mz,
                        const double* __restrict mdx, const double* __restrict mdy, const double* __restrict mdz,
                        const double* __restrict omx, const double* __restrict omy, const double* __restrict omz,
                        const double* __restrict vmx, const double* __restrict vmy, const double* __restrict vmz,
                        double* __restrict ox, double* __restrict oy, double* __restrict oz, double* __restrict dx,
-                       double* __restrict dy, double* __restrict dz, int* __restrict from_mirror) {
+                       double* __restrict dy, double* __restrict dz, int* __restrict from_mirror,
+                       int* __restrict from_camera, double* __restrict mount_t) {
   if (tau) {
-    ThinLensWorldRaysOf<true>(n, on_mirror, unit, R, t, motion, tau, Mx, My, Mz, mdx, mdy, mdz, omx, omy, omz, vmx,
-                              vmy, vmz, ox, oy, oz, dx, dy, dz, from_mirror);
+    ThinLensWorldRaysOf<true>(n, on_mirror, unit, R, t, motion, ring, tau, Mx, My, Mz, mdx, mdy, mdz, omx, omy, omz,
+                              vmx, vmy, vmz, ox, oy, oz, dx, dy, dz, from_mirror, from_camera, mount_t);
   } else {
-    ThinLensWorldRaysOf<false>(n, on_mirror, unit, R, t, motion, tau, Mx, My, Mz, mdx, mdy, mdz, omx, omy, omz, vmx,
-                               vmy, vmz, ox, oy, oz, dx, dy, dz, from_mirror);
+    ThinLensWorldRaysOf<false>(n, on_mirror, unit, R, t, motion, ring, tau, Mx, My, Mz, mdx, mdy, mdz, omx, omy,
+                               omz, vmx, vmy, vmz, ox, oy, oz, dx, dy, dz, from_mirror, from_camera, mount_t);
   }
 }
 
@@ -573,6 +596,14 @@ class RayMaker {
       if (motion_.rate > 0)
         for (int k = 0; k < 3; ++k) motion_.axis[k] = unit_->angular_velocity(k) / motion_.rate;
       for (int k = 0; k < 3; ++k) motion_.velocity[k] = unit_->velocity(k);
+      // Thin-lens samples past the rim are the unit's own straight camera rays when the whole aperture lies inside
+      // the mirror's lower nappe, as the camera centre does: from there a ray that misses the mirror within the rim
+      // never meets it (MirrorReflector::MissesRim's argument), and it leaves the lens face forwards.
+      lens_ring_.own = ApertureInLowerNappe() ? 1 : 0;
+      lens_ring_.ring = unit_->mount_outer_radius > 0 ? 1 : 0;
+      lens_ring_.zr = unit_->rig.mirror.RimZ();
+      lens_ring_.r02 = unit_->rig.mirror.RimRadius() * unit_->rig.mirror.RimRadius();
+      lens_ring_.r12 = unit_->mount_outer_radius * unit_->mount_outer_radius;
     } else {
       cam.pinhole.Check("render camera");
       world_from_cam_ = cam.world_from_cam;
@@ -681,8 +712,8 @@ class RayMaker {
   // MakeBatch's thin-lens and motion-blur path for a unit's camera without distortion, vectorised: the camera
   // rays from the aperture (ThinLensRays), the mirror with an origin per ray (MirrorReflector::ReflectRays, to the
   // bit as Reflect), then the world rays at each sample's time (ThinLensWorldRays). The same rays as Make to
-  // rounding (tests bound them against the core's ReflectCameraRay and WorldFromMirrorAt); the straight rays past
-  // the rim are traced up to the mount by RayScene, as Make's.
+  // rounding (tests bound them against the core's ReflectCameraRay and WorldFromMirrorAt). The straight rays past
+  // the rim end on the unit's mount ring, met in the unit's frame, as the pinhole samples' (LensRayRing).
   void MakeLensBatch(int n, const double* u, const double* v, const double* lens_x, const double* lens_y,
                      const double* tau, RayBatch* b, double* Mx, double* My, double* Mz) const {
     const PinholeCamera<double>& cam = unit_->rig.camera;
@@ -697,16 +728,12 @@ class RayMaker {
                  R_mirror_from_cam_.data(), t_mirror_from_cam_.data(), u, v, thin ? lens_x : zeros,
                  thin ? lens_y : zeros, omx, omy, omz, vmx, vmy, vmz);
     reflector_->ReflectRays(n, omx, omy, omz, vmx, vmy, vmz, Mx, My, Mz, mdx, mdy, mdz, on_mirror);
-    ThinLensWorldRays(n, on_mirror, cam_.unit, R_world_from_mirror_.data(), t_world_from_mirror_.data(), motion_, tau,
-                      Mx, My, Mz, mdx, mdy, mdz, omx, omy, omz, vmx, vmy, vmz, b->ox, b->oy, b->oz, b->dx, b->dy,
-                      b->dz, b->from_mirror);
+    ThinLensWorldRays(n, on_mirror, cam_.unit, R_world_from_mirror_.data(), t_world_from_mirror_.data(), motion_,
+                      lens_ring_, tau, Mx, My, Mz, mdx, mdy, mdz, omx, omy, omz, vmx, vmy, vmz, b->ox, b->oy, b->oz,
+                      b->dx, b->dy, b->dz, b->from_mirror, b->from_camera, b->mount_t);
     // tnear 1e-5 as in Make: off the mirror's sheet (float rounding of the origin), or off the camera's lens face.
-    for (int i = 0; i < n; ++i) {
-      b->valid[i] = 1;
-      b->tnear[i] = 1e-5f;
-      b->from_camera[i] = -1;
-      b->mount_t[i] = -1;
-    }
+    std::fill(b->valid, b->valid + n, 1);
+    std::fill(b->tnear, b->tnear + n, 1e-5f);
   }
 
   static void Store(const RayRequest& r, int i, RayBatch* b) {
@@ -778,8 +805,26 @@ class RayMaker {
   bool single_ = false;
   Eigen::Matrix3f R_mirror_from_cam_f_ = Eigen::Matrix3f::Identity();
   UnitMotion motion_;              // the unit's motion during the exposure
+  LensRayRing lens_ring_;          // how thin-lens samples past the rim are traced
   UnitRayFrame<double> frame_d_;   // UnitRays' view of the unit, in double and in float
   UnitRayFrame<float> frame_f_;
+
+  // True when the thin-lens aperture (the disc of radius lens_radius_ about the camera centre in the lens plane)
+  // lies inside the unit's lower nappe, below the rim plane, with a margin: checked on a polygon circumscribing
+  // its boundary circle (the region is convex).
+  bool ApertureInLowerNappe() const {
+    const HyperboloidMirror<double>& mirror = unit_->rig.mirror;
+    const double c = mirror.c(), ia2 = 1 / (mirror.a * mirror.a), ib2 = 1 / (mirror.b * mirror.b);
+    const int k = 64;
+    const double r = lens_radius_ / std::cos(M_PI / k);
+    for (int i = 0; i < k; ++i) {
+      const Vec3d p = mirror_from_cam_ * Vec3d(r * std::cos(2 * M_PI * i / k), r * std::sin(2 * M_PI * i / k), 0);
+      const double oz = p.z() + c;
+      if (!(oz < 0 && oz * oz * ia2 - (p.x() * p.x() + p.y() * p.y()) * ib2 >= 1 + 1e-9 && p.z() < mirror.RimZ()))
+        return false;
+    }
+    return true;
+  }
 
   // The unit's ring, camera centre and world_from_mirror, rounded to T.
   template <class T>

@@ -351,8 +351,9 @@ RayScene::RayScene(SceneDescription description) : desc_(std::move(description))
   DecideMountPaths(body_rects);
 }
 
-// A unit's straight camera rays start at its camera centre and end on its mount ring: they stay inside the
-// cone from the centre to the ring's outer circle, inside the box bounding the centre and the ring's square.
+// A unit's straight camera rays start at its camera centre (thin-lens samples: a point of the aperture, within
+// kMaxApertureRadius of it) and end on its mount ring: they stay inside the box bounding the centre's cube of that
+// half-size and the ring's square.
 // Anything else whose box overlaps that box (another rectangle, another unit's parts) could be in between;
 // the unit's own mirror and lens face are masked off for these rays and its camera body lies behind the lens
 // face (the rays go forward from it), so they do not count.
@@ -362,7 +363,9 @@ void RayScene::DecideMountPaths(const std::vector<std::pair<size_t, size_t>>& bo
     if (!m.geometry) continue;
     const CatadioptricUnit& unit = desc_.units[u];
     Eigen::AlignedBox3d region;
-    region.extend((unit.world_from_mirror * unit.rig.cam_from_mirror.Inverse()).translation);
+    // The camera centre and any aperture point around it (thin-lens samples leave those).
+    const Vec3d centre = (unit.world_from_mirror * unit.rig.cam_from_mirror.Inverse()).translation;
+    region.extend(centre - Vec3d::Constant(kMaxApertureRadius)).extend(centre + Vec3d::Constant(kMaxApertureRadius));
     const double r = m.geometry->r_outer;
     for (int k = 0; k < 4; ++k)
       region.extend(m.geometry->world_from_local * Vec3d((k & 1) ? r : -r, (k & 2) ? r : -r, 0));

@@ -20,6 +20,9 @@ namespace hovs::raytrace {
 // How far from the world origin (m, along each axis) a scene may reach: Embree traces in single precision,
 // whose spacing there is about 1 mm. RayScene rejects a scene that reaches further (or is not finite).
 constexpr double kWorldExtent = 1e4;
+// The largest thin-lens aperture radius (m) the renderer takes (RenderOptions::lens_radius): straight camera rays
+// may leave any point within it of a unit's camera centre (RayScene::OwnMount::path_clear allows for that).
+constexpr double kMaxApertureRadius = 0.1;
 
 // Object ids written to the ground truth. Scene objects number from kFirstObjectId in the order given.
 enum ObjectId : int { kSkyId = 0, kMountId = 1, kCameraBodyId = 2, kMirrorId = 3, kFirstObjectId = 4 };
@@ -165,8 +168,9 @@ class RayScene {
 
   struct UserGeometry;  // mirror, annulus (mount, lens face): analytic shapes, defined in scene.cc
   // A unit's mount ring, met analytically by that unit's straight camera rays (IntersectBatch).
-  // When nothing but the unit's own parts lies between its camera centre and its mount ring (path_clear,
-  // decided once from bounding boxes), those rays end on the ring without going to Embree at all.
+  // When nothing but the unit's own parts lies between its camera centre (or any point of a thin-lens aperture
+  // around it, kMaxApertureRadius) and its mount ring (path_clear, decided once from bounding boxes), those rays
+  // end on the ring without going to Embree at all.
   struct OwnMount {
     const UserGeometry* geometry = nullptr;
     unsigned geom_id = 0;

@@ -462,7 +462,7 @@ TEST(Render, ThinLensAndMotionBlurRaysAreTheCoresGeometry) {
                            blur ? tau.data() : nullptr, &b);
       ASSERT_EQ(b.n, n);
       const Rigid3d mirror_from_cam = unit.rig.cam_from_mirror.Inverse();
-      int on_mirror = 0, past_rim = 0;
+      int on_mirror = 0, past_rim = 0, rings = 0;
       double worst_o = 0, worst_d = 0;
       for (int i = 0; i < n; ++i) {
         Vec3d bearing;
@@ -480,6 +480,18 @@ TEST(Render, ThinLensAndMotionBlurRaysAreTheCoresGeometry) {
           const Rigid3d world_from_cam = world_from_mirror * mirror_from_cam;
           o_world = world_from_cam * origin_cam, d_world = world_from_cam.Rotate(dir_cam);
           ++past_rim;
+          // The unit's own straight ray (its mirror and lens face masked off), ended on its mount ring: the
+          // annulus between the rim and the ring's outer radius in the rim plane, met in the unit's frame.
+          const Vec3d om = mirror_from_cam * origin_cam, vm = mirror_from_cam.Rotate(dir_cam);
+          const double t = (unit.rig.mirror.RimZ() - om.z()) / vm.z();
+          const double r = (om + t * vm).head<2>().norm();
+          const bool ring = vm.z() != 0 && t > 1e-5 && r >= unit.rig.mirror.RimRadius() && r <= unit.mount_outer_radius;
+          EXPECT_EQ(b.from_camera[i], 0) << "sample " << i;
+          EXPECT_NEAR(b.mount_t[i], ring ? t : 0.0, 1e-12) << "sample " << i;
+          rings += ring;
+        }
+        if (hit) {
+          EXPECT_EQ(b.from_camera[i], -1) << "sample " << i;
         }
         ASSERT_EQ(b.from_mirror[i], hit ? 0 : -1) << "sample " << i;
         EXPECT_EQ(b.valid[i], 1);
@@ -491,6 +503,7 @@ TEST(Render, ThinLensAndMotionBlurRaysAreTheCoresGeometry) {
       EXPECT_LT(worst_d, 1e-12) << "lens " << lens << " blur " << blur;
       EXPECT_GT(on_mirror, 50);
       EXPECT_GT(past_rim, 50);
+      EXPECT_GT(rings, 20);
     }
   }
   // Bad input: more points than a batch holds, an aperture point without its second coordinate.
@@ -507,17 +520,24 @@ TEST(Render, ThinLensAndMotionBlurRaysAreTheCoresGeometry) {
 TEST(Render, PastTheRimTheCameraSeesTheMountNotItsOwnLens) {
   // A camera ray that misses the mirror leaves the camera's own lens face; it used to meet that face again at
   // t = 0 (float rounding), which painted everything past the rim in the body's colour with the body's id.
-  // Both ray paths (the batched pinhole path and the per-sample thin-lens path) must see the mount ring.
+  // Both ray paths (the batched pinhole path and the thin-lens path) must see the mount ring; so must a unit that
+  // moves and turns during the exposure (its mount moves with it: up to 11 cm in this exposure, which once left
+  // the rays of the moved camera passing beside the ring where it stood at time 0).
   SceneConfig cfg = BoardScene(false);
   auto& cam = cfg.description.units[0].rig.camera;
   cam = PinholeCamera<double>::FromPhysical(0.016, 4.54e-6 * 25, 110, 88);
   const RayScene scene(cfg.description);
+  cfg.description.units[0].velocity = Vec3d(5, 2, 0);
+  cfg.description.units[0].angular_velocity = Vec3d(0, 0, 30 * kDeg);
+  const RayScene moving_scene(cfg.description);
   const auto& unit = scene.description().units[0];
-  for (const double lens : {0.0, 1e-4}) {
+  for (const double lens : {0.0, 1e-4, 2e-4}) {
+    const bool moving = lens > 1.5e-4;
     raytrace::RenderOptions ro;
     ro.samples = 4;
     ro.lens_radius = lens;
-    const raytrace::Frame f = raytrace::Render(scene, raytrace::ViewCamera::Unit(0), ro);
+    ro.exposure_time = moving ? 0.02 : 0.0;
+    const raytrace::Frame f = raytrace::Render(moving ? moving_scene : scene, raytrace::ViewCamera::Unit(0), ro);
     int past_rim = 0;
     for (const auto& [x, y] : {std::pair{0, 0}, {109, 0}, {0, 87}, {109, 87}}) {
       Vec3d M, d;
