@@ -449,26 +449,24 @@ inline void StoreGroundTruthPixel(const float* t, float* v) {
 #endif
 }
 
-// Thin-lens camera rays of n image points of an undistorted camera, in the mirror frame:
-// the pinhole bearing b of (u, v) (CamFromImg: ((u - cx) / fx, (v - cy) / fy, 1), normalised); with thin = 1, the
-// ray from the aperture point o = lens_radius (disc_x, disc_y, 0) towards b's point on the plane z = focus_distance,
-// normalised; with thin = 0, from the centre along b. Out: origin and unit direction mapped by mirror_from_cam
-// (R column-major, t).
+// Thin-lens camera rays of n image points of an undistorted camera, in the mirror frame. With thin = 1, the ray
+// from the aperture point o = lens_radius (disc_x, disc_y, 0) towards the pinhole ray's point on the plane
+// z = focus_distance, f (x, y, 1) with (x, y) = ((u - cx) / fx, (v - cy) / fy); with thin = 0, from the centre
+// along (x, y, 1). Directions normalised (one square root and one division per ray); origin and direction mapped by
+// mirror_from_cam (R column-major, t). ifx, ify: 1 / fx, 1 / fy.
 HOVS_VECTOR_CLONES
-void ThinLensRays(int n, double fx, double fy, double cx, double cy, double lens_radius, double focus_distance,
+void ThinLensRays(int n, double ifx, double ify, double cx, double cy, double lens_radius, double focus_distance,
                   int thin, const double* __restrict R, const double* __restrict t, const double* __restrict u,
                   const double* __restrict v, const double* __restrict disc_x, const double* __restrict disc_y,
                   double* __restrict omx, double* __restrict omy, double* __restrict omz,
                   double* __restrict vmx, double* __restrict vmy, double* __restrict vmz) {
+  const double f = thin ? focus_distance : 1.0, r = thin ? lens_radius : 0.0;
   for (int i = 0; i < n; ++i) {
-    const double x = (u[i] - cx) / fx, y = (v[i] - cy) / fy;
-    const double nb = std::sqrt(x * x + y * y + 1.0);
-    const double bx = x / nb, by = y / nb, bz = 1.0 / nb;
-    const double ox = thin ? lens_radius * disc_x[i] : 0.0, oy = thin ? lens_radius * disc_y[i] : 0.0;
-    const double s = focus_distance / bz;
-    const double ex = bx * s - ox, ey = by * s - oy, ez = bz * s;
-    const double ne = std::sqrt(ex * ex + ey * ey + ez * ez);
-    const double dx = thin ? ex / ne : bx, dy = thin ? ey / ne : by, dz = thin ? ez / ne : bz;
+    const double x = (u[i] - cx) * ifx, y = (v[i] - cy) * ify;
+    const double ox = r * disc_x[i], oy = r * disc_y[i];
+    const double ex = x * f - ox, ey = y * f - oy, ez = f;
+    const double inv = 1.0 / std::sqrt(ex * ex + ey * ey + ez * ez);
+    const double dx = ex * inv, dy = ey * inv, dz = ez * inv;
     omx[i] = R[0] * ox + R[3] * oy + t[0];
     omy[i] = R[1] * ox + R[4] * oy + t[1];
     omz[i] = R[2] * ox + R[5] * oy + t[2];
@@ -724,7 +722,7 @@ class RayMaker {
     unsigned char on_mirror[RayBatch::kMax];
     const bool thin = lens_x && lens_radius_ > 0;
     if (!thin) std::fill(zeros, zeros + n, 0.0);
-    ThinLensRays(n, cam.fx, cam.fy, cam.cx, cam.cy, lens_radius_, focus_distance_, thin ? 1 : 0,
+    ThinLensRays(n, 1.0 / cam.fx, 1.0 / cam.fy, cam.cx, cam.cy, lens_radius_, focus_distance_, thin ? 1 : 0,
                  R_mirror_from_cam_.data(), t_mirror_from_cam_.data(), u, v, thin ? lens_x : zeros,
                  thin ? lens_y : zeros, omx, omy, omz, vmx, vmy, vmz);
     reflector_->ReflectRays(n, omx, omy, omz, vmx, vmy, vmz, Mx, My, Mz, mdx, mdy, mdz, on_mirror);
