@@ -40,11 +40,9 @@ BENCHMARK(BM_RenderFrame)->Args({4, 1})->Args({4, 0})->Unit(benchmark::kMillisec
 
 // The same frame rendered into reused buffers (RenderInto, as the dataset writer does from its second frame on):
 // the frame's memory is already mapped, so this is the steady state of a sequence of frames.
-void BM_RenderFrameReused(benchmark::State& state) {
-  const hovs::raytrace::RayScene scene(Scene().description);
-  hovs::raytrace::RenderOptions ro;
-  ro.samples = static_cast<int>(state.range(0));
-  ro.ground_truth = state.range(1) != 0;
+// Frames of unit 0 rendered into one frame's buffers, mapped by a first render before the timing.
+void RenderReusedFrames(benchmark::State& state, const hovs::raytrace::RayScene& scene,
+                        const hovs::raytrace::RenderOptions& ro) {
   hovs::raytrace::Frame f;
   hovs::raytrace::RenderInto(scene, hovs::raytrace::ViewCamera::Unit(0), ro, &f);  // maps the buffers
   uint64_t rays = 0;
@@ -54,6 +52,14 @@ void BM_RenderFrameReused(benchmark::State& state) {
     benchmark::DoNotOptimize(f.rgb.data());
   }
   state.counters["rays_per_s"] = benchmark::Counter(static_cast<double>(rays), benchmark::Counter::kIsRate);
+}
+
+void BM_RenderFrameReused(benchmark::State& state) {
+  const hovs::raytrace::RayScene scene(Scene().description);
+  hovs::raytrace::RenderOptions ro;
+  ro.samples = static_cast<int>(state.range(0));
+  ro.ground_truth = state.range(1) != 0;
+  RenderReusedFrames(state, scene, ro);
 }
 BENCHMARK(BM_RenderFrameReused)->Args({4, 1})->Args({4, 0})->Unit(benchmark::kMillisecond)->UseRealTime()->Iterations(3);
 
@@ -73,15 +79,7 @@ void BM_RenderFrameEffects(benchmark::State& state) {
   ro.lens_radius = 0.002;
   ro.focus_distance = 1.5;
   if (state.range(0) == 1) ro.exposure_time = 0.02;
-  hovs::raytrace::Frame f;
-  hovs::raytrace::RenderInto(scene, hovs::raytrace::ViewCamera::Unit(0), ro, &f);  // maps the buffers
-  uint64_t rays = 0;
-  for (auto _ : state) {
-    hovs::raytrace::RenderInto(scene, hovs::raytrace::ViewCamera::Unit(0), ro, &f);
-    rays += f.rays;
-    benchmark::DoNotOptimize(f.rgb.data());
-  }
-  state.counters["rays_per_s"] = benchmark::Counter(static_cast<double>(rays), benchmark::Counter::kIsRate);
+  RenderReusedFrames(state, scene, ro);
 }
 BENCHMARK(BM_RenderFrameEffects)->Arg(0)->Arg(1)->Unit(benchmark::kMillisecond)->UseRealTime()->Iterations(3);
 
