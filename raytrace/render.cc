@@ -655,6 +655,11 @@ class RayMaker {
       MakeLensBatch(n, u, v, lens_x, lens_y, tau, b, Mx, My, Mz);
       return;
     }
+    if (lens_x && !unit_ && cam_.pinhole.distortion.IsZero()) {   // a pinhole view through a thin lens
+      MakePinholeLensBatch(n, u, v, lens_x, lens_y, b);
+      std::fill(Mx, Mx + n, 0.0), std::fill(My, My + n, 0.0), std::fill(Mz, Mz + n, 0.0);   // no mirror
+      return;
+    }
     if (lens_x || tau) {
       for (int i = 0; i < n; ++i) {
         const RayRequest r = Make(Vec2d(u[i], v[i]), lens_x ? Vec2d(lens_x[i], lens_y[i]) : Vec2d::Zero(),
@@ -732,6 +737,24 @@ class RayMaker {
     // tnear 1e-5 as in Make: off the mirror's sheet (float rounding of the origin), or off the camera's lens face.
     std::fill(b->valid, b->valid + n, 1);
     std::fill(b->tnear, b->tnear + n, 1e-5f);
+  }
+
+  // A pinhole view's thin-lens samples (a camera without distortion; RenderInto gives pinhole views no motion
+  // blur): ThinLensRays mapped straight to the world by world_from_cam, as Make's rays to rounding.
+  void MakePinholeLensBatch(int n, const double* u, const double* v, const double* lens_x, const double* lens_y,
+                            RayBatch* b) const {
+    const PinholeCamera<double>& cam = cam_.pinhole;
+    const bool thin = lens_radius_ > 0;
+    alignas(64) double zeros[RayBatch::kMax];
+    if (!thin) std::fill(zeros, zeros + n, 0.0);
+    ThinLensRays(n, 1.0 / cam.fx, 1.0 / cam.fy, cam.cx, cam.cy, lens_radius_, focus_distance_, thin ? 1 : 0,
+                 R_world_from_cam_.data(), world_from_cam_.translation.data(), u, v, thin ? lens_x : zeros,
+                 thin ? lens_y : zeros, b->ox, b->oy, b->oz, b->dx, b->dy, b->dz);
+    std::fill(b->valid, b->valid + n, 1);
+    std::fill(b->tnear, b->tnear + n, 0.0f);
+    std::fill(b->from_mirror, b->from_mirror + n, -1);
+    std::fill(b->from_camera, b->from_camera + n, -1);
+    std::fill(b->mount_t, b->mount_t + n, -1.0);
   }
 
   static void Store(const RayRequest& r, int i, RayBatch* b) {

@@ -506,6 +506,33 @@ TEST(Render, ThinLensAndMotionBlurRaysAreTheCoresGeometry) {
       EXPECT_GT(rings, 20);
     }
   }
+  // A pinhole view through a thin lens (no mirror): from the aperture point towards the pinhole ray's point on the
+  // plane in focus, mapped by world_from_cam.
+  {
+    const Rigid3d world_from_cam(QuaternionFromAngleAxis<double>(Vec3d(0.3, -1.2, 0.4)), Vec3d(0.5, -0.2, 1.1));
+    const PinholeCamera<double> pin = PinholeCamera<double>::FromPhysical(0.008, 5e-6, 640, 480);
+    raytrace::RenderOptions ro;
+    ro.lens_radius = 0.004;
+    ro.focus_distance = 2.5;
+    std::vector<double> pu(n), pv(n);
+    for (int i = 0; i < n; ++i) pu[i] = us[i] * 640 / cam.width, pv[i] = vs[i] * 480 / cam.height;
+    raytrace::RayBatch b;
+    raytrace::SampleRays(still, raytrace::ViewCamera::Pinhole(pin, world_from_cam), ro, n, pu.data(), pv.data(),
+                         dx.data(), dy.data(), nullptr, &b);
+    double worst = 0;
+    for (int i = 0; i < n; ++i) {
+      const Vec2d uv(pu[i], pv[i]);
+      Vec3d bearing;
+      ASSERT_TRUE(pin.CamFromImg(uv, &bearing));
+      const Vec3d origin_cam(ro.lens_radius * dx[i], ro.lens_radius * dy[i], 0);
+      const Vec3d dir_cam = (bearing * (ro.focus_distance / bearing.z()) - origin_cam).normalized();
+      EXPECT_EQ(b.from_mirror[i], -1);
+      EXPECT_EQ(b.valid[i], 1);
+      worst = std::max(worst, (Vec3d(b.ox[i], b.oy[i], b.oz[i]) - world_from_cam * origin_cam).norm());
+      worst = std::max(worst, (Vec3d(b.dx[i], b.dy[i], b.dz[i]) - world_from_cam.Rotate(dir_cam)).norm());
+    }
+    EXPECT_LT(worst, 1e-12);
+  }
   // Bad input: more points than a batch holds, an aperture point without its second coordinate.
   raytrace::RayBatch b;
   std::vector<double> many(raytrace::RayBatch::kMax + 1, 100.0);
