@@ -194,14 +194,6 @@ void LensSamples(int P, int s_begin, int s_end, uint64_t seed_mix, bool lens, do
   LensSamplesBits(P, s_begin, s_end, seed_mix, lens, exposure, pixel, disc_x, disc_y, tau);
 }
 
-struct RayRequest {
-  Vec3d origin, direction;
-  double tnear = 0;
-  bool valid = false;
-  bool via_mirror = false;
-  int from_mirror = -1;                // unit whose mirror the ray leaves
-  Vec3d mirror_point = Vec3d::Zero();  // mirror frame
-};
 
 // What UnitRays needs of a unit, in T: the mount ring (the annulus r0 <= r <= r1 in the plane z = zr of the
 // mirror frame) and the camera centre c_m there; world_from_mirror (column-major R, t) and the camera centre c_w in
@@ -642,8 +634,9 @@ class RayMaker {
   }
 
   // The rays of n image points (n <= RayBatch::kMax) into a batch, with each ray's mirror point (mirror frame;
-  // meaningful where from_mirror >= 0). lens, tau: per point as in Make, or null for a pinhole at time 0, the
-  // vectorised path: the camera rays of the batch are reflected together (MirrorReflector::ReflectBatch).
+  // meaningful where from_mirror >= 0). lens_x, lens_y: thin-lens aperture points on the unit disc, tau: times in
+  // the exposure (MakeLensBatch, MakePinholeLensBatch); both null: a pinhole at time 0, whose camera rays are
+  // reflected together (MirrorReflector::ReflectBatch).
   //
   // nx, ny (with u, v still given): the points' normalised coordinates ((u - cx) / fx, (v - cy) / fy), already
   // computed (pixel centres: one division per column and per row of a tile), for a camera without distortion.
@@ -651,22 +644,13 @@ class RayMaker {
                  const double* tau, RayBatch* b, double* Mx, double* My, double* Mz, const double* nx = nullptr,
                  const double* ny = nullptr) const {
     b->n = n;
-    if ((lens_x || tau) && unit_ && unit_->rig.camera.distortion.IsZero()) {
+    if ((lens_x || tau) && unit_) {
       MakeLensBatch(n, u, v, lens_x, lens_y, tau, b, Mx, My, Mz);
       return;
     }
-    if (lens_x && !unit_ && cam_.pinhole.distortion.IsZero()) {   // a pinhole view through a thin lens
+    if (lens_x || tau) {   // a pinhole view through a thin lens (pinhole views do not move)
       MakePinholeLensBatch(n, u, v, lens_x, lens_y, b);
       std::fill(Mx, Mx + n, 0.0), std::fill(My, My + n, 0.0), std::fill(Mz, Mz + n, 0.0);   // no mirror
-      return;
-    }
-    if (lens_x || tau) {
-      for (int i = 0; i < n; ++i) {
-        const RayRequest r = Make(Vec2d(u[i], v[i]), lens_x ? Vec2d(lens_x[i], lens_y[i]) : Vec2d::Zero(),
-                                  tau ? tau[i] : 0.0);
-        Store(r, i, b);
-        Mx[i] = r.mirror_point.x(), My[i] = r.mirror_point.y(), Mz[i] = r.mirror_point.z();
-      }
       return;
     }
     const PinholeCamera<double>& cam = unit_ ? unit_->rig.camera : cam_.pinhole;
@@ -693,7 +677,7 @@ class RayMaker {
           reflector_->ReflectBatch(t_mirror_from_cam_, n, vx, vy, vz, Mx, My, Mz, b->dx, b->dy, b->dz, on_mirror);
       // Camera rays past the rim: where they meet the unit's mount ring, in the mirror frame where the rim test
       // was made (the world ray is the same ray rotated and moved, so the distance along it is the same).
-      // RayScene traces them only up to it. tnear 1e-5 as in Make (off the mirror, or off the lens face).
+      // RayScene traces them only up to it. tnear 1e-5: off the mirror, or off the lens face.
       // (A batch whose rays all meet the mirror, most of them, has no straight ray: no ring test.) Both kinds of
       // ray from the mirror frame to the world in one rotation.
       UnitRays<double>(n, on, on_mirror, cam_.unit, 1e-5f, unit_->mount_outer_radius > 0 && on < n, &frame_d_, vx, vy,
@@ -712,10 +696,10 @@ class RayMaker {
 #pragma GCC diagnostic pop
   }
 
-  // MakeBatch's thin-lens and motion-blur path for a unit's camera without distortion, vectorised: the camera
+  // MakeBatch's thin-lens and motion-blur path for a unit's camera, vectorised (but for the undistortion): the camera
   // rays from the aperture (ThinLensRays), the mirror with an origin per ray (MirrorReflector::ReflectRays, to the
-  // bit as Reflect), then the world rays at each sample's time (ThinLensWorldRays). The same rays as Make to
-  // rounding (tests bound them against the core's ReflectCameraRay and WorldFromMirrorAt). The straight rays past
+  // bit as Reflect), then the world rays at each sample's time (ThinLensWorldRays). Tests bound them against the
+  // core's CamFromImg, ReflectCameraRay and WorldFromMirrorAt. The straight rays past
   // the rim end on the unit's mount ring, met in the unit's frame, as the pinhole samples' (LensRayRing).
   void MakeLensBatch(int n, const double* u, const double* v, const double* lens_x, const double* lens_y,
                      const double* tau, RayBatch* b, double* Mx, double* My, double* Mz) const {
@@ -727,89 +711,46 @@ class RayMaker {
     unsigned char on_mirror[RayBatch::kMax];
     const bool thin = lens_x && lens_radius_ > 0;
     if (!thin) std::fill(zeros, zeros + n, 0.0);
-    ThinLensRays(n, 1.0 / cam.fx, 1.0 / cam.fy, cam.cx, cam.cy, lens_radius_, focus_distance_, thin ? 1 : 0,
-                 R_mirror_from_cam_.data(), t_mirror_from_cam_.data(), u, v, thin ? lens_x : zeros,
+    // With lens distortion, the undistorted normalised points first (ThinLensRays then takes them as they are:
+    // unit focal lengths, zero principal point); points that cannot be undistorted give no ray.
+    const bool distorted = !cam.distortion.IsZero();
+    alignas(64) double xn[RayBatch::kMax], yn[RayBatch::kMax];
+    if (distorted) cam.NormalisedFromImgBatch(n, u, v, xn, yn, b->valid);
+    ThinLensRays(n, distorted ? 1.0 : 1.0 / cam.fx, distorted ? 1.0 : 1.0 / cam.fy, distorted ? 0.0 : cam.cx,
+                 distorted ? 0.0 : cam.cy, lens_radius_, focus_distance_, thin ? 1 : 0, R_mirror_from_cam_.data(),
+                 t_mirror_from_cam_.data(), distorted ? xn : u, distorted ? yn : v, thin ? lens_x : zeros,
                  thin ? lens_y : zeros, omx, omy, omz, vmx, vmy, vmz);
     reflector_->ReflectRays(n, omx, omy, omz, vmx, vmy, vmz, Mx, My, Mz, mdx, mdy, mdz, on_mirror);
     ThinLensWorldRays(n, on_mirror, cam_.unit, R_world_from_mirror_.data(), t_world_from_mirror_.data(), motion_,
                       lens_ring_, tau, Mx, My, Mz, mdx, mdy, mdz, omx, omy, omz, vmx, vmy, vmz, b->ox, b->oy, b->oz,
                       b->dx, b->dy, b->dz, b->from_mirror, b->from_camera, b->mount_t);
-    // tnear 1e-5 as in Make: off the mirror's sheet (float rounding of the origin), or off the camera's lens face.
-    std::fill(b->valid, b->valid + n, 1);
+    // tnear 1e-5: off the mirror's sheet (float rounding of the origin), or off the camera's lens face.
+    if (!distorted) std::fill(b->valid, b->valid + n, 1);
     std::fill(b->tnear, b->tnear + n, 1e-5f);
   }
 
-  // A pinhole view's thin-lens samples (a camera without distortion; RenderInto gives pinhole views no motion
-  // blur): ThinLensRays mapped straight to the world by world_from_cam, as Make's rays to rounding.
+  // A pinhole view's thin-lens samples (RenderInto gives pinhole views no motion blur): ThinLensRays mapped
+  // straight to the world by world_from_cam (tests bound them against the core's CamFromImg); with distortion, from the
+  // undistorted points (points that cannot be undistorted give no ray).
   void MakePinholeLensBatch(int n, const double* u, const double* v, const double* lens_x, const double* lens_y,
                             RayBatch* b) const {
     const PinholeCamera<double>& cam = cam_.pinhole;
-    const bool thin = lens_radius_ > 0;
-    alignas(64) double zeros[RayBatch::kMax];
+    const bool thin = lens_x && lens_radius_ > 0, distorted = !cam.distortion.IsZero();
+    alignas(64) double zeros[RayBatch::kMax], xn[RayBatch::kMax], yn[RayBatch::kMax];
     if (!thin) std::fill(zeros, zeros + n, 0.0);
-    ThinLensRays(n, 1.0 / cam.fx, 1.0 / cam.fy, cam.cx, cam.cy, lens_radius_, focus_distance_, thin ? 1 : 0,
-                 R_world_from_cam_.data(), world_from_cam_.translation.data(), u, v, thin ? lens_x : zeros,
+    if (distorted) {
+      cam.NormalisedFromImgBatch(n, u, v, xn, yn, b->valid);
+    } else {
+      std::fill(b->valid, b->valid + n, 1);
+    }
+    ThinLensRays(n, distorted ? 1.0 : 1.0 / cam.fx, distorted ? 1.0 : 1.0 / cam.fy, distorted ? 0.0 : cam.cx,
+                 distorted ? 0.0 : cam.cy, lens_radius_, focus_distance_, thin ? 1 : 0, R_world_from_cam_.data(),
+                 world_from_cam_.translation.data(), distorted ? xn : u, distorted ? yn : v, thin ? lens_x : zeros,
                  thin ? lens_y : zeros, b->ox, b->oy, b->oz, b->dx, b->dy, b->dz);
-    std::fill(b->valid, b->valid + n, 1);
     std::fill(b->tnear, b->tnear + n, 0.0f);
     std::fill(b->from_mirror, b->from_mirror + n, -1);
     std::fill(b->from_camera, b->from_camera + n, -1);
     std::fill(b->mount_t, b->mount_t + n, -1.0);
-  }
-
-  static void Store(const RayRequest& r, int i, RayBatch* b) {
-    b->valid[i] = r.valid;
-    b->ox[i] = r.origin.x(), b->oy[i] = r.origin.y(), b->oz[i] = r.origin.z();
-    b->dx[i] = r.direction.x(), b->dy[i] = r.direction.y(), b->dz[i] = r.direction.z();
-    b->tnear[i] = static_cast<float>(r.tnear);
-    b->from_mirror[i] = r.from_mirror;
-    b->from_camera[i] = -1;
-    b->mount_t[i] = -1;
-  }
-
-  // The ray of image point uv. lens: a point on the unit disc (thin lens), tau: time in the exposure.
-  RayRequest Make(const Vec2d& uv, const Vec2d& lens = Vec2d::Zero(), double tau = 0) const {
-    RayRequest r;
-    Vec3d bearing;
-    const PinholeCamera<double>& cam = unit_ ? unit_->rig.camera : cam_.pinhole;
-    if (!cam.CamFromImg(uv, &bearing)) return r;
-    // Thin lens: from a point of the aperture towards the point of the pinhole ray on the plane in focus.
-    Vec3d origin_cam = Vec3d::Zero(), dir_cam = bearing;
-    if (lens_radius_ > 0) {
-      origin_cam = Vec3d(lens_radius_ * lens.x(), lens_radius_ * lens.y(), 0);
-      dir_cam = (bearing * (focus_distance_ / bearing.z()) - origin_cam).normalized();
-    }
-    if (unit_) {
-      const Vec3d o = R_mirror_from_cam_ * origin_cam + t_mirror_from_cam_, v = R_mirror_from_cam_ * dir_cam;
-      Vec3d M, d;
-      // The pixel's ray from the camera, reflected by the exact mirror (RayFromImg without a second unprojection).
-      if (reflector_->Reflect(o, v, &M, &d)) {
-        r.valid = r.via_mirror = true;
-        r.from_mirror = cam_.unit;
-        r.mirror_point = M;
-        if (tau == 0) {
-          r.origin = R_world_from_mirror_ * M + t_world_from_mirror_;
-          r.direction = R_world_from_mirror_ * d;
-        } else {
-          const Rigid3d world_from_mirror = unit_->WorldFromMirrorAt(tau);
-          r.origin = world_from_mirror * M;
-          r.direction = world_from_mirror.Rotate(d);
-        }
-        r.tnear = 1e-5;  // clears the float rounding of the origin on the sheet (the mirror is convex)
-        return r;
-      }
-      const Rigid3d world_from_cam =
-          (tau == 0 ? unit_->world_from_mirror : unit_->WorldFromMirrorAt(tau)) * mirror_from_cam_;
-      r.valid = true;
-      r.origin = world_from_cam * origin_cam;
-      r.direction = world_from_cam.Rotate(dir_cam);
-      r.tnear = 1e-5;  // the ray starts on the camera's own lens face: not a hit at t = 0
-      return r;
-    }
-    r.valid = true;
-    r.origin = world_from_cam_ * origin_cam;
-    r.direction = world_from_cam_.Rotate(dir_cam);
-    return r;
   }
 
  private:

@@ -430,29 +430,35 @@ TEST(Render, ThinLensAndMotionBlurRaysAreTheCoresGeometry) {
   // towards the bearing's point on the plane in focus, the exact mirror (ReflectCameraRay), the unit's pose at
   // the sample's time (WorldFromMirrorAt). A misaligned rig on a unit moving and turning about a tilted axis;
   // samples over the whole image (on the mirror and past the rim), aperture points over the unit disc, times over
-  // the exposure; with and without the lens, with and without the motion.
+  // the exposure; with and without the lens, with and without the motion, with and without lens distortion.
   SceneConfig cfg = BoardScene(true);
   auto& u0 = cfg.description.units[0];
   const RayScene still(cfg.description);
+  SceneConfig distorted_cfg = cfg;
+  auto& dist = distorted_cfg.description.units[0].rig.camera.distortion;
+  dist.k1 = -0.08, dist.k2 = 0.02, dist.p1 = 2e-4, dist.p2 = -1e-4;
+  const RayScene distorted(distorted_cfg.description);
   u0.velocity = Vec3d(1.5, -0.4, 0.2);
   u0.angular_velocity = Vec3d(0.3, -0.2, 0.9);
   const RayScene moving(cfg.description);
   std::mt19937 rng(12);
   std::uniform_real_distribution<double> U(0, 1);
   const int n = 256;
-  const auto& cam = u0.rig.camera;
+  const int width = u0.rig.camera.width, height = u0.rig.camera.height;
   std::vector<double> us(n), vs(n), dx(n), dy(n), tau(n);
   for (int i = 0; i < n; ++i) {
-    us[i] = -0.5 + cam.width * U(rng), vs[i] = -0.5 + cam.height * U(rng);
+    us[i] = -0.5 + width * U(rng), vs[i] = -0.5 + height * U(rng);
     const double r = std::sqrt(U(rng)), phi = 2 * M_PI * U(rng);
     dx[i] = r * std::cos(phi), dy[i] = r * std::sin(phi);
     tau[i] = 0.05 * U(rng);
   }
   tau[0] = 0;
   for (const double lens : {0.0, 0.003}) {
-    for (const bool blur : {false, true}) {
-      const RayScene& scene = blur ? moving : still;
+    for (const int kind : {0, 1, 2}) {   // still, moving, still with lens distortion
+      const bool blur = kind == 1;
+      const RayScene& scene = kind == 0 ? still : kind == 1 ? moving : distorted;
       const auto& unit = scene.description().units[0];
+      const auto& cam = unit.rig.camera;
       raytrace::RenderOptions ro;
       ro.lens_radius = lens;
       ro.focus_distance = 0.8;
@@ -499,31 +505,31 @@ TEST(Render, ThinLensAndMotionBlurRaysAreTheCoresGeometry) {
         worst_o = std::max(worst_o, (Vec3d(b.ox[i], b.oy[i], b.oz[i]) - o_world).norm());
         worst_d = std::max(worst_d, (Vec3d(b.dx[i], b.dy[i], b.dz[i]) - d_world).norm());
       }
-      EXPECT_LT(worst_o, 1e-12) << "lens " << lens << " blur " << blur;
-      EXPECT_LT(worst_d, 1e-12) << "lens " << lens << " blur " << blur;
+      EXPECT_LT(worst_o, 1e-12) << "lens " << lens << " kind " << kind;
+      EXPECT_LT(worst_d, 1e-12) << "lens " << lens << " kind " << kind;
       EXPECT_GT(on_mirror, 50);
       EXPECT_GT(past_rim, 50);
       EXPECT_GT(rings, 20);
     }
   }
-  // A pinhole view through a thin lens (no mirror): from the aperture point towards the pinhole ray's point on the
-  // plane in focus, mapped by world_from_cam.
-  {
-    const Rigid3d world_from_cam(QuaternionFromAngleAxis<double>(Vec3d(0.3, -1.2, 0.4)), Vec3d(0.5, -0.2, 1.1));
-    const PinholeCamera<double> pin = PinholeCamera<double>::FromPhysical(0.008, 5e-6, 640, 480);
+  // A pinhole view through a thin lens (no mirror), with and without lens distortion: from the aperture point
+  // towards the pinhole ray's point on the plane in focus, mapped by world_from_cam.
+  const Rigid3d world_from_cam(QuaternionFromAngleAxis<double>(Vec3d(0.3, -1.2, 0.4)), Vec3d(0.5, -0.2, 1.1));
+  std::vector<double> pu(n), pv(n);
+  for (int i = 0; i < n; ++i) pu[i] = us[i] * 640 / width, pv[i] = vs[i] * 480 / height;
+  for (const bool with_distortion : {false, true}) {
+    PinholeCamera<double> pin = PinholeCamera<double>::FromPhysical(0.008, 5e-6, 640, 480);
+    if (with_distortion) pin.distortion.k1 = -0.1, pin.distortion.p2 = 3e-4;
     raytrace::RenderOptions ro;
     ro.lens_radius = 0.004;
     ro.focus_distance = 2.5;
-    std::vector<double> pu(n), pv(n);
-    for (int i = 0; i < n; ++i) pu[i] = us[i] * 640 / cam.width, pv[i] = vs[i] * 480 / cam.height;
     raytrace::RayBatch b;
     raytrace::SampleRays(still, raytrace::ViewCamera::Pinhole(pin, world_from_cam), ro, n, pu.data(), pv.data(),
                          dx.data(), dy.data(), nullptr, &b);
     double worst = 0;
     for (int i = 0; i < n; ++i) {
-      const Vec2d uv(pu[i], pv[i]);
       Vec3d bearing;
-      ASSERT_TRUE(pin.CamFromImg(uv, &bearing));
+      ASSERT_TRUE(pin.CamFromImg(Vec2d(pu[i], pv[i]), &bearing));
       const Vec3d origin_cam(ro.lens_radius * dx[i], ro.lens_radius * dy[i], 0);
       const Vec3d dir_cam = (bearing * (ro.focus_distance / bearing.z()) - origin_cam).normalized();
       EXPECT_EQ(b.from_mirror[i], -1);
@@ -531,7 +537,7 @@ TEST(Render, ThinLensAndMotionBlurRaysAreTheCoresGeometry) {
       worst = std::max(worst, (Vec3d(b.ox[i], b.oy[i], b.oz[i]) - world_from_cam * origin_cam).norm());
       worst = std::max(worst, (Vec3d(b.dx[i], b.dy[i], b.dz[i]) - world_from_cam.Rotate(dir_cam)).norm());
     }
-    EXPECT_LT(worst, 1e-12);
+    EXPECT_LT(worst, 1e-12) << (with_distortion ? "with" : "without") << " distortion";
   }
   // Bad input: more points than a batch holds, an aperture point without its second coordinate.
   raytrace::RayBatch b;
