@@ -605,7 +605,7 @@ TEST(Render, PastTheRimTheCameraSeesTheMountNotItsOwnLens) {
 TEST(Render, SomethingBetweenTheCameraAndItsMountIsSeenInFrontOfIt) {
   // A camera ray past the rim meets the mount ring analytically and goes to Embree only up to the ring: plates
   // placed on such rays, 2 cm in front of the camera and just in front of the ring, must still be seen (and the
-  // ring elsewhere), on both ray paths (batched pinhole and per-sample thin lens).
+  // ring elsewhere), on both ray paths (the pinhole samples and the thin-lens samples).
   SceneConfig cfg = BoardScene(false);
   auto& unit_cfg = cfg.description.units[0];
   unit_cfg.rig.camera = PinholeCamera<double>::FromPhysical(0.016, 4.54e-6 * 25, 110, 88);
