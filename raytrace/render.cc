@@ -441,11 +441,13 @@ inline void StoreGroundTruthPixel(const float* t, float* v) {
 #endif
 }
 
-// Thin-lens camera rays of n image points of an undistorted camera, in the mirror frame. With thin = 1, the ray
+// Thin-lens camera rays of n image points of an undistorted camera (or of undistorted normalised points, given
+// with unit focal lengths and a zero principal point), mapped to a target frame. With thin = 1, the ray
 // from the aperture point o = lens_radius (disc_x, disc_y, 0) towards the pinhole ray's point on the plane
 // z = focus_distance, f (x, y, 1) with (x, y) = ((u - cx) / fx, (v - cy) / fy); with thin = 0, from the centre
 // along (x, y, 1). Directions normalised (one square root and one division per ray); origin and direction mapped by
-// mirror_from_cam (R column-major, t). ifx, ify: 1 / fx, 1 / fy.
+// target_from_cam (R column-major, t: mirror_from_cam for a unit, world_from_cam for a pinhole view). ifx, ify:
+// 1 / fx, 1 / fy.
 HOVS_VECTOR_CLONES
 void ThinLensRays(int n, double ifx, double ify, double cx, double cy, double lens_radius, double focus_distance,
                   int thin, const double* __restrict R, const double* __restrict t, const double* __restrict u,
@@ -493,9 +495,8 @@ template <bool kMoving>
 __attribute__((always_inline)) inline void ThinLensWorldRaysOf(
     int n, const unsigned char* __restrict on_mirror, int unit, const double* __restrict R, const double* __restrict t,
     const UnitMotion& motion, const LensRayRing& ring, const double* __restrict tau, const double* __restrict Mx,
-    const double* __restrict My,
-    const double* __restrict Mz, const double* __restrict mdx, const double* __restrict mdy,
-    const double* __restrict mdz, const double* __restrict omx, const double* __restrict omy,
+    const double* __restrict My, const double* __restrict Mz, const double* __restrict mdx,
+    const double* __restrict mdy, const double* __restrict mdz, const double* __restrict omx, const double* __restrict omy,
     const double* __restrict omz, const double* __restrict vmx, const double* __restrict vmy,
     const double* __restrict vmz, double* __restrict ox, double* __restrict oy, double* __restrict oz,
     double* __restrict dx, double* __restrict dy, double* __restrict dz, int* __restrict from_mirror,
@@ -544,8 +545,8 @@ __attribute__((always_inline)) inline void ThinLensWorldRaysOf(
 HOVS_VECTOR_CLONES
 void ThinLensWorldRays(int n, const unsigned char* __restrict on_mirror, int unit, const double* __restrict R,
                        const double* __restrict t, const UnitMotion& motion, const LensRayRing& ring,
-                       const double* __restrict tau,
-                       const double* __restrict Mx, const double* __restrict My, const double* __restrict Mz,
+                       const double* __restrict tau, const double* __restrict Mx, const double* __restrict My,
+                       const double* __restrict Mz,
                        const double* __restrict mdx, const double* __restrict mdy, const double* __restrict mdz,
                        const double* __restrict omx, const double* __restrict omy, const double* __restrict omz,
                        const double* __restrict vmx, const double* __restrict vmy, const double* __restrict vmz,
@@ -696,57 +697,33 @@ class RayMaker {
 #pragma GCC diagnostic pop
   }
 
-  // MakeBatch's thin-lens and motion-blur path for a unit's camera, vectorised (but for the undistortion): the camera
-  // rays from the aperture (ThinLensRays), the mirror with an origin per ray (MirrorReflector::ReflectRays, to the
-  // bit as Reflect), then the world rays at each sample's time (ThinLensWorldRays). Tests bound them against the
-  // core's CamFromImg, ReflectCameraRay and WorldFromMirrorAt. The straight rays past
-  // the rim end on the unit's mount ring, met in the unit's frame, as the pinhole samples' (LensRayRing).
+  // MakeBatch's thin-lens and motion-blur path for a unit's camera, vectorised (but for the undistortion): the
+  // camera rays from the aperture (CameraLensRays), the mirror with an origin per ray (MirrorReflector::ReflectRays,
+  // to the bit as Reflect), then the world rays at each sample's time (ThinLensWorldRays). Tests bound them against
+  // the core's CamFromImg, ReflectCameraRay and WorldFromMirrorAt. The straight rays past the rim end on the unit's
+  // mount ring, met in the unit's frame, as the pinhole samples' (LensRayRing).
   void MakeLensBatch(int n, const double* u, const double* v, const double* lens_x, const double* lens_y,
                      const double* tau, RayBatch* b, double* Mx, double* My, double* Mz) const {
-    const PinholeCamera<double>& cam = unit_->rig.camera;
     alignas(64) double omx[RayBatch::kMax], omy[RayBatch::kMax], omz[RayBatch::kMax], vmx[RayBatch::kMax],
         vmy[RayBatch::kMax], vmz[RayBatch::kMax];
     alignas(64) double mdx[RayBatch::kMax], mdy[RayBatch::kMax], mdz[RayBatch::kMax];
-    alignas(64) double zeros[RayBatch::kMax];
     unsigned char on_mirror[RayBatch::kMax];
-    const bool thin = lens_x && lens_radius_ > 0;
-    if (!thin) std::fill(zeros, zeros + n, 0.0);
-    // With lens distortion, the undistorted normalised points first (ThinLensRays then takes them as they are:
-    // unit focal lengths, zero principal point); points that cannot be undistorted give no ray.
-    const bool distorted = !cam.distortion.IsZero();
-    alignas(64) double xn[RayBatch::kMax], yn[RayBatch::kMax];
-    if (distorted) cam.NormalisedFromImgBatch(n, u, v, xn, yn, b->valid);
-    ThinLensRays(n, distorted ? 1.0 : 1.0 / cam.fx, distorted ? 1.0 : 1.0 / cam.fy, distorted ? 0.0 : cam.cx,
-                 distorted ? 0.0 : cam.cy, lens_radius_, focus_distance_, thin ? 1 : 0, R_mirror_from_cam_.data(),
-                 t_mirror_from_cam_.data(), distorted ? xn : u, distorted ? yn : v, thin ? lens_x : zeros,
-                 thin ? lens_y : zeros, omx, omy, omz, vmx, vmy, vmz);
+    CameraLensRays(unit_->rig.camera, R_mirror_from_cam_.data(), t_mirror_from_cam_.data(), n, u, v, lens_x, lens_y,
+                   b->valid, omx, omy, omz, vmx, vmy, vmz);
     reflector_->ReflectRays(n, omx, omy, omz, vmx, vmy, vmz, Mx, My, Mz, mdx, mdy, mdz, on_mirror);
     ThinLensWorldRays(n, on_mirror, cam_.unit, R_world_from_mirror_.data(), t_world_from_mirror_.data(), motion_,
                       lens_ring_, tau, Mx, My, Mz, mdx, mdy, mdz, omx, omy, omz, vmx, vmy, vmz, b->ox, b->oy, b->oz,
                       b->dx, b->dy, b->dz, b->from_mirror, b->from_camera, b->mount_t);
     // tnear 1e-5: off the mirror's sheet (float rounding of the origin), or off the camera's lens face.
-    if (!distorted) std::fill(b->valid, b->valid + n, 1);
     std::fill(b->tnear, b->tnear + n, 1e-5f);
   }
 
-  // A pinhole view's thin-lens samples (RenderInto gives pinhole views no motion blur): ThinLensRays mapped
-  // straight to the world by world_from_cam (tests bound them against the core's CamFromImg); with distortion, from the
-  // undistorted points (points that cannot be undistorted give no ray).
+  // A pinhole view's thin-lens samples (RenderInto gives pinhole views no motion blur): CameraLensRays mapped
+  // straight to the world by world_from_cam (tests bound them against the core's CamFromImg).
   void MakePinholeLensBatch(int n, const double* u, const double* v, const double* lens_x, const double* lens_y,
                             RayBatch* b) const {
-    const PinholeCamera<double>& cam = cam_.pinhole;
-    const bool thin = lens_x && lens_radius_ > 0, distorted = !cam.distortion.IsZero();
-    alignas(64) double zeros[RayBatch::kMax], xn[RayBatch::kMax], yn[RayBatch::kMax];
-    if (!thin) std::fill(zeros, zeros + n, 0.0);
-    if (distorted) {
-      cam.NormalisedFromImgBatch(n, u, v, xn, yn, b->valid);
-    } else {
-      std::fill(b->valid, b->valid + n, 1);
-    }
-    ThinLensRays(n, distorted ? 1.0 : 1.0 / cam.fx, distorted ? 1.0 : 1.0 / cam.fy, distorted ? 0.0 : cam.cx,
-                 distorted ? 0.0 : cam.cy, lens_radius_, focus_distance_, thin ? 1 : 0, R_world_from_cam_.data(),
-                 world_from_cam_.translation.data(), distorted ? xn : u, distorted ? yn : v, thin ? lens_x : zeros,
-                 thin ? lens_y : zeros, b->ox, b->oy, b->oz, b->dx, b->dy, b->dz);
+    CameraLensRays(cam_.pinhole, R_world_from_cam_.data(), world_from_cam_.translation.data(), n, u, v, lens_x, lens_y,
+                   b->valid, b->ox, b->oy, b->oz, b->dx, b->dy, b->dz);
     std::fill(b->tnear, b->tnear + n, 0.0f);
     std::fill(b->from_mirror, b->from_mirror + n, -1);
     std::fill(b->from_camera, b->from_camera + n, -1);
@@ -754,6 +731,26 @@ class RayMaker {
   }
 
  private:
+  // The thin-lens camera rays of n image points of cam (ThinLensRays; lens_x null or no lens radius: from the
+  // centre), mapped by target_from_cam (R column-major, t); valid[i] = 0 where a point of a camera with lens
+  // distortion cannot be undistorted (ThinLensRays then takes the undistorted normalised points as they are: unit
+  // focal lengths, zero principal point).
+  void CameraLensRays(const PinholeCamera<double>& cam, const double* R, const double* t, int n, const double* u,
+                      const double* v, const double* lens_x, const double* lens_y, unsigned char* valid, double* ox,
+                      double* oy, double* oz, double* dx, double* dy, double* dz) const {
+    const bool thin = lens_x && lens_radius_ > 0, distorted = !cam.distortion.IsZero();
+    alignas(64) double zeros[RayBatch::kMax], xn[RayBatch::kMax], yn[RayBatch::kMax];
+    if (!thin) std::fill(zeros, zeros + n, 0.0);
+    if (distorted) {
+      cam.NormalisedFromImgBatch(n, u, v, xn, yn, valid);
+    } else {
+      std::fill(valid, valid + n, 1);
+    }
+    ThinLensRays(n, distorted ? 1.0 : 1.0 / cam.fx, distorted ? 1.0 : 1.0 / cam.fy, distorted ? 0.0 : cam.cx,
+                 distorted ? 0.0 : cam.cy, lens_radius_, focus_distance_, thin ? 1 : 0, R, t, distorted ? xn : u,
+                 distorted ? yn : v, thin ? lens_x : zeros, thin ? lens_y : zeros, ox, oy, oz, dx, dy, dz);
+  }
+
   const RayScene& scene_;
   const ViewCamera& cam_;
   double lens_radius_ = 0, focus_distance_ = 1;
