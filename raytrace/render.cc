@@ -47,12 +47,6 @@ void RenderOptions::Check(const std::string& where) const {
 
 namespace {
 
-uint64_t SplitMix(uint64_t x) {
-  x += 0x9E3779B97F4A7C15ull;
-  x = (x ^ (x >> 30)) * 0xBF58476D1CE4E5B9ull;
-  x = (x ^ (x >> 27)) * 0x94D049BB133111EBull;
-  return x ^ (x >> 31);
-}
 
 // True where the x86-64-v4 copies of the functions below (picked by hand, not by target_clones) can run.
 bool CpuHasX86_64V4() {
@@ -66,13 +60,14 @@ bool CpuHasX86_64V4() {
 #endif
 }
 
-// SplitMix and Uniform for the vectorised loops below (helpers of target-specific functions are always_inline).
+// SplitMix64, always inlined (the vectorised loops below call it: helpers of target-specific functions must be).
 __attribute__((always_inline)) inline uint64_t SplitMixInline(uint64_t z) {
   z += 0x9E3779B97F4A7C15ull;
   z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ull;
   z = (z ^ (z >> 27)) * 0x94D049BB133111EBull;
   return z ^ (z >> 31);
 }
+uint64_t SplitMix(uint64_t x) { return SplitMixInline(x); }
 // Uniform(h): q = h >> 11 < 2^53 as a double, exactly: kDirect, by the 64-bit integer conversion (AVX-512DQ),
 // else its low 52 bits as the mantissa of 2^52 + q_low, minus 2^52, plus the top bit's 2^52 (all exact).
 template <bool kDirect>
@@ -98,16 +93,15 @@ __attribute__((always_inline)) inline void JitteredSamplesOf(int P, int s_begin,
                                                              const int* __restrict pixel, const int* __restrict x,
                                                              const int* __restrict y, double* __restrict u,
                                                              double* __restrict v) {
-  const auto mix = [](uint64_t z) { return SplitMixInline(z); };
-  const auto to_unit = [](uint64_t h) { return UniformOf<kDirect>(h); };
   const double g = stratified ? 1.0 : 0.0, scale = stratified ? inv_grid : 1.0;
   for (int smp = s_begin; smp < s_end; ++smp) {
     const double gsx = g * (smp % grid), gsy = g * (smp / grid);
     double* __restrict us = u + static_cast<ptrdiff_t>(smp - s_begin) * P;
     double* __restrict vs = v + static_cast<ptrdiff_t>(smp - s_begin) * P;
     for (int q = 0; q < P; ++q) {
-      const uint64_t h = mix(seed_mix ^ (static_cast<uint64_t>(pixel[q]) * 4096 + static_cast<uint64_t>(smp)));
-      const double ju = to_unit(h), jv = to_unit(mix(h));
+      const uint64_t key = static_cast<uint64_t>(pixel[q]) * 4096 + static_cast<uint64_t>(smp);
+      const uint64_t h = SplitMixInline(seed_mix ^ key);
+      const double ju = UniformOf<kDirect>(h), jv = UniformOf<kDirect>(SplitMixInline(h));
       us[q] = static_cast<double>(x[q]) + ((gsx + ju) * scale - 0.5);
       vs[q] = static_cast<double>(y[q]) + ((gsy + jv) * scale - 0.5);
     }
