@@ -40,8 +40,8 @@ void RenderOptions::Check(const std::string& where) const {
   HOVS_REQUIRE(std::isfinite(lens_radius) && lens_radius >= 0 && lens_radius <= kMaxApertureRadius,
                where + ".lens_radius", "must be in [0, ", kMaxApertureRadius, "] m (got ", lens_radius, ")");
   HOVS_REQUIRE(std::isfinite(focus_distance) && focus_distance > 0, where + ".focus_distance", "must be positive");
-  HOVS_REQUIRE(std::isfinite(exposure_time) && exposure_time >= 0 && exposure_time <= 10, where + ".exposure_time",
-               "must be in [0, 10] s (got ", exposure_time, ")");
+  HOVS_REQUIRE(std::isfinite(exposure_time) && exposure_time >= 0 && exposure_time <= kMaxExposureTime,
+               where + ".exposure_time", "must be in [0, ", kMaxExposureTime, "] s (got ", exposure_time, ")");
   sensor.Check(where + ".sensor");
 }
 
@@ -611,6 +611,7 @@ class RayMaker {
   // within about 1e-7 relative of MakeBatch's (tests bound them), the precision Embree traces them in.
   void MakeBatchF(int n, const double* u, const double* v, RayBatchF* b) const {
     b->n = n;
+    b->timed = false;
     const PinholeCamera<double>& cam = unit_->rig.camera;
     alignas(64) float vx[RayBatch::kMax], vy[RayBatch::kMax], vz[RayBatch::kMax];
     alignas(64) float Mx[RayBatch::kMax], My[RayBatch::kMax], Mz[RayBatch::kMax];
@@ -639,6 +640,7 @@ class RayMaker {
                  const double* tau, RayBatch* b, double* Mx, double* My, double* Mz, const double* nx = nullptr,
                  const double* ny = nullptr) const {
     b->n = n;
+    b->timed = false;
     if ((lens_x || tau) && unit_) {
       MakeLensBatch(n, u, v, lens_x, lens_y, tau, b, Mx, My, Mz);
       return;
@@ -710,6 +712,10 @@ class RayMaker {
                       b->dx, b->dy, b->dz, b->from_mirror, b->from_camera, b->mount_t);
     // tnear 1e-5: off the mirror's sheet (float rounding of the origin), or off the camera's lens face.
     std::fill(b->tnear, b->tnear + n, 1e-5f);
+    // Each ray's time, at which RayScene meets the moving units' parts.
+    b->timed = tau != nullptr;
+    if (tau)
+      for (int i = 0; i < n; ++i) b->time[i] = static_cast<float>(tau[i]);
   }
 
   // A pinhole view's thin-lens samples (RenderInto gives pinhole views no motion blur): CameraLensRays mapped
@@ -838,6 +844,8 @@ void RenderInto(const RayScene& scene, const ViewCamera& camera, const RenderOpt
     const Vec3d end = u.WorldFromMirrorAt(options.exposure_time).translation;
     HOVS_REQUIRE(end.allFinite() && end.cwiseAbs().maxCoeff() <= kWorldExtent, "render.exposure_time", "unit ", u.name,
                  " moves beyond ", kWorldExtent, " m of the world origin during the exposure");
+    HOVS_REQUIRE(options.exposure_time <= scene.MotionHorizon(), "render.exposure_time", "the scene's units turn so "
+                 "fast that motion blur covers at most ", scene.MotionHorizon(), " s (got ", options.exposure_time, ")");
   }
   Frame& f = *frame;
   CheckFrameMemory(camera.unit >= 0 ? "render (unit " + scene.description().units[camera.unit].name + "'s camera)"

@@ -37,7 +37,8 @@ struct RenderOptions {
   double lens_radius = 0.0;
   double focus_distance = 0.13;
   // Motion blur: the exposure time (s); each sample sees the unit at a random time in [0, exposure] moving
-  // with the unit's velocity and angular velocity.
+  // with the unit's velocity and angular velocity. Every moving unit's parts (its camera body, lens face, mirror
+  // and mount, as seen in its own mirror or by another unit) are met where they are at that time.
   double exposure_time = 0.0;
   bool progress = false;         // progress bar on stderr
   // Render only pixels with x0 <= x < x1, y0 <= y < y1 (others stay black, ground truth zero). Empty: all.

@@ -21,33 +21,60 @@ Rgb Sky::Eval(const Vec3d& d) const {
 }
 
 // Analytic shapes as Embree user geometry. Intersections run in double in the shape's own frame.
+// Embree hands the callbacks rays in the frame of the scene the geometry is attached to: the world, or for the
+// parts of a moving unit (attached to a scene instanced with the unit's motion) the unit's mirror frame.
 struct RayScene::UserGeometry {
   enum class Kind { kMirror, kAnnulus } kind = Kind::kMirror;
   int object_id = kMirrorId;
   int unit = -1;
-  Rigid3d world_from_local, local_from_world;
+  Rigid3d world_from_local, local_from_world;   // at time 0
+  // The callbacks' frame from the local one: world_from_local, or mirror_from_local for a moving unit's part.
+  Rigid3d ray_from_local;
   HyperboloidMirror<double> mirror;  // kMirror: local frame = mirror frame
   double r_inner = 0, r_outer = 0;   // kAnnulus: disc in local z = 0
   Rgb colour = {0, 0, 0}, back_colour = {0, 0, 0};
   // The transforms as matrices (a quaternion rotation costs twice a matrix product): set by Prepare().
   Eigen::Matrix3d R_local_from_world, R_world_from_local;
   Vec3d t_local_from_world;
-  void Prepare() {
+  Eigen::Matrix3d R_local_from_ray, R_ray_from_local;
+  Vec3d t_local_from_ray;
+  void Prepare(bool instanced) {
     R_local_from_world = local_from_world.rotation.toRotationMatrix();
     R_world_from_local = world_from_local.rotation.toRotationMatrix();
     t_local_from_world = local_from_world.translation;
+    if (!instanced) {   // the callbacks' rays are world rays: the same matrices, to the bit
+      ray_from_local = world_from_local;
+      R_local_from_ray = R_local_from_world, R_ray_from_local = R_world_from_local;
+      t_local_from_ray = t_local_from_world;
+      return;
+    }
+    const Rigid3d local_from_ray = ray_from_local.Inverse();
+    R_local_from_ray = local_from_ray.rotation.toRotationMatrix();
+    R_ray_from_local = ray_from_local.rotation.toRotationMatrix();
+    t_local_from_ray = local_from_ray.translation;
   }
 
-  // Ray in world coordinates; t along the given (not necessarily unit) direction.
+  // Ray in world coordinates (the unit at time 0); t along the given (not necessarily unit) direction.
   bool Intersect(const Vec3d& o_w, const Vec3d& d_w, double tnear, double tfar, double* t, Vec3d* n_w) const {
-    const Vec3d o = R_local_from_world * o_w + t_local_from_world, d = R_local_from_world * d_w;
+    return IntersectLocal(R_local_from_world * o_w + t_local_from_world, R_local_from_world * d_w, tnear, tfar, t,
+                          n_w, R_world_from_local);
+  }
+  // Ray in the callbacks' frame; the normal in that frame.
+  bool IntersectInRayFrame(const Vec3d& o_r, const Vec3d& d_r, double tnear, double tfar, double* t,
+                           Vec3d* n_r) const {
+    return IntersectLocal(R_local_from_ray * o_r + t_local_from_ray, R_local_from_ray * d_r, tnear, tfar, t, n_r,
+                          R_ray_from_local);
+  }
+  // Ray in the local frame; the normal rotated by R_out_from_local.
+  bool IntersectLocal(const Vec3d& o, const Vec3d& d, double tnear, double tfar, double* t, Vec3d* n_out,
+                      const Eigen::Matrix3d& R_out_from_local) const {
     if (kind == Kind::kMirror) {
       double tt = 0;
       if (!mirror.IntersectSheet(o, d, &tt, tnear) || !(tt < tfar)) return false;
       const Vec3d p = o + tt * d;
       if (!mirror.WithinRim(p)) return false;
       *t = tt;
-      if (n_w) *n_w = R_world_from_local * mirror.Normal(p);
+      if (n_out) *n_out = R_out_from_local * mirror.Normal(p);
       return true;
     }
     if (d.z() == 0) return false;
@@ -57,11 +84,12 @@ struct RayScene::UserGeometry {
     const double r2 = p.x() * p.x() + p.y() * p.y();
     if (r2 < r_inner * r_inner || r2 > r_outer * r_outer) return false;
     *t = tt;
-    if (n_w) *n_w = R_world_from_local.col(2);
+    if (n_out) *n_out = R_out_from_local.col(2);
     return true;
   }
 
-  void Bounds(RTCBounds* b) const {
+  // The shape's bounding box in the frame of frame_from_local (the callbacks' frame, or the world at time 0).
+  void Bounds(const Rigid3d& frame_from_local, RTCBounds* b) const {
     Vec3d lo_l, hi_l;
     if (kind == Kind::kMirror) {
       const double R = mirror.RimRadius();
@@ -74,7 +102,7 @@ struct RayScene::UserGeometry {
     Vec3d lo = Vec3d::Constant(HUGE_VAL), hi = Vec3d::Constant(-HUGE_VAL);
     for (int k = 0; k < 8; ++k) {
       const Vec3d c((k & 1) ? hi_l.x() : lo_l.x(), (k & 2) ? hi_l.y() : lo_l.y(), (k & 4) ? hi_l.z() : lo_l.z());
-      const Vec3d w = world_from_local * c;
+      const Vec3d w = frame_from_local * c;
       lo = lo.cwiseMin(w), hi = hi.cwiseMax(w);
     }
     const double pad = 1e-6;
@@ -107,7 +135,8 @@ inline unsigned RayMask(int from_mirror, int from_camera = -1) {
 }
 
 void UserBounds(const RTCBoundsFunctionArguments* args) {
-  static_cast<const UG*>(args->geometryUserPtr)->Bounds(args->bounds_o);
+  const auto* g = static_cast<const UG*>(args->geometryUserPtr);
+  g->Bounds(g->ray_from_local, args->bounds_o);
 }
 
 // Lane i of a ray packet in double, or false when the lane is inactive or the ray leaves this very mirror
@@ -129,7 +158,7 @@ void UserIntersect(const RTCIntersectFunctionNArguments* args) {
     Vec3d o, d, n;
     if (!LaneRay(g, args->valid, ray, N, i, &o, &d)) continue;
     double t = 0;
-    if (!g->Intersect(o, d, RTCRayN_tnear(ray, N, i), RTCRayN_tfar(ray, N, i), &t, &n)) continue;
+    if (!g->IntersectInRayFrame(o, d, RTCRayN_tnear(ray, N, i), RTCRayN_tfar(ray, N, i), &t, &n)) continue;
     RTCRayN_tfar(ray, N, i) = static_cast<float>(t);
     RTCHitN_Ng_x(hit, N, i) = static_cast<float>(n.x());
     RTCHitN_Ng_y(hit, N, i) = static_cast<float>(n.y());
@@ -150,7 +179,7 @@ void UserOccluded(const RTCOccludedFunctionNArguments* args) {
     Vec3d o, d;
     if (!LaneRay(g, args->valid, ray, N, i, &o, &d)) continue;
     double t = 0;
-    if (g->Intersect(o, d, RTCRayN_tnear(ray, N, i), RTCRayN_tfar(ray, N, i), &t, nullptr))
+    if (g->IntersectInRayFrame(o, d, RTCRayN_tnear(ray, N, i), RTCRayN_tfar(ray, N, i), &t, nullptr))
       RTCRayN_tfar(ray, N, i) = -std::numeric_limits<float>::infinity();
   }
 }
@@ -237,22 +266,34 @@ RayScene::RayScene(SceneDescription description) : desc_(std::move(description))
   // costs about 2.5 % of a frame.
   rtcSetSceneFlags(scene_, RTC_SCENE_FLAG_ROBUST);
 
-  // Camera bodies of the units become rectangles (a box behind the lens face, along the optical axis).
-  std::vector<std::pair<size_t, size_t>> body_rects;  // by unit: [first, last) in desc_.rects
-  for (size_t ui = 0; ui < desc_.units.size(); ++ui) {
-    body_rects.emplace_back(desc_.rects.size(), 0);
-    const CatadioptricUnit& u = desc_.units[ui];
-    u.rig.Check("unit " + u.name);
-    const Rigid3d world_from_cam = u.world_from_mirror * u.rig.cam_from_mirror.Inverse();
-    const double half = 0.7 * u.rig.occluder_radius;
-    Texture body;
-    body.colour_a = u.body_colour;
-    for (Rect r : MakeBox(world_from_cam * Rigid3d::Translation(Vec3d(0, 0, -u.body_length)),
-                          Vec3d(2 * half, 2 * half, u.body_length), body, kCameraBodyId, true)) {
-      r.back = u.body_colour;
-      desc_.rects.push_back(r);
+  // Units that move during an exposure: their parts (mirror, mount ring, lens face, camera body) are traced
+  // through an Embree instance that follows the motion (AttachMovingUnit), the other units' in the world.
+  std::vector<char> moving(desc_.units.size(), 0);
+  for (size_t ui = 0; ui < desc_.units.size(); ++ui)
+    moving[ui] = desc_.units[ui].velocity != Vec3d::Zero() || desc_.units[ui].angular_velocity != Vec3d::Zero();
+
+  // Camera bodies of the units become rectangles (a box behind the lens face, along the optical axis): the still
+  // units' first, then the moving units' (which go into their instances, not into the world's quad mesh).
+  std::vector<std::pair<size_t, size_t>> body_rects(desc_.units.size());  // by unit: [first, last) in desc_.rects
+  size_t world_rects = 0;
+  for (const char pass : {0, 1}) {
+    for (size_t ui = 0; ui < desc_.units.size(); ++ui) {
+      if (moving[ui] != pass) continue;
+      body_rects[ui].first = desc_.rects.size();
+      const CatadioptricUnit& u = desc_.units[ui];
+      u.rig.Check("unit " + u.name);
+      const Rigid3d world_from_cam = u.world_from_mirror * u.rig.cam_from_mirror.Inverse();
+      const double half = 0.7 * u.rig.occluder_radius;
+      Texture body;
+      body.colour_a = u.body_colour;
+      for (Rect r : MakeBox(world_from_cam * Rigid3d::Translation(Vec3d(0, 0, -u.body_length)),
+                            Vec3d(2 * half, 2 * half, u.body_length), body, kCameraBodyId, true)) {
+        r.back = u.body_colour;
+        desc_.rects.push_back(r);
+      }
+      body_rects[ui].second = desc_.rects.size();
     }
-    body_rects.back().second = desc_.rects.size();
+    if (pass == 0) world_rects = desc_.rects.size();
   }
 
   for (const Rect& r : desc_.rects) {
@@ -264,33 +305,41 @@ RayScene::RayScene(SceneDescription description) : desc_(std::move(description))
     rect_frames_.push_back(fr);
   }
 
-  // All rectangles: one quad mesh; primID = index into rects.
-  if (!desc_.rects.empty()) {
+  // Rectangles [first, last) as one quad mesh (primID = index - first), in the world or (frame_from_world given)
+  // in that frame.
+  const auto attach_quads = [&](RTCScene target, size_t first, size_t last, const Rigid3d* frame_from_world) {
     RTCGeometry g = rtcNewGeometry(device_, RTC_GEOMETRY_TYPE_QUAD);
+    const size_t count = last - first;
     auto* v = static_cast<float*>(rtcSetNewGeometryBuffer(g, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3,
-                                                          3 * sizeof(float), 4 * desc_.rects.size()));
+                                                          3 * sizeof(float), 4 * count));
     auto* idx = static_cast<unsigned*>(rtcSetNewGeometryBuffer(g, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT4,
-                                                               4 * sizeof(unsigned), desc_.rects.size()));
-    for (size_t i = 0; i < desc_.rects.size(); ++i) {
-      const Rect& r = desc_.rects[i];
+                                                               4 * sizeof(unsigned), count));
+    for (size_t i = 0; i < count; ++i) {
+      const Rect& r = desc_.rects[first + i];
       HOVS_REQUIRE(r.width > 0 && r.height > 0 && std::isfinite(r.width) && std::isfinite(r.height), "scene object",
-                   "rectangle ", i, " has a non-positive size");
+                   "rectangle ", first + i, " has a non-positive size");
       const double hw = 0.5 * r.width, hh = 0.5 * r.height;
       const Vec3d corners[4] = {Vec3d(-hw, -hh, 0), Vec3d(hw, -hh, 0), Vec3d(hw, hh, 0), Vec3d(-hw, hh, 0)};
       for (int k = 0; k < 4; ++k) {
-        const Vec3d w = r.world_from_rect * corners[k];
+        const Vec3d w = frame_from_world ? Vec3d(*frame_from_world * (r.world_from_rect * corners[k]))
+                                         : Vec3d(r.world_from_rect * corners[k]);
         for (int c = 0; c < 3; ++c) v[(4 * i + k) * 3 + c] = static_cast<float>(w(c));
         idx[4 * i + k] = static_cast<unsigned>(4 * i + k);
       }
     }
     rtcSetGeometryMask(g, 1u);
     rtcCommitGeometry(g);
-    rect_geom_ = rtcAttachGeometry(scene_, g);
+    const unsigned id = rtcAttachGeometry(target, g);
     rtcReleaseGeometry(g);
-  }
+    return id;
+  };
+  // All rectangles of the world: one quad mesh; primID = index into rects.
+  if (world_rects > 0) rect_geom_ = attach_quads(scene_, 0, world_rects, nullptr);
 
-  const auto attach = [&](std::unique_ptr<UserGeometry> ug) {
-    ug->Prepare();
+  // An analytic shape attached to target (the world, or a moving unit's scene: instanced); its slot in user_ and
+  // its id in target.
+  const auto attach = [&](std::unique_ptr<UserGeometry> ug, RTCScene target, bool instanced) {
+    ug->Prepare(instanced);
     RTCGeometry g = rtcNewGeometry(device_, RTC_GEOMETRY_TYPE_USER);
     rtcSetGeometryUserPrimitiveCount(g, 1);
     rtcSetGeometryUserData(g, ug.get());
@@ -304,19 +353,45 @@ RayScene::RayScene(SceneDescription description) : desc_(std::move(description))
                           : mount                                 ? MountMaskBit(ug->unit)
                                                                   : 1u);
     rtcCommitGeometry(g);
-    const unsigned id = rtcAttachGeometry(scene_, g);
+    const unsigned id = rtcAttachGeometry(target, g);
     rtcReleaseGeometry(g);
-    if (mount && ug->unit >= 0 && ug->unit < kMaskUnits) {
-      if (own_mount_.size() <= static_cast<size_t>(ug->unit)) own_mount_.resize(ug->unit + 1);
-      own_mount_[ug->unit] = {ug.get(), id};
+    user_.push_back(std::move(ug));
+    return std::make_pair(static_cast<int>(user_.size() - 1), id);
+  };
+  // Registers a shape under its scene-wide id.
+  const auto record = [&](int slot, unsigned id) {
+    const UserGeometry& ug = *user_[slot];
+    if (ug.kind == UserGeometry::Kind::kAnnulus && ug.object_id == kMountId && ug.unit >= 0 && ug.unit < kMaskUnits) {
+      if (own_mount_.size() <= static_cast<size_t>(ug.unit)) own_mount_.resize(ug.unit + 1);
+      own_mount_[ug.unit] = {&ug, id};
     }
     if (geom_to_user_.size() <= id) geom_to_user_.resize(id + 1, -1);
-    geom_to_user_[id] = static_cast<int>(user_.size());
-    user_.push_back(std::move(ug));
+    geom_to_user_[id] = slot;
   };
+  // The time Embree's ray time [0, 1] spans (AttachMovingUnit): kMaxExposureTime, shorter when a unit turns so fast
+  // that its instance would need more time steps than Embree takes.
+  for (size_t ui = 0; ui < desc_.units.size(); ++ui) {
+    const double rate = desc_.units[ui].angular_velocity.norm();
+    if (moving[ui] && rate > 0) motion_horizon_ = std::min(motion_horizon_, kMaxMotionSegments * kMotionSegmentAngle / rate);
+  }
+  unsigned next_id = rect_geom_ == RTC_INVALID_GEOMETRY_ID ? 0u : rect_geom_ + 1;   // past the world's ids
   for (size_t ui = 0; ui < desc_.units.size(); ++ui) {
     CatadioptricUnit& u = desc_.units[ui];
     if (u.mount_outer_radius <= 0) u.mount_outer_radius = DefaultMountRadius(u);
+    const bool instanced = moving[ui] != 0;
+    // A moving unit's parts live in its mirror frame (the instance's frame) and move with it.
+    RTCScene target = scene_;
+    if (instanced) {
+      target = rtcNewScene(device_);
+      rtcSetSceneBuildQuality(target, RTC_BUILD_QUALITY_HIGH);
+      rtcSetSceneFlags(target, RTC_SCENE_FLAG_ROBUST);
+    }
+    const Rigid3d mirror_from_world = u.world_from_mirror.Inverse();
+    MotionInstance mi;
+    if (instanced) {
+      mi.rect_base = static_cast<unsigned>(body_rects[ui].first);
+      mi.quad_geom = attach_quads(target, body_rects[ui].first, body_rects[ui].second, &mirror_from_world);
+    }
     auto mirror = std::make_unique<UserGeometry>();
     mirror->kind = UserGeometry::Kind::kMirror;
     mirror->object_id = kMirrorId;
@@ -325,7 +400,6 @@ RayScene::RayScene(SceneDescription description) : desc_(std::move(description))
     mirror->world_from_local = u.world_from_mirror;
     mirror->local_from_world = u.world_from_mirror.Inverse();
     mirror->back_colour = u.mirror_back_colour;
-    attach(std::move(mirror));
     auto mount = std::make_unique<UserGeometry>();
     mount->kind = UserGeometry::Kind::kAnnulus;
     mount->object_id = kMountId;
@@ -335,7 +409,6 @@ RayScene::RayScene(SceneDescription description) : desc_(std::move(description))
     mount->world_from_local = u.world_from_mirror * Rigid3d::Translation(Vec3d(0, 0, u.rig.mirror.RimZ()));
     mount->local_from_world = mount->world_from_local.Inverse();
     mount->colour = mount->back_colour = u.mount_colour;
-    attach(std::move(mount));
     auto lens = std::make_unique<UserGeometry>();
     lens->kind = UserGeometry::Kind::kAnnulus;
     lens->object_id = kCameraBodyId;
@@ -345,10 +418,92 @@ RayScene::RayScene(SceneDescription description) : desc_(std::move(description))
     lens->world_from_local = u.world_from_mirror * u.rig.cam_from_mirror.Inverse();
     lens->local_from_world = lens->world_from_local.Inverse();
     lens->colour = lens->back_colour = u.body_colour;
-    attach(std::move(lens));
+    for (auto* part : {&mirror, &mount, &lens}) {
+      if (instanced) (*part)->ray_from_local = mirror_from_world * (*part)->world_from_local;
+      const auto [slot, id] = attach(std::move(*part), target, instanced);
+      if (!instanced) {
+        record(slot, id);
+        next_id = std::max(next_id, id + 1);
+        continue;
+      }
+      if (mi.geom.size() <= id) mi.geom.resize(id + 1, RTC_INVALID_GEOMETRY_ID);
+      mi.geom[id] = static_cast<unsigned>(slot);   // a slot for now; the scene-wide id below
+    }
+    if (instanced) {
+      rtcCommitScene(target);
+      const unsigned inst = AttachMovingUnit(u, target);
+      rtcReleaseScene(target);   // the instance holds it
+      next_id = std::max(next_id, inst + 1);
+      if (inst_slot_.size() <= inst) inst_slot_.resize(inst + 1, -1);
+      inst_slot_[inst] = static_cast<int>(instances_.size());
+      instances_.push_back(std::move(mi));
+    }
   }
   rtcCommitScene(scene_);
+  // The moving units' shapes get scene-wide ids past the world's (hits in their instances are mapped to them:
+  // MapInstanceHits), and their camera bodies' rectangles the world's quad id (there may be no world quads).
+  if (!instances_.empty() && rect_geom_ == RTC_INVALID_GEOMETRY_ID) rect_geom_ = next_id++;
+  for (MotionInstance& mi : instances_) {
+    for (unsigned& g : mi.geom) {
+      if (g == RTC_INVALID_GEOMETRY_ID) continue;
+      const unsigned id = next_id++;
+      record(static_cast<int>(g), id);
+      g = id;
+    }
+  }
   DecideMountPaths(body_rects);
+}
+
+// A moving unit's scene (its parts in its mirror frame) as an instance whose transform is its world_from_mirror
+// at the ray's time: Embree interpolates it between time steps spread over [0, motion_horizon_] (ray time tau /
+// horizon), the rotation by slerp and the translation linearly. That is the unit's motion (WorldFromMirrorAt: a
+// constant turn about a fixed axis through the viewpoint, a constant velocity) exactly, in Embree's single
+// precision, as long as no step turns by half a turn or more; the steps turn by a quarter turn at most.
+unsigned RayScene::AttachMovingUnit(const CatadioptricUnit& u, RTCScene unit_scene) {
+  const double rate = u.angular_velocity.norm();
+  const int segments = static_cast<int>(
+      std::clamp(std::ceil(rate * motion_horizon_ / kMotionSegmentAngle - 1e-9), 1.0, double(kMaxMotionSegments)));
+  RTCGeometry g = rtcNewGeometry(device_, RTC_GEOMETRY_TYPE_INSTANCE);
+  rtcSetGeometryInstancedScene(g, unit_scene);
+  rtcSetGeometryTimeStepCount(g, static_cast<unsigned>(segments + 1));
+  Eigen::Quaterniond previous = Eigen::Quaterniond::Identity();
+  for (int step = 0; step <= segments; ++step) {
+    const Rigid3d pose = u.WorldFromMirrorAt(motion_horizon_ * step / segments);
+    Eigen::Quaterniond q = pose.rotation.normalized();
+    if (step > 0 && q.dot(previous) < 0) q.coeffs() *= -1;   // the short way round between steps
+    previous = q;
+    RTCQuaternionDecomposition qd;
+    rtcInitQuaternionDecomposition(&qd);
+    rtcQuaternionDecompositionSetQuaternion(&qd, static_cast<float>(q.w()), static_cast<float>(q.x()),
+                                            static_cast<float>(q.y()), static_cast<float>(q.z()));
+    rtcQuaternionDecompositionSetTranslation(&qd, static_cast<float>(pose.translation.x()),
+                                             static_cast<float>(pose.translation.y()),
+                                             static_cast<float>(pose.translation.z()));
+    rtcSetGeometryTransformQuaternion(g, static_cast<unsigned>(step), &qd);
+  }
+  rtcSetGeometryMask(g, 0xFFFFFFFFu);
+  rtcCommitGeometry(g);
+  const unsigned id = rtcAttachGeometry(scene_, g);
+  rtcReleaseGeometry(g);
+  return id;
+}
+
+void RayScene::MapInstanceHits(int n, const unsigned* inst, unsigned* geom, unsigned* prim) const {
+  for (int i = 0; i < n; ++i) {
+    if (inst[i] == RTC_INVALID_GEOMETRY_ID || geom[i] == RTC_INVALID_GEOMETRY_ID) continue;
+    const int slot = inst[i] < inst_slot_.size() ? inst_slot_[inst[i]] : -1;
+    if (slot < 0) {   // (no other instances exist)
+      geom[i] = RTC_INVALID_GEOMETRY_ID;
+      continue;
+    }
+    const MotionInstance& m = instances_[slot];
+    if (geom[i] == m.quad_geom) {
+      geom[i] = rect_geom_, prim[i] += m.rect_base;
+    } else {
+      geom[i] = geom[i] < m.geom.size() ? m.geom[geom[i]] : RTC_INVALID_GEOMETRY_ID;
+      prim[i] = 0;
+    }
+  }
 }
 
 // A unit's straight camera rays start at its camera centre (thin-lens samples: a point of the aperture, within
@@ -384,7 +539,7 @@ void RayScene::DecideMountPaths(const std::vector<std::pair<size_t, size_t>>& bo
       if (!clear) break;
       if (g->unit == static_cast<int>(u)) continue;  // its mirror, lens face and mount ring
       RTCBounds b;
-      g->Bounds(&b);
+      g->Bounds(g->world_from_local, &b);
       const Eigen::AlignedBox3d box(Vec3d(b.lower_x, b.lower_y, b.lower_z), Vec3d(b.upper_x, b.upper_y, b.upper_z));
       clear = !box.intersects(region);
     }
@@ -492,6 +647,7 @@ void RayScene::Trace16(int count, const Vec3d* o, const Vec3d* d, const double* 
                        const int* from_mirror, bool colour) const {
   alignas(64) RTCRayHit16 rh;
   IntersectPacket(scene_, count, o, d, tnear, from_mirror, &rh);
+  if (!instances_.empty()) MapInstanceHits(count, rh.hit.instID[0], rh.hit.geomID, rh.hit.primID);
   for (int i = 0; i < count; ++i) {
     Hit& h = hits[i];
     h = Hit();
@@ -610,9 +766,11 @@ void PrepareLanes(const RayBatchOf<T>& b, const std::vector<RayScene::OwnMount>&
 }
 
 // Batch rays [i0, i0 + W) (fewer at the end) as one Embree packet of width W (RTCRayHit8 or RTCRayHit16).
+// Rays with times (b.timed) take time = b.time * inv_horizon in Embree's [0, 1] (a moving unit's instance); the
+// hits' instance ids go to inst_ids when it is given (the scene has moving units), else they are not needed.
 template <int W, class RayHitW, class T, class IntersectW>
 void TracePacketOfBatch(RTCScene scene, const RayBatchOf<T>& b, const BatchLanes& L, int i0, unsigned* geom_ids,
-                        unsigned* prim_ids, IntersectW intersect) {
+                        unsigned* prim_ids, unsigned* inst_ids, float inv_horizon, IntersectW intersect) {
   const int count = std::min(W, b.n - i0);
   int any = 0;
   if (count == W) {   // (as vectors of four lanes: GCC leaves the plain loop scalar)
@@ -635,6 +793,7 @@ void TracePacketOfBatch(RTCScene scene, const RayBatchOf<T>& b, const BatchLanes
       std::fill(geom_ids, geom_ids + count, RTC_INVALID_GEOMETRY_ID);
       std::fill(prim_ids, prim_ids + count, 0u);
     }
+    if (inst_ids) std::fill(inst_ids, inst_ids + count, RTC_INVALID_GEOMETRY_ID);
     return;
   }
   alignas(64) RayHitW rh;
@@ -660,7 +819,14 @@ void TracePacketOfBatch(RTCScene scene, const RayBatchOf<T>& b, const BatchLanes
     }
     valid = partial_valid;
   }
+  if (b.timed) {
+    for (int i = 0; i < W; ++i) {
+      const int j = i0 + (i < count ? i : 0);
+      rh.ray.time[i] = std::min(std::max(b.time[j] * inv_horizon, 0.0f), 1.0f);
+    }
+  }
   TracePacket(scene, valid, &rh, intersect);
+  if (inst_ids) std::memcpy(inst_ids, rh.hit.instID[0], sizeof(unsigned) * static_cast<size_t>(count));
   if (count == W) {   // (a constant size: vector moves, not a library call)
     std::memcpy(geom_ids, rh.hit.geomID, sizeof(unsigned) * W);
     std::memcpy(prim_ids, rh.hit.primID, sizeof(unsigned) * W);
@@ -687,14 +853,21 @@ template <class T>
 void RayScene::IntersectBatch(const RayBatchOf<T>& b, unsigned* geom_ids, unsigned* prim_ids) const {
   BatchLanes lanes;
   PrepareLanes(b, own_mount_, &lanes);
+  alignas(64) unsigned inst[RayBatch::kMax];
+  unsigned* const inst_ids = instances_.empty() ? nullptr : inst;
+  const float inv_horizon = static_cast<float>(1.0 / motion_horizon_);
   for (int i0 = 0; i0 < b.n; i0 += native16_ ? 16 : 8) {
+    unsigned* const ii = inst_ids ? inst_ids + i0 : nullptr;
     if (native16_) {
-      TracePacketOfBatch<16, RTCRayHit16>(scene_, b, lanes, i0, geom_ids + i0, prim_ids + i0, rtcIntersect16);
+      TracePacketOfBatch<16, RTCRayHit16>(scene_, b, lanes, i0, geom_ids + i0, prim_ids + i0, ii, inv_horizon,
+                                          rtcIntersect16);
     } else {
       // Without native 16-wide packets (no AVX-512) Embree emulates rtcIntersect16; rtcIntersect8 is faster.
-      TracePacketOfBatch<8, RTCRayHit8>(scene_, b, lanes, i0, geom_ids + i0, prim_ids + i0, rtcIntersect8);
+      TracePacketOfBatch<8, RTCRayHit8>(scene_, b, lanes, i0, geom_ids + i0, prim_ids + i0, ii, inv_horizon,
+                                        rtcIntersect8);
     }
   }
+  if (inst_ids) MapInstanceHits(b.n, inst_ids, geom_ids, prim_ids);
   ResolveMisses(b.n, lanes.mount_geom, geom_ids, prim_ids);
 }
 
@@ -1009,6 +1182,7 @@ void RayScene::IntersectOnly16(int count, const Vec3d* o, const Vec3d* d, unsign
                                const int* from_mirror) const {
   alignas(64) RTCRayHit16 rh;
   IntersectPacket(scene_, count, o, d, nullptr, from_mirror, &rh);
+  if (!instances_.empty()) MapInstanceHits(count, rh.hit.instID[0], rh.hit.geomID, rh.hit.primID);
   for (int i = 0; i < count; ++i) geom_ids[i] = rh.hit.geomID[i];
 }
 

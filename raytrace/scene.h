@@ -23,6 +23,9 @@ constexpr double kWorldExtent = 1e4;
 // The largest thin-lens aperture radius (m) the renderer takes (RenderOptions::lens_radius): straight camera rays
 // may leave any point within it of a unit's camera centre (RayScene::OwnMount::path_clear allows for that).
 constexpr double kMaxApertureRadius = 0.1;
+// The longest exposure the renderer takes (RenderOptions::exposure_time), s. A scene whose units turn faster than
+// about 20 rad/s covers less (RayScene::MotionHorizon).
+constexpr double kMaxExposureTime = 10;
 
 // Object ids written to the ground truth. Scene objects number from kFirstObjectId in the order given.
 enum ObjectId : int { kSkyId = 0, kMountId = 1, kCameraBodyId = 2, kMirrorId = 3, kFirstObjectId = 4 };
@@ -109,6 +112,10 @@ struct RayBatchOf {
   // < 0 if not computed (RayScene then computes it).
   alignas(64) T mount_t[kMax];
   alignas(64) unsigned char valid[kMax];            // 0: no ray (outside the camera's domain): black, no hit
+  // Motion blur: each ray's time in the exposure (s), where timed; else every ray is at time 0. Moving units'
+  // parts are met where they are at that time.
+  bool timed = false;
+  alignas(64) float time[kMax];
 };
 using RayBatch = RayBatchOf<double>;
 using RayBatchF = RayBatchOf<float>;
@@ -164,6 +171,7 @@ class RayScene {
   struct RawPacket16 {
     alignas(64) float ox[16], oy[16], oz[16], dx[16], dy[16], dz[16];
   };
+  // (Ids as Embree gives them: a moving unit's parts have their ids inside its instance.)
   void IntersectRaw(const RawPacket16& packet, int from_mirror, int width, unsigned* geom_ids) const;
 
   struct UserGeometry;  // mirror, annulus (mount, lens face): analytic shapes, defined in scene.cc
@@ -179,6 +187,9 @@ class RayScene {
   // True if unit's straight camera rays (from its camera centre, past the rim) are known to meet nothing
   // before its mount ring, so they skip Embree (see OwnMount).
   bool MountPathClear(int unit) const;
+  // The longest exposure (s) over which the moving units' parts are where their motion puts them:
+  // kMaxExposureTime unless a unit turns faster than about 20 rad/s (Embree takes at most 129 time steps).
+  double MotionHorizon() const { return motion_horizon_; }
 
  private:
   void Shade(const Vec3d& o, const Vec3d& d, unsigned geom_id, unsigned prim_id, Hit* hit, bool colour) const;
@@ -209,6 +220,26 @@ class RayScene {
   std::vector<std::unique_ptr<UserGeometry>> user_;  // index = user geometry slot
   std::vector<int> geom_to_user_;                    // geomID -> slot in user_, or -1
   std::vector<OwnMount> own_mount_;  // by unit, for the units with their own Embree mask bits
+
+  // A unit that moves (velocity or angular velocity not zero) has its parts (camera body rectangles, mirror, mount
+  // ring, lens face) in a scene of its own, in its mirror frame, instanced in the world with its motion over
+  // [0, motion_horizon_]. So under motion blur a ray at time tau meets them where they are then: the camera's
+  // reflection stays sharp, as it moves with the mirror. Their hits are mapped to scene-wide ids (the world's
+  // rectangles' id and the rectangle's index in desc_.rects; ids past the world's for the shapes), so that
+  // shading and ground truth treat them as the still units' parts (at time 0).
+  struct MotionInstance {
+    unsigned quad_geom = RTC_INVALID_GEOMETRY_ID;  // the camera body's quad mesh in the unit's scene
+    unsigned rect_base = 0;                        // its first rectangle in desc_.rects
+    std::vector<unsigned> geom;                    // the unit scene's geomID -> scene-wide id
+  };
+  static constexpr int kMaxMotionSegments = RTC_MAX_TIME_STEP_COUNT - 1;
+  static constexpr double kMotionSegmentAngle = 1.5707963267948966;   // rad: a quarter turn per time step at most
+  unsigned AttachMovingUnit(const CatadioptricUnit& unit, RTCScene unit_scene);
+  // Hits found inside an instance (inst[i] valid) to scene-wide ids (geom, prim).
+  void MapInstanceHits(int n, const unsigned* inst, unsigned* geom, unsigned* prim) const;
+  std::vector<MotionInstance> instances_;
+  std::vector<int> inst_slot_;   // world geomID of an instance -> index in instances_, or -1
+  double motion_horizon_ = kMaxExposureTime;
 };
 
 }  // namespace hovs::raytrace
