@@ -489,6 +489,10 @@ unsigned RayScene::AttachMovingUnit(const CatadioptricUnit& u, RTCScene unit_sce
 }
 
 void RayScene::MapInstanceHits(int n, const unsigned* inst, unsigned* geom, unsigned* prim) const {
+  // Most lanes hit nothing inside an instance (a moving unit's parts fill little of a frame): one vectorised test.
+  unsigned any = 0;
+  for (int i = 0; i < n; ++i) any |= inst[i] ^ RTC_INVALID_GEOMETRY_ID;
+  if (!any) return;
   for (int i = 0; i < n; ++i) {
     if (inst[i] == RTC_INVALID_GEOMETRY_ID || geom[i] == RTC_INVALID_GEOMETRY_ID) continue;
     const int slot = inst[i] < inst_slot_.size() ? inst_slot_[inst[i]] : -1;
@@ -826,7 +830,11 @@ void TracePacketOfBatch(RTCScene scene, const RayBatchOf<T>& b, const BatchLanes
     }
   }
   TracePacket(scene, valid, &rh, intersect);
-  if (inst_ids) std::memcpy(inst_ids, rh.hit.instID[0], sizeof(unsigned) * static_cast<size_t>(count));
+  if (inst_ids && count == W) {   // (a constant size: vector moves, not a library call)
+    std::memcpy(inst_ids, rh.hit.instID[0], sizeof(unsigned) * W);
+  } else if (inst_ids) {
+    std::memcpy(inst_ids, rh.hit.instID[0], sizeof(unsigned) * static_cast<size_t>(count));
+  }
   if (count == W) {   // (a constant size: vector moves, not a library call)
     std::memcpy(geom_ids, rh.hit.geomID, sizeof(unsigned) * W);
     std::memcpy(prim_ids, rh.hit.primID, sizeof(unsigned) * W);
