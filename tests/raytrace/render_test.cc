@@ -40,6 +40,14 @@ SceneConfig BoardScene(bool misaligned) {
   return cfg;
 }
 
+// The reference board scene seen by a camera of the same field of view with pixels `shrink` times larger.
+SceneConfig SmallBoardScene(int shrink) {
+  SceneConfig cfg = BoardScene(false);
+  cfg.description.units[0].rig.camera =
+      PinholeCamera<double>::FromPhysical(0.016, 4.54e-6 * shrink, 2750 / shrink, 2200 / shrink);
+  return cfg;
+}
+
 // Region of the image around the visible corners of the first board.
 raytrace::RenderOptions::Region CornerRegion(const std::vector<scenes::CornerTruth>& corners, int pad) {
   double x0 = 1e9, y0 = 1e9, x1 = -1e9, y1 = -1e9;
@@ -556,9 +564,7 @@ TEST(Render, PastTheRimTheCameraSeesTheMountNotItsOwnLens) {
   // Both ray paths (the batched pinhole path and the thin-lens path) must see the mount ring; so must a unit that
   // moves and turns during the exposure (its mount moves with it: up to 11 cm in this exposure, which once left
   // the rays of the moved camera passing beside the ring where it stood at time 0).
-  SceneConfig cfg = BoardScene(false);
-  auto& cam = cfg.description.units[0].rig.camera;
-  cam = PinholeCamera<double>::FromPhysical(0.016, 4.54e-6 * 25, 110, 88);
+  SceneConfig cfg = SmallBoardScene(25);
   const RayScene scene(cfg.description);
   cfg.description.units[0].velocity = Vec3d(5, 2, 0);
   cfg.description.units[0].angular_velocity = Vec3d(0, 0, 30 * kDeg);
@@ -607,9 +613,7 @@ TEST(Render, UnderMotionBlurTheCamerasOwnReflectionStaysSharp) {
   // where they are at tau: the camera's reflection at the image centre is the same under any motion. (They used
   // to stay where they stood at time 0: at 10 cm of travel the reflected rays of later samples passed beside
   // the body and saw the floor.) The ground truth is at time 0 and does not depend on the motion.
-  SceneConfig cfg = BoardScene(false);
-  auto& cam = cfg.description.units[0].rig.camera;
-  cam = PinholeCamera<double>::FromPhysical(0.016, 4.54e-6 * 5, 550, 440);
+  SceneConfig cfg = SmallBoardScene(5);
   const RayScene still(cfg.description);
   cfg.description.units[0].velocity = Vec3d(5, 2, 0.5);
   cfg.description.units[0].angular_velocity = Vec3d(0.2, -0.1, 0.6);
