@@ -611,7 +611,7 @@ class RayMaker {
   // within about 1e-7 relative of MakeBatch's (tests bound them), the precision Embree traces them in.
   void MakeBatchF(int n, const double* u, const double* v, RayBatchF* b) const {
     b->n = n;
-    b->timed = false;
+    b->timed = false, b->mirror_frame = false;
     const PinholeCamera<double>& cam = unit_->rig.camera;
     alignas(64) float vx[RayBatch::kMax], vy[RayBatch::kMax], vz[RayBatch::kMax];
     alignas(64) float Mx[RayBatch::kMax], My[RayBatch::kMax], Mz[RayBatch::kMax];
@@ -640,7 +640,7 @@ class RayMaker {
                  const double* tau, RayBatch* b, double* Mx, double* My, double* Mz, const double* nx = nullptr,
                  const double* ny = nullptr) const {
     b->n = n;
-    b->timed = false;
+    b->timed = false, b->mirror_frame = false;
     if ((lens_x || tau) && unit_) {
       MakeLensBatch(n, u, v, lens_x, lens_y, tau, b, Mx, My, Mz);
       return;
@@ -716,6 +716,12 @@ class RayMaker {
     b->timed = tau != nullptr;
     if (tau)
       for (int i = 0; i < n; ++i) b->time[i] = static_cast<float>(tau[i]);
+    // The mirror rays in the mirror frame, where RayScene meets the moving unit's own parts.
+    b->mirror_frame = scene_.OwnPartsInMirrorFrame(cam_.unit);
+    if (b->mirror_frame) {
+      std::copy(Mx, Mx + n, b->mox), std::copy(My, My + n, b->moy), std::copy(Mz, Mz + n, b->moz);
+      std::copy(mdx, mdx + n, b->mdx), std::copy(mdy, mdy + n, b->mdy), std::copy(mdz, mdz + n, b->mdz);
+    }
   }
 
   // A pinhole view's thin-lens samples (RenderInto gives pinhole views no motion blur): CameraLensRays mapped

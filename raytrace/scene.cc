@@ -428,11 +428,28 @@ RayScene::RayScene(SceneDescription description) : desc_(std::move(description))
       }
       if (mi.geom.size() <= id) mi.geom.resize(id + 1, RTC_INVALID_GEOMETRY_ID);
       mi.geom[id] = static_cast<unsigned>(slot);   // a slot for now; the scene-wide id below
+      if (part == &mount) mi.mount_inner = id;
+      if (part == &lens) mi.lens_inner = id;
     }
     if (instanced) {
       rtcCommitScene(target);
-      const unsigned inst = AttachMovingUnit(u, target);
+      OwnPartShapes& own = mi.own;
+      own.analytic = ui < static_cast<size_t>(kMaskUnits);
+      own.mask = own.analytic ? LensMaskBit(static_cast<int>(ui)) | MountMaskBit(static_cast<int>(ui)) : 0xFFFFFFFFu;
+      const Eigen::Matrix3d Rc = u.rig.cam_from_mirror.rotation.toRotationMatrix();
+      const Eigen::Matrix3d Rw = mirror_from_world.rotation.toRotationMatrix();
+      for (int k = 0; k < 9; ++k) own.R_cam_from_mirror[k] = Rc.data()[k], own.R_mirror_from_world[k] = Rw.data()[k];
+      for (int k = 0; k < 3; ++k)
+        own.t_cam_from_mirror[k] = u.rig.cam_from_mirror.translation(k), own.t_mirror_from_world[k] = mirror_from_world.translation(k);
+      own.lens_r2 = u.rig.occluder_radius * u.rig.occluder_radius;
+      own.rim_z = u.rig.mirror.RimZ();
+      own.rim_r2 = u.rig.mirror.RimRadius() * u.rig.mirror.RimRadius();
+      own.mount_r2 = u.mount_outer_radius * u.mount_outer_radius;
+      own.half = 0.7 * u.rig.occluder_radius, own.length = u.body_length;   // as the body rectangles above
+      const unsigned inst = AttachMovingUnit(u, target, own.mask);
       rtcReleaseScene(target);   // the instance holds it
+      if (unit_instance_.size() <= ui) unit_instance_.resize(ui + 1, -1);
+      unit_instance_[ui] = static_cast<int>(instances_.size());
       next_id = std::max(next_id, inst + 1);
       if (inst_slot_.size() <= inst) inst_slot_.resize(inst + 1, -1);
       inst_slot_[inst] = static_cast<int>(instances_.size());
@@ -450,6 +467,7 @@ RayScene::RayScene(SceneDescription description) : desc_(std::move(description))
       record(static_cast<int>(g), id);
       g = id;
     }
+    mi.own.lens_geom = mi.geom[mi.lens_inner], mi.own.mount_geom = mi.geom[mi.mount_inner];
   }
   DecideMountPaths(body_rects);
 }
@@ -459,7 +477,7 @@ RayScene::RayScene(SceneDescription description) : desc_(std::move(description))
 // horizon), the rotation by slerp and the translation linearly. That is the unit's motion (WorldFromMirrorAt: a
 // constant turn about a fixed axis through the viewpoint, a constant velocity) exactly, in Embree's single
 // precision, as long as no step turns by half a turn or more; the steps turn by a quarter turn at most.
-unsigned RayScene::AttachMovingUnit(const CatadioptricUnit& u, RTCScene unit_scene) {
+unsigned RayScene::AttachMovingUnit(const CatadioptricUnit& u, RTCScene unit_scene, unsigned mask) {
   const double rate = u.angular_velocity.norm();
   const int segments = static_cast<int>(
       std::clamp(std::ceil(rate * motion_horizon_ / kMotionSegmentAngle - 1e-9), 1.0, double(kMaxMotionSegments)));
@@ -481,7 +499,7 @@ unsigned RayScene::AttachMovingUnit(const CatadioptricUnit& u, RTCScene unit_sce
                                              static_cast<float>(pose.translation.z()));
     rtcSetGeometryTransformQuaternion(g, static_cast<unsigned>(step), &qd);
   }
-  rtcSetGeometryMask(g, 0xFFFFFFFFu);
+  rtcSetGeometryMask(g, mask);
   rtcCommitGeometry(g);
   const unsigned id = rtcAttachGeometry(scene_, g);
   rtcReleaseGeometry(g);
@@ -663,6 +681,22 @@ void RayScene::Trace16(int count, const Vec3d* o, const Vec3d* d, const double* 
   }
 }
 
+// The Embree lanes of a whole batch, set up once before its packets are traced.
+//
+// A unit's straight camera rays (they missed its mirror within the rim: 40 % of a frame's samples, the image
+// past the rim) end on its mount ring unless something lies in between. They meet the ring analytically, in
+// double (RayBatch::mount_t, from the renderer's ray set-up in the mirror frame where the rim test was made, or
+// here with the ring's own test), and go to Embree only up to that distance with the ring masked off: anything
+// nearer still wins, and the ring's callback is not called for them. Where nothing can be in between
+// (OwnMount::path_clear) they do not go to Embree at all; a packet of such rays only gets its hits.
+struct BatchLanes {
+  alignas(64) int valid[RayBatch::kMax];         // -1: traced by Embree, 0: not
+  alignas(64) float tfar[RayBatch::kMax];        // > 0: traced only up to here (the ring's distance)
+  alignas(64) unsigned mask_off[RayBatch::kMax]; // Embree mask bits cleared (the ring's)
+  alignas(64) unsigned mount_geom[RayBatch::kMax];  // the ring that ends the ray where Embree finds nothing, or
+                                                    // RTC_INVALID_GEOMETRY_ID
+};
+
 namespace {
 
 // Packet fields of w full lanes from batch arrays (already offset to the packet's first ray): the conversions
@@ -691,21 +725,6 @@ HOVS_VECTOR_CLONES void FillPacket(const T* __restrict ox, const T* __restrict o
   }
 }
 
-// The Embree lanes of a whole batch, set up once before its packets are traced.
-//
-// A unit's straight camera rays (they missed its mirror within the rim: 40 % of a frame's samples, the image
-// past the rim) end on its mount ring unless something lies in between. They meet the ring analytically, in
-// double (RayBatch::mount_t, from the renderer's ray set-up in the mirror frame where the rim test was made, or
-// here with the ring's own test), and go to Embree only up to that distance with the ring masked off: anything
-// nearer still wins, and the ring's callback is not called for them. Where nothing can be in between
-// (OwnMount::path_clear) they do not go to Embree at all; a packet of such rays only gets its hits.
-struct BatchLanes {
-  alignas(64) int valid[RayBatch::kMax];         // -1: traced by Embree, 0: not
-  alignas(64) float tfar[RayBatch::kMax];        // > 0: traced only up to here (the ring's distance)
-  alignas(64) unsigned mask_off[RayBatch::kMax]; // Embree mask bits cleared (the ring's)
-  alignas(64) unsigned mount_geom[RayBatch::kMax];  // the ring that ends the ray where Embree finds nothing, or
-                                                    // RTC_INVALID_GEOMETRY_ID
-};
 
 // The common case of PrepareLanes without branches: every straight camera ray of the batch leaves unit U's
 // camera with its ring distance computed.
@@ -857,10 +876,151 @@ HOVS_VECTOR_CLONES void ResolveMisses(int n, const unsigned* __restrict mount_ge
 
 }  // namespace
 
+namespace {
+
+// Rays from the world to a frame: o' = R o + t, d' = R d (R column-major). Vectorised.
+template <class T>
+HOVS_VECTOR_CLONES void RaysToFrame(int n, const double* __restrict Rd, const double* __restrict td,
+                                    const T* __restrict ox, const T* __restrict oy, const T* __restrict oz,
+                                    const T* __restrict dx, const T* __restrict dy, const T* __restrict dz,
+                                    T* __restrict fox, T* __restrict foy, T* __restrict foz, T* __restrict fdx,
+                                    T* __restrict fdy, T* __restrict fdz) {
+  T R[9], t[3];
+  for (int k = 0; k < 9; ++k) R[k] = static_cast<T>(Rd[k]);
+  for (int k = 0; k < 3; ++k) t[k] = static_cast<T>(td[k]);
+  for (int i = 0; i < n; ++i) {
+    const T o0 = ox[i], o1 = oy[i], o2 = oz[i], d0 = dx[i], d1 = dy[i], d2 = dz[i];
+    fox[i] = R[0] * o0 + R[3] * o1 + R[6] * o2 + t[0];
+    foy[i] = R[1] * o0 + R[4] * o1 + R[7] * o2 + t[1];
+    foz[i] = R[2] * o0 + R[5] * o1 + R[8] * o2 + t[2];
+    fdx[i] = R[0] * d0 + R[3] * d1 + R[6] * d2;
+    fdy[i] = R[1] * d0 + R[4] * d1 + R[7] * d2;
+    fdz[i] = R[2] * d0 + R[5] * d1 + R[8] * d2;
+  }
+}
+
+// The nearest of a moving unit's own parts along its rays in its mirror frame (OwnPartShapes): part[i] = 0 none,
+// 1 the lens face, 2 the mount ring, 3 + f the body's rectangle f (MakeBox's order: top, bottom, +x, -x, +y, -y),
+// at distance t[i] beyond tnear[i], for lanes with active[i]. The disc and annulus as UserGeometry's tests (a
+// plane, then the radius), the box by slabs in the camera frame (where the ray enters it). A ray parallel to a
+// plane gives an infinite or undefined distance, which no comparison passes. Vectorised. sh: R_cam_from_mirror
+// (9, column-major), t_cam_from_mirror (3), lens_r2, rim_z, rim_r2, mount_r2, half, length.
+template <class T>
+HOVS_VECTOR_CLONES void OwnPartLanes(int n, const unsigned char* __restrict active, const T* __restrict ox_in,
+                                     const T* __restrict oy_in, const T* __restrict oz_in, const T* __restrict dx_in,
+                                     const T* __restrict dy_in, const T* __restrict dz_in,
+                                     const float* __restrict tnear, const double* __restrict sh, int* __restrict part,
+                                     float* __restrict tout) {
+  // In single precision whatever the rays' (Embree, which takes the distance, traces in it; which part a ray
+  // meets differs from a double-precision test only within about 1e-7 m of a part's edge).
+  alignas(64) float ox[RayBatch::kMax], oy[RayBatch::kMax], oz[RayBatch::kMax], dx[RayBatch::kMax],
+      dy[RayBatch::kMax], dz[RayBatch::kMax];
+  for (int i = 0; i < n; ++i) {
+    ox[i] = static_cast<float>(ox_in[i]), oy[i] = static_cast<float>(oy_in[i]), oz[i] = static_cast<float>(oz_in[i]);
+    dx[i] = static_cast<float>(dx_in[i]), dy[i] = static_cast<float>(dy_in[i]), dz[i] = static_cast<float>(dz_in[i]);
+  }
+  using F = float;
+  F R[9], c[3];
+  for (int k = 0; k < 9; ++k) R[k] = static_cast<F>(sh[k]);
+  for (int k = 0; k < 3; ++k) c[k] = static_cast<F>(sh[9 + k]);
+  const F lens_r2 = static_cast<F>(sh[12]), rim_z = static_cast<F>(sh[13]), rim_r2 = static_cast<F>(sh[14]);
+  const F mount_r2 = static_cast<F>(sh[15]), half = static_cast<F>(sh[16]), length = static_cast<F>(sh[17]);
+  const F inf = std::numeric_limits<F>::infinity();
+  for (int i = 0; i < n; ++i) {
+    const F o0 = ox[i], o1 = oy[i], o2 = oz[i], d0 = dx[i], d1 = dy[i], d2 = dz[i], tn = tnear[i];
+    // The camera frame.
+    const F cx = R[0] * o0 + R[3] * o1 + R[6] * o2 + c[0], cy = R[1] * o0 + R[4] * o1 + R[7] * o2 + c[1];
+    const F cz = R[2] * o0 + R[5] * o1 + R[8] * o2 + c[2];
+    const F ex = R[0] * d0 + R[3] * d1 + R[6] * d2, ey = R[1] * d0 + R[4] * d1 + R[7] * d2;
+    const F ez = R[2] * d0 + R[5] * d1 + R[8] * d2;
+    // The lens face: the disc z = 0 of the camera frame. (Flags as integers combined with &, and selects: the
+    // loop then vectorises.)
+    const F tl = -cz / ez, lx = cx + tl * ex, ly = cy + tl * ey;
+    const int hl = (tl > tn ? 1 : 0) & (lx * lx + ly * ly <= lens_r2 ? 1 : 0);
+    // The mount ring: the annulus in the rim plane.
+    const F tm = (rim_z - o2) / d2, mx = o0 + tm * d0, my = o1 + tm * d1, mr2 = mx * mx + my * my;
+    const int hm = (tm > tn ? 1 : 0) & (mr2 >= rim_r2 ? 1 : 0) & (mr2 <= mount_r2 ? 1 : 0);
+    // The body: where the ray enters the box x, y in [-half, half], z in [-length, 0] of the camera frame.
+    const F ix = F(1) / ex, iy = F(1) / ey, iz = F(1) / ez;
+    const F ax = (-half - cx) * ix, bx = (half - cx) * ix, ay = (-half - cy) * iy, by = (half - cy) * iy;
+    const F az = (-length - cz) * iz, bz = -cz * iz;
+    const F nx = ax < bx ? ax : bx, fx = ax < bx ? bx : ax, ny = ay < by ? ay : by, fy = ay < by ? by : ay;
+    const F nz = az < bz ? az : bz, fz = az < bz ? bz : az;
+    const F nxy = nx < ny ? ny : nx, fxy = fx < fy ? fx : fy;
+    const F enter = nxy < nz ? nz : nxy, exit = fxy < fz ? fxy : fz;
+    const int hb = (enter <= exit ? 1 : 0) & (enter > tn ? 1 : 0);
+    const int is_z = enter == nz ? 1 : 0, is_x = (enter == nx ? 1 : 0) & (1 - is_z);
+    const int face = is_z * (ez < 0 ? 0 : 1) + is_x * (ex < 0 ? 2 : 3) + (1 - is_z - is_x) * (ey < 0 ? 4 : 5);
+    // The nearest (the lens face first where the body's top face lies in its plane).
+    F best = hl ? tl : inf;
+    int p = hl;
+    const int take_m = hm & (tm < best ? 1 : 0);
+    p = take_m ? 2 : p;
+    best = take_m ? tm : best;
+    const int take_b = hb & (enter < best ? 1 : 0);
+    p = take_b ? 3 + face : p;
+    best = take_b ? enter : best;
+    part[i] = active[i] != 0 ? p : 0;
+    tout[i] = static_cast<float>(best);
+  }
+}
+
+}  // namespace
+
+template <class T>
+bool RayScene::OwnParts(const RayBatchOf<T>& b, int U, BatchLanes* L, unsigned* own_geom, unsigned* own_prim) const {
+  const MotionInstance& m = instances_[unit_instance_[U]];
+  const OwnPartShapes& sh = m.own;
+  const int n = b.n;
+  alignas(64) unsigned char active[RayBatch::kMax];
+  for (int i = 0; i < n; ++i) {
+    // The unit's own rays skip its instance; those from its mirror meet its parts here. (Its straight camera
+    // rays leave the lens face forwards: of its parts only the mount ring lies ahead, which PrepareLanes met.)
+    const int from_mirror = b.from_mirror[i] == U ? 1 : 0, own = from_mirror | (b.from_camera[i] == U ? 1 : 0);
+    L->mask_off[i] |= sh.mask & static_cast<unsigned>(-own);
+    active[i] = static_cast<unsigned char>(from_mirror & (L->valid[i] != 0 ? 1 : 0));
+  }
+  alignas(64) T fo[6][RayBatch::kMax];
+  const T *mox = b.mox, *moy = b.moy, *moz = b.moz, *mdx = b.mdx, *mdy = b.mdy, *mdz = b.mdz;
+  if (!b.mirror_frame) {   // rays at time 0: the world rays mapped back
+    RaysToFrame<T>(n, sh.R_mirror_from_world, sh.t_mirror_from_world, b.ox, b.oy, b.oz, b.dx, b.dy, b.dz, fo[0],
+                   fo[1], fo[2], fo[3], fo[4], fo[5]);
+    mox = fo[0], moy = fo[1], moz = fo[2], mdx = fo[3], mdy = fo[4], mdz = fo[5];
+  }
+  double shape[18];
+  for (int k = 0; k < 9; ++k) shape[k] = sh.R_cam_from_mirror[k];
+  for (int k = 0; k < 3; ++k) shape[9 + k] = sh.t_cam_from_mirror[k];
+  shape[12] = sh.lens_r2, shape[13] = sh.rim_z, shape[14] = sh.rim_r2, shape[15] = sh.mount_r2;
+  shape[16] = sh.half, shape[17] = sh.length;
+  alignas(64) int part[RayBatch::kMax];
+  alignas(64) float t[RayBatch::kMax];
+  OwnPartLanes<T>(n, active, mox, moy, moz, mdx, mdy, mdz, b.tnear, shape, part, t);
+  bool any = false;
+  for (int i = 0; i < n; ++i) {
+    if (!part[i]) continue;
+    any = true;
+    L->tfar[i] = t[i];   // the world trace looks only nearer
+    own_geom[i] = part[i] == 1 ? sh.lens_geom : part[i] == 2 ? sh.mount_geom : rect_geom_;
+    own_prim[i] = part[i] >= 3 ? m.rect_base + static_cast<unsigned>(part[i] - 3) : 0u;
+  }
+  return any;
+}
+
 template <class T>
 void RayScene::IntersectBatch(const RayBatchOf<T>& b, unsigned* geom_ids, unsigned* prim_ids) const {
   BatchLanes lanes;
   PrepareLanes(b, own_mount_, &lanes);
+  // A moving unit's own rays meet its own parts in its mirror frame (OwnParts), not through its instance.
+  alignas(64) unsigned own_geom[RayBatch::kMax], own_prim[RayBatch::kMax];
+  bool own = false;
+  if (!instances_.empty()) {
+    int U = -1;
+    for (int i = 0; i < b.n; ++i) U = std::max(U, std::max(b.from_mirror[i], b.from_camera[i]));
+    if (OwnPartsInMirrorFrame(U)) {
+      std::fill(own_geom, own_geom + b.n, RTC_INVALID_GEOMETRY_ID);
+      own = OwnParts(b, U, &lanes, own_geom, own_prim);
+    }
+  }
   alignas(64) unsigned inst[RayBatch::kMax];
   unsigned* const inst_ids = instances_.empty() ? nullptr : inst;
   const float inv_horizon = static_cast<float>(1.0 / motion_horizon_);
@@ -877,6 +1037,12 @@ void RayScene::IntersectBatch(const RayBatchOf<T>& b, unsigned* geom_ids, unsign
   }
   if (inst_ids) MapInstanceHits(b.n, inst_ids, geom_ids, prim_ids);
   ResolveMisses(b.n, lanes.mount_geom, geom_ids, prim_ids);
+  if (own) {   // nothing in the world nearer than the unit's own part: the part
+    for (int i = 0; i < b.n; ++i) {
+      if (own_geom[i] == RTC_INVALID_GEOMETRY_ID || geom_ids[i] != RTC_INVALID_GEOMETRY_ID) continue;
+      geom_ids[i] = own_geom[i], prim_ids[i] = own_prim[i];
+    }
+  }
 }
 
 namespace {

@@ -116,6 +116,11 @@ struct RayBatchOf {
   // parts are met where they are at that time.
   bool timed = false;
   alignas(64) float time[kMax];
+  // Where mirror_frame is set: the rays leaving a unit's mirror (from_mirror) in that unit's mirror frame, origin
+  // and direction (the thin-lens and motion-blur rays, whose world rays are each at its own time). RayScene meets
+  // a moving unit's own parts there; without them it maps the world rays back at time 0.
+  bool mirror_frame = false;
+  alignas(64) T mox[kMax], moy[kMax], moz[kMax], mdx[kMax], mdy[kMax], mdz[kMax];
 };
 using RayBatch = RayBatchOf<double>;
 using RayBatchF = RayBatchOf<float>;
@@ -129,6 +134,8 @@ struct HitBatch {
   alignas(64) int object_id[RayBatch::kMax];
   alignas(64) unsigned char hit[RayBatch::kMax];
 };
+
+struct BatchLanes;  // a batch's Embree lanes (scene.cc)
 
 // The Embree scene built from a description. Thread-safe for tracing once built.
 class RayScene {
@@ -190,6 +197,12 @@ class RayScene {
   // The longest exposure (s) over which the moving units' parts are where their motion puts them:
   // kMaxExposureTime unless a unit turns faster than about 20 rad/s (Embree takes at most 129 time steps).
   double MotionHorizon() const { return motion_horizon_; }
+  // True when unit moves and the rays leaving its mirror or its camera meet its own parts (which move with it)
+  // analytically in its mirror frame and skip its instance (which they would all enter: they start inside it).
+  bool OwnPartsInMirrorFrame(int unit) const {
+    return unit >= 0 && static_cast<size_t>(unit) < unit_instance_.size() && unit_instance_[unit] >= 0 &&
+           instances_[unit_instance_[unit]].own.analytic;
+  }
 
  private:
   void Shade(const Vec3d& o, const Vec3d& d, unsigned geom_id, unsigned prim_id, Hit* hit, bool colour) const;
@@ -227,18 +240,37 @@ class RayScene {
   // reflection stays sharp, as it moves with the mirror. Their hits are mapped to scene-wide ids (the world's
   // rectangles' id and the rectangle's index in desc_.rects; ids past the world's for the shapes), so that
   // shading and ground truth treat them as the still units' parts (at time 0).
+  // The parts of a moving unit as its own rays meet them, in its mirror frame (OwnParts): the lens face (a disc
+  // at the camera centre, in the camera frame), the mount ring (an annulus in the rim plane) and the camera body
+  // (the box of its six rectangles, in the camera frame: x, y in [-half, half], z in [-length, 0]).
+  struct OwnPartShapes {
+    bool analytic = false;   // units 0-9 (their own mask bits); the others' rays enter the instance
+    double R_cam_from_mirror[9] = {}, t_cam_from_mirror[3] = {};   // column-major
+    double lens_r2 = 0, rim_z = 0, rim_r2 = 0, mount_r2 = 0, half = 0, length = 0;
+    unsigned lens_geom = RTC_INVALID_GEOMETRY_ID, mount_geom = RTC_INVALID_GEOMETRY_ID;   // scene-wide ids
+    unsigned mask = 0;   // the instance's mask (the unit's lens-face and mount bits): cleared for own rays
+    double R_mirror_from_world[9] = {}, t_mirror_from_world[3] = {};   // time 0, column-major
+  };
   struct MotionInstance {
     unsigned quad_geom = RTC_INVALID_GEOMETRY_ID;  // the camera body's quad mesh in the unit's scene
     unsigned rect_base = 0;                        // its first rectangle in desc_.rects
     std::vector<unsigned> geom;                    // the unit scene's geomID -> scene-wide id
+    unsigned lens_inner = 0, mount_inner = 0;      // the lens face's and mount's ids in the unit's scene
+    OwnPartShapes own;
   };
   static constexpr int kMaxMotionSegments = RTC_MAX_TIME_STEP_COUNT - 1;
   static constexpr double kMotionSegmentAngle = 1.5707963267948966;   // rad: a quarter turn per time step at most
-  unsigned AttachMovingUnit(const CatadioptricUnit& unit, RTCScene unit_scene);
+  unsigned AttachMovingUnit(const CatadioptricUnit& unit, RTCScene unit_scene, unsigned mask);
+  // A batch's own rays of unit U (from its mirror or its camera) meet U's parts in its mirror frame: where one does,
+  // the world trace looks only nearer (lanes->tfar) and own_geom / own_prim take over if it finds nothing; all
+  // skip U's instance (lanes->mask_off). Returns whether any lane met a part.
+  template <class T>
+  bool OwnParts(const RayBatchOf<T>& b, int U, BatchLanes* lanes, unsigned* own_geom, unsigned* own_prim) const;
   // Hits found inside an instance (inst[i] valid) to scene-wide ids (geom, prim).
   void MapInstanceHits(int n, const unsigned* inst, unsigned* geom, unsigned* prim) const;
   std::vector<MotionInstance> instances_;
   std::vector<int> inst_slot_;   // world geomID of an instance -> index in instances_, or -1
+  std::vector<int> unit_instance_;   // unit -> index in instances_, or -1
   double motion_horizon_ = kMaxExposureTime;
 };
 

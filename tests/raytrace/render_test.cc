@@ -694,6 +694,56 @@ TEST(Render, UnderMotionBlurTheCamerasOwnReflectionStaysSharp) {
   EXPECT_EQ(changed, 0) << "colour channels of " << seen << " pixels showing the other unit";
 }
 
+TEST(RayScene, AMovingUnitsOwnRaysMeetItsPartsWhereAStillUnitsDo) {
+  // Rays leaving a moving unit's mirror meet its lens face, mount and camera body analytically in its mirror
+  // frame (RayScene::OwnPartsInMirrorFrame); a still unit's meet them through Embree. At time 0 both must give
+  // the same hits: rays at each face of the body box (from beside it), at the lens face and at the mount ring.
+  SceneConfig cfg = SmallBoardScene(25);
+  const RayScene still(cfg.description);
+  cfg.description.units[0].velocity = Vec3d(2, 0, 0);
+  const RayScene moving(cfg.description);
+  ASSERT_TRUE(moving.OwnPartsInMirrorFrame(0));
+  ASSERT_FALSE(still.OwnPartsInMirrorFrame(0));
+  const raytrace::CatadioptricUnit& u = still.description().units[0];
+  const Rigid3d world_from_cam = u.world_from_mirror * u.rig.cam_from_mirror.Inverse();
+  const double h = 0.7 * u.rig.occluder_radius, L = u.body_length;
+  // (origin, target) in the camera frame: the body's faces +x, -x, +y, -y and bottom, then the lens face and,
+  // from the mirror frame, the mount ring from below.
+  std::vector<std::pair<Vec3d, Vec3d>> cam_rays = {
+      {Vec3d(3 * h, 0.2 * h, -0.4 * L), Vec3d(h, 0.1 * h, -0.5 * L)},
+      {Vec3d(-3 * h, -0.2 * h, -0.6 * L), Vec3d(-h, 0, -0.5 * L)},
+      {Vec3d(0.3 * h, 3 * h, -0.5 * L), Vec3d(0, h, -0.3 * L)},
+      {Vec3d(-0.1 * h, -3 * h, -0.2 * L), Vec3d(0.2 * h, -h, -0.7 * L)},
+      {Vec3d(0.1 * h, 0.2 * h, -3 * L), Vec3d(0, 0, -L)},
+      {Vec3d(0.2 * h, 0.1 * h, 0.05), Vec3d(0.3 * h, -0.2 * h, 0)}};
+  raytrace::RayBatch b;
+  const auto add = [&](const Vec3d& o_w, const Vec3d& target_w) {
+    const int i = b.n++;
+    const Vec3d d = (target_w - o_w).normalized();
+    b.ox[i] = o_w.x(), b.oy[i] = o_w.y(), b.oz[i] = o_w.z(), b.dx[i] = d.x(), b.dy[i] = d.y(), b.dz[i] = d.z();
+    b.tnear[i] = 1e-5f, b.from_mirror[i] = 0, b.from_camera[i] = -1, b.mount_t[i] = -1, b.valid[i] = 1;
+  };
+  for (const auto& [o, t] : cam_rays) add(world_from_cam * o, world_from_cam * t);
+  const double zr = u.rig.mirror.RimZ(), rr = u.rig.mirror.RimRadius();
+  add(u.world_from_mirror * Vec3d(0.5 * rr, 0, zr - 0.02), u.world_from_mirror * Vec3d(rr + 0.005, 0.002, zr));
+  raytrace::HitBatch hs, hm;
+  still.Geometry(b, &hs);
+  moving.Geometry(b, &hm);
+  const int expected_id[] = {raytrace::kCameraBodyId, raytrace::kCameraBodyId, raytrace::kCameraBodyId,
+                             raytrace::kCameraBodyId, raytrace::kCameraBodyId, raytrace::kCameraBodyId,
+                             raytrace::kMountId};
+  for (int i = 0; i < b.n; ++i) {
+    EXPECT_EQ(hs.object_id[i], expected_id[i]) << "ray " << i;
+    EXPECT_EQ(hm.object_id[i], hs.object_id[i]) << "ray " << i;
+    EXPECT_NEAR(hm.px[i], hs.px[i], 1e-9) << "ray " << i;
+    EXPECT_NEAR(hm.py[i], hs.py[i], 1e-9) << "ray " << i;
+    EXPECT_NEAR(hm.pz[i], hs.pz[i], 1e-9) << "ray " << i;
+    EXPECT_NEAR(hm.nx[i], hs.nx[i], 1e-12) << "ray " << i;
+    EXPECT_NEAR(hm.ny[i], hs.ny[i], 1e-12) << "ray " << i;
+    EXPECT_NEAR(hm.nz[i], hs.nz[i], 1e-12) << "ray " << i;
+  }
+}
+
 TEST(Render, SomethingBetweenTheCameraAndItsMountIsSeenInFrontOfIt) {
   // A camera ray past the rim meets the mount ring analytically and goes to Embree only up to the ring: plates
   // placed on such rays, 2 cm in front of the camera and just in front of the ring, must still be seen (and the
