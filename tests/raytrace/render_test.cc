@@ -744,6 +744,26 @@ TEST(RayScene, AMovingUnitsOwnRaysMeetItsPartsWhereAStillUnitsDo) {
   }
 }
 
+TEST(Render, AnExposureBeyondTheMotionHorizonIsRefused) {
+  // A unit turning at 100 rad/s needs a time step per quarter turn: Embree's 129 steps cover about 2 s of it.
+  SceneConfig cfg = SmallBoardScene(25);
+  cfg.description.units[0].angular_velocity = Vec3d(0, 0, 100);
+  const RayScene scene(cfg.description);
+  EXPECT_NEAR(scene.MotionHorizon(), 128 * (M_PI / 2) / 100, 1e-12);
+  raytrace::RenderOptions ro;
+  ro.samples = 1;
+  ro.ground_truth = false;
+  ro.exposure_time = 3.0;
+  try {
+    raytrace::Render(scene, raytrace::ViewCamera::Unit(0), ro);
+    ADD_FAILURE() << "an exposure beyond the horizon was rendered";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("exposure_time"), std::string::npos) << e.what();
+  }
+  ro.exposure_time = 1.0;   // within it
+  EXPECT_NO_THROW(raytrace::Render(scene, raytrace::ViewCamera::Unit(0), ro));
+}
+
 TEST(Render, SomethingBetweenTheCameraAndItsMountIsSeenInFrontOfIt) {
   // A camera ray past the rim meets the mount ring analytically and goes to Embree only up to the ring: plates
   // placed on such rays, 2 cm in front of the camera and just in front of the ring, must still be seen (and the
