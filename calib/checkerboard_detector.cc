@@ -176,9 +176,15 @@ class GridGrower {
           };
           const int len = add_col ? cols : rows;
           const Vec2d a = at(0), b = at(1);
-          const Vec2d pred = len >= 3 ? Vec2d(3 * a - 3 * b + at(2)) : Vec2d(2 * a - b);
+          const Vec2d linear = 2 * a - b;
+          const Vec2d pred = len >= 3 ? Vec2d(3 * a - 3 * b + at(2)) : linear;
           const double spacing = (a - b).norm();
-          const int q = Nearest(pred, 0.35 * spacing, used_now);
+          int q = Nearest(pred, 0.35 * spacing, used_now);
+          // The quadratic extrapolation follows the mirror's distortion but multiplies the candidates' own error
+          // (3 a - 3 b + c: up to seven times it). On small squares (15 px at 1375 x 1100) that error, about
+          // half a pixel from the candidates' coarse refinement, can put it more than 0.35 spacing from the
+          // corner; the straight extrapolation (three times the error) then still finds it.
+          if (q < 0 && len >= 3) q = Nearest(linear, 0.35 * spacing, used_now);
           if (q < 0 || !HasEdgeAlong(c_[q], c_[q].p - a, 20 * kPi / 180)) {
             ok = false;
             break;

@@ -2,9 +2,12 @@
 // the command line leaves nothing behind.
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <cstdio>
 #include <fstream>
 #include <nlohmann/json.hpp>
 
+#include "calib/checkerboard_detector.h"
 #include "core/io.h"
 #include "raytrace/render.h"
 #include "scenes/dataset.h"
@@ -145,6 +148,40 @@ TEST(Dataset, StereoArucoPairsSeeTheBoardFromBothUnits) {
   auto mono = scenes::LoadSceneConfig(std::string(HOVS_SOURCE_DIR) + "/scenes/reference_calibration.yaml");
   EXPECT_THROW(scenes::DrawBoardPoses(mono, o), Error) << "a stereo set needs two units";
   fs::remove_all(out.parent_path());
+}
+
+TEST(Detection, EveryViewOfAHalfResolutionSetIsDetectedWhole) {
+  // The reference calibration set at 1375 x 1100 and 2 samples per pixel (CalibrateCli's detection set), render
+  // seed 16: view 7's board has squares of about 15 px, and its last column used to be lost (6 x 5 of 7 x 5): the
+  // grid's quadratic extrapolation multiplied the candidates' half-pixel error beyond its search radius.
+  auto half = scenes::LoadSceneConfig(std::string(HOVS_SOURCE_DIR) + "/scenes/reference_calibration.yaml");
+  half.description.units[0].rig.camera = PinholeCamera<double>::FromPhysical(0.016, 2 * 4.54e-6, 1375, 1100);
+  half.render.samples = 2;
+  half.render.seed = 16;
+  scenes::DatasetOptions o;
+  o.count = 9;
+  const fs::path dir = test::Scratch("detection", "seed16");
+  scenes::WriteCalibrationDataset(half, o, dir / "set", {{"hovs", "test"}});
+  calib::CheckerboardDetectOptions opts;
+  opts.board = {7, 5, 0.03};
+  int views = 0;
+  for (int k = 0; k < 9; ++k) {
+    char name[32];
+    std::snprintf(name, sizeof name, "unit0_%04d.png", k);
+    int w = 0, h = 0, c = 0;
+    const auto px = raytrace::ReadImage(dir / "set" / "images" / name, &w, &h, &c);
+    cv::Mat grey(h, w, CV_8UC1);
+    for (int y = 0; y < h; ++y)
+      for (int x = 0; x < w; ++x) {
+        const float* p = &px[(static_cast<size_t>(y) * w + x) * c];
+        const float g = c >= 3 ? 0.299f * p[0] + 0.587f * p[1] + 0.114f * p[2] : p[0];
+        grey.at<unsigned char>(y, x) = static_cast<unsigned char>(std::clamp(g * 255.0f + 0.5f, 0.0f, 255.0f));
+      }
+    const auto det = calib::DetectCheckerboard(grey, opts);
+    EXPECT_TRUE(det.complete) << name << ": " << det.status;
+    ++views;
+  }
+  EXPECT_EQ(views, 9);
 }
 
 TEST(CalibrateCli, CalibratesASyntheticSetAgainstGroundTruthAndRejectsBadInput) {
