@@ -306,8 +306,10 @@ void WriteCalibrationDataset(const SceneConfig& base, const DatasetOptions& o, c
   results::HtmlPage page("hovs dataset: " + base.name + " (" + o.kind + ")");
  page.Paragraph(std::to_string(frames.size()) + " frames (" + o.kind + "), board poses drawn with seed " + std::to_string(o.seed) + " so that every corner is visible; "
                  "render seed " + std::to_string(base.render.seed) + ", " + std::to_string(base.render.samples) +
-                 " samples per pixel. Ground truth per frame: truth/*.exr (channels Z, P, N, id, mask, M) and "
-                 "truth/*.json (rig, board pose, exact corner pixels).");
+                 " samples per pixel. " +
+                 (base.render.ground_truth ? "Ground truth per frame: truth/*.exr (channels Z, P, N, id, mask, M) and "
+                                             "truth/*.json (rig, board pose, exact corner pixels)."
+                                           : "Rendered without ground truth (render.ground_truth: false)."));
   std::vector<std::vector<std::string>> rows;
   for (const auto& fr : frames) {
     char secs[32];
@@ -315,11 +317,16 @@ void WriteCalibrationDataset(const SceneConfig& base, const DatasetOptions& o, c
     for (const auto& view : fr["views"]) {
       const std::string thumb = Thumbnail(stage.staging(), view["image"].get<std::string>(), 320);
       page.Figure(thumb, "frame " + std::to_string(fr["id"].get<int>()) + ", " + view["unit"].get<std::string>(), 320);
-      const auto side = nlohmann::json::parse(ReadFile(stage.staging() / view["ground_truth"]["sidecar"].get<std::string>()));
+      // (A set rendered without ground truth has no sidecar to count its corners from.)
+      std::string visible = "no ground truth";
+      if (view.contains("ground_truth")) {
+        const auto side =
+            nlohmann::json::parse(ReadFile(stage.staging() / view["ground_truth"]["sidecar"].get<std::string>()));
+        visible = std::to_string(side["boards"][0]["visible_corners"].get<int>()) + " / " +
+                  std::to_string(side["boards"][0]["corners"].size());
+      }
       rows.push_back({std::to_string(fr["id"].get<int>()), view["unit"].get<std::string>(), view["image"].get<std::string>(),
-                      std::to_string(side["boards"][0]["visible_corners"].get<int>()) + " / " +
-                          std::to_string(side["boards"][0]["corners"].size()),
-                      secs});
+                      visible, secs});
     }
   }
   page.Table({"frame", "unit", "image", "visible corners", "render of the frame (s)"}, rows);

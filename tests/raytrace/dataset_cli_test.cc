@@ -150,6 +150,26 @@ TEST(Dataset, StereoArucoPairsSeeTheBoardFromBothUnits) {
   fs::remove_all(out.parent_path());
 }
 
+TEST(Dataset, ASetRenderedWithoutGroundTruthHasAManifestAndAReport) {
+  // render.ground_truth: false (as real captures have none): the report page used to read every view's sidecar
+  // and stopped with an uncaught JSON error (exit 3).
+  auto cfg = SmallCalibrationScene();
+  cfg.render.ground_truth = false;
+  scenes::DatasetOptions o;
+  o.count = 2;
+  const fs::path dir = test::Scratch("dataset", "no-truth");
+  ASSERT_NO_THROW(scenes::WriteCalibrationDataset(cfg, o, dir / "set", {{"hovs", "test"}}));
+  const auto m = nlohmann::json::parse(ReadFile(dir / "set" / "dataset.json"));
+  ASSERT_EQ(m["frames"].size(), 2u);
+  for (const auto& fr : m["frames"])
+    for (const auto& v : fr["views"]) {
+      EXPECT_FALSE(v.contains("ground_truth")) << v.dump();
+      EXPECT_TRUE(fs::exists(dir / "set" / v["image"].get<std::string>()));
+    }
+  EXPECT_FALSE(fs::exists(dir / "set" / "truth"));
+  EXPECT_NE(ReadFile(dir / "set" / "index.html").find("no ground truth"), std::string::npos);
+}
+
 TEST(Detection, EveryViewOfAHalfResolutionSetIsDetectedWhole) {
   // The reference calibration set at 1375 x 1100 and 2 samples per pixel (CalibrateCli's detection set), render
   // seed 16: view 7's board has squares of about 15 px, and its last column used to be lost (6 x 5 of 7 x 5): the
