@@ -10,7 +10,9 @@
 //  3. A grid grows from seed candidates: neighbours are found along the edge lines (adjacent corners share an
 //     edge, so the line joining them is an edge direction of both, and their polarity alternates); whole rows and
 //     columns are added while every new corner is found near its position extrapolated (quadratically) from the
-//     two or three corners before it, which follows the mirror's distortion. The largest grid wins.
+//     two or three corners before it, which follows the mirror's distortion (or, where that finds none, linearly
+//     from the two before it: the quadratic extrapolation multiplies the candidates' own error up to seven
+//     times, too much on squares of about 15 px). The largest grid wins.
 //  4. The grid is labelled against the board: its axes are matched to the board's, and its handedness is fixed by
 //     the expected orientation in the image (one mirror reflection mirrors the board; the sign is an option).
 //     Partial grids are labelled from their own first corner: for monocular calibration, where each image has its
