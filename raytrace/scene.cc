@@ -184,6 +184,9 @@ void UserOccluded(const RTCOccludedFunctionNArguments* args) {
   }
 }
 
+// Half the width of a unit's camera body (a square box behind the lens face, within the lens face's disc).
+double BodyHalfWidth(const CatadioptricUnit& u) { return 0.7 * u.rig.occluder_radius; }
+
 // Radius of the mount ring that hides everything the camera sees past the rim.
 double DefaultMountRadius(const CatadioptricUnit& u) {
   const auto& cam = u.rig.camera;
@@ -283,7 +286,7 @@ RayScene::RayScene(SceneDescription description) : desc_(std::move(description))
       const CatadioptricUnit& u = desc_.units[ui];
       u.rig.Check("unit " + u.name);
       const Rigid3d world_from_cam = u.world_from_mirror * u.rig.cam_from_mirror.Inverse();
-      const double half = 0.7 * u.rig.occluder_radius;
+      const double half = BodyHalfWidth(u);
       Texture body;
       body.colour_a = u.body_colour;
       for (Rect r : MakeBox(world_from_cam * Rigid3d::Translation(Vec3d(0, 0, -u.body_length)),
@@ -438,14 +441,14 @@ RayScene::RayScene(SceneDescription description) : desc_(std::move(description))
       own.mask = own.analytic ? LensMaskBit(static_cast<int>(ui)) | MountMaskBit(static_cast<int>(ui)) : 0xFFFFFFFFu;
       const Eigen::Matrix3d Rc = u.rig.cam_from_mirror.rotation.toRotationMatrix();
       const Eigen::Matrix3d Rw = mirror_from_world.rotation.toRotationMatrix();
-      for (int k = 0; k < 9; ++k) own.R_cam_from_mirror[k] = Rc.data()[k], own.R_mirror_from_world[k] = Rw.data()[k];
+      for (int k = 0; k < 9; ++k) own.shape[k] = Rc.data()[k], own.R_mirror_from_world[k] = Rw.data()[k];
       for (int k = 0; k < 3; ++k)
-        own.t_cam_from_mirror[k] = u.rig.cam_from_mirror.translation(k), own.t_mirror_from_world[k] = mirror_from_world.translation(k);
-      own.lens_r2 = u.rig.occluder_radius * u.rig.occluder_radius;
-      own.rim_z = u.rig.mirror.RimZ();
-      own.rim_r2 = u.rig.mirror.RimRadius() * u.rig.mirror.RimRadius();
-      own.mount_r2 = u.mount_outer_radius * u.mount_outer_radius;
-      own.half = 0.7 * u.rig.occluder_radius, own.length = u.body_length;   // as the body rectangles above
+        own.shape[9 + k] = u.rig.cam_from_mirror.translation(k), own.t_mirror_from_world[k] = mirror_from_world.translation(k);
+      own.shape[12] = u.rig.occluder_radius * u.rig.occluder_radius;
+      own.shape[13] = u.rig.mirror.RimZ();
+      own.shape[14] = u.rig.mirror.RimRadius() * u.rig.mirror.RimRadius();
+      own.shape[15] = u.mount_outer_radius * u.mount_outer_radius;
+      own.shape[16] = BodyHalfWidth(u), own.shape[17] = u.body_length;
       const unsigned inst = AttachMovingUnit(u, target, own.mask);
       rtcReleaseScene(target);   // the instance holds it
       if (unit_instance_.size() <= ui) unit_instance_.resize(ui + 1, -1);
@@ -987,14 +990,9 @@ bool RayScene::OwnParts(const RayBatchOf<T>& b, int U, BatchLanes* L, unsigned* 
                    fo[1], fo[2], fo[3], fo[4], fo[5]);
     mox = fo[0], moy = fo[1], moz = fo[2], mdx = fo[3], mdy = fo[4], mdz = fo[5];
   }
-  double shape[18];
-  for (int k = 0; k < 9; ++k) shape[k] = sh.R_cam_from_mirror[k];
-  for (int k = 0; k < 3; ++k) shape[9 + k] = sh.t_cam_from_mirror[k];
-  shape[12] = sh.lens_r2, shape[13] = sh.rim_z, shape[14] = sh.rim_r2, shape[15] = sh.mount_r2;
-  shape[16] = sh.half, shape[17] = sh.length;
   alignas(64) int part[RayBatch::kMax];
   alignas(64) float t[RayBatch::kMax];
-  OwnPartLanes<T>(n, active, mox, moy, moz, mdx, mdy, mdz, b.tnear, shape, part, t);
+  OwnPartLanes<T>(n, active, mox, moy, moz, mdx, mdy, mdz, b.tnear, sh.shape, part, t);
   bool any = false;
   for (int i = 0; i < n; ++i) {
     if (!part[i]) continue;

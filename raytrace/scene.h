@@ -245,8 +245,10 @@ class RayScene {
   // (the box of its six rectangles, in the camera frame: x, y in [-half, half], z in [-length, 0]).
   struct OwnPartShapes {
     bool analytic = false;   // units 0-9 (their own mask bits); the others' rays enter the instance
-    double R_cam_from_mirror[9] = {}, t_cam_from_mirror[3] = {};   // column-major
-    double lens_r2 = 0, rim_z = 0, rim_r2 = 0, mount_r2 = 0, half = 0, length = 0;
+    // As OwnPartLanes takes them: R_cam_from_mirror (9, column-major), t_cam_from_mirror (3), then the lens
+    // face's radius squared, the rim plane's z, the rim's and the mount's outer radius squared, the body's half
+    // width and length.
+    double shape[18] = {};
     unsigned lens_geom = RTC_INVALID_GEOMETRY_ID, mount_geom = RTC_INVALID_GEOMETRY_ID;   // scene-wide ids
     unsigned mask = 0;   // the instance's mask (the unit's lens-face and mount bits): cleared for own rays
     double R_mirror_from_world[9] = {}, t_mirror_from_world[3] = {};   // time 0, column-major
