@@ -897,7 +897,7 @@ void RenderInto(const RayScene& scene, const ViewCamera& camera, const RenderOpt
   // or 0 when a pixel has more samples than a chunk (then each chunk holds part of one pixel).
   constexpr int kMaxBatch = RayBatch::kMax;
   const int per_chunk = kMaxBatch / n;
-  std::atomic<uint64_t> rays{0};
+  std::atomic<uint64_t> rays{0}, embree_rays{0};
   std::atomic<int> done{0};
   const bool progress = options.progress && isatty(STDERR_FILENO);
   int last_percent = -1;
@@ -922,7 +922,7 @@ void RenderInto(const RayScene& scene, const ViewCamera& camera, const RenderOpt
     };
     const auto scratch = std::make_unique<Scratch>();
     Scratch& sc = *scratch;
-    uint64_t task_rays = 0;
+    uint64_t task_rays = 0, task_embree = 0;
     for (int ti = range.begin(); ti != range.end(); ++ti) {
       const int x0 = roi.x0 + (ti % tiles_x) * tile, y0 = roi.y0 + (ti / tiles_x) * tile;
       const int x1 = std::min(x0 + tile, roi.x1), y1 = std::min(y0 + tile, roi.y1);
@@ -956,12 +956,12 @@ void RenderInto(const RayScene& scene, const ViewCamera& camera, const RenderOpt
         }
         if (batch_f) {   // (every ray of this path is valid: MakeBatchF has no domain limit)
           maker.MakeBatchF(m, sc.u, sc.v, batch_f.get());
-          scene.Colours(*batch_f, sc.rgb);
+          task_embree += static_cast<uint64_t>(scene.Colours(*batch_f, sc.rgb));
           task_rays += static_cast<uint64_t>(m);
         } else {
           maker.MakeBatch(m, sc.u, sc.v, lens ? sc.disc_x : nullptr, lens ? sc.disc_y : nullptr,
                           blur ? sc.tau : nullptr, batch.get(), sc.Mx, sc.My, sc.Mz);
-          scene.Colours(*batch, sc.rgb);
+          task_embree += static_cast<uint64_t>(scene.Colours(*batch, sc.rgb));
           for (int k = 0; k < m; ++k) task_rays += batch->valid[k];
         }
         // Each pixel's samples summed in order, weighted (w r0 + w r1 + ...: the first sample starts the sum, so
@@ -1008,7 +1008,7 @@ void RenderInto(const RayScene& scene, const ViewCamera& camera, const RenderOpt
           }
           maker.MakeBatch(m, sc.u, sc.v, nullptr, nullptr, nullptr, batch.get(), sc.Mx, sc.My, sc.Mz,
                           separable ? sc.nx : nullptr, separable ? sc.ny : nullptr);
-          scene.Geometry(*batch, &sc.hits);
+          task_embree += static_cast<uint64_t>(scene.Geometry(*batch, &sc.hits));
           const HitBatch& H = sc.hits;
           static_assert(GroundTruth::kChannels == 12, "the pixel below is 12 floats");
           GroundTruthLanes(m, batch->valid, batch->from_mirror, H.hit, H.object_id, maker.viewpoint().data(), H.px, H.py, H.pz, H.nx,
@@ -1036,8 +1036,10 @@ void RenderInto(const RayScene& scene, const ViewCamera& camera, const RenderOpt
     _mm_sfence();   // the streamed ground truth, ordered before the task ends
 #endif
     rays += task_rays;
+    embree_rays += task_embree;
   });
   f.rays = rays;
+  f.embree_rays = embree_rays;
   f.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 }
 

@@ -86,6 +86,9 @@ struct Frame {
   // Rays traced: one per valid sample and per ground-truth pixel, each the camera ray and, where it meets the
   // mirror, its reflection; Embree or an analytic surface (the unit's own mount ring) ends it.
   uint64_t rays = 0;
+  // Of those, the rays given to Embree (the others end analytically: camera rays past the rim on the unit's own
+  // mount ring when nothing can lie in between). rtcIntersect16's raw figure is comparable with these.
+  uint64_t embree_rays = 0;
   double seconds = 0;
 };
 

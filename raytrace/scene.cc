@@ -1005,7 +1005,7 @@ bool RayScene::OwnParts(const RayBatchOf<T>& b, int U, BatchLanes* L, unsigned* 
 }
 
 template <class T>
-void RayScene::IntersectBatch(const RayBatchOf<T>& b, unsigned* geom_ids, unsigned* prim_ids) const {
+int RayScene::IntersectBatch(const RayBatchOf<T>& b, unsigned* geom_ids, unsigned* prim_ids) const {
   BatchLanes lanes;
   PrepareLanes(b, own_mount_, &lanes);
   // A moving unit's own rays meet its own parts in its mirror frame (OwnParts), not through its instance.
@@ -1019,6 +1019,8 @@ void RayScene::IntersectBatch(const RayBatchOf<T>& b, unsigned* geom_ids, unsign
       own = OwnParts(b, U, &lanes, own_geom, own_prim);
     }
   }
+  int traced = 0;   // lanes Embree traces (valid -1; 0: ended analytically, or invalid)
+  for (int i = 0; i < b.n; ++i) traced -= lanes.valid[i];
   alignas(64) unsigned inst[RayBatch::kMax];
   unsigned* const inst_ids = instances_.empty() ? nullptr : inst;
   const float inv_horizon = static_cast<float>(1.0 / motion_horizon_);
@@ -1041,6 +1043,7 @@ void RayScene::IntersectBatch(const RayBatchOf<T>& b, unsigned* geom_ids, unsign
       geom_ids[i] = own_geom[i], prim_ids[i] = own_prim[i];
     }
   }
+  return traced;
 }
 
 namespace {
@@ -1136,14 +1139,14 @@ inline int RunEnd(const RunBreaks& r, int i) {
 
 }  // namespace
 
-void RayScene::Colours(const RayBatch& b, float* rgb) const { ColoursOf(b, rgb); }
-void RayScene::Colours(const RayBatchF& b, float* rgb) const { ColoursOf(b, rgb); }
+int RayScene::Colours(const RayBatch& b, float* rgb) const { return ColoursOf(b, rgb); }
+int RayScene::Colours(const RayBatchF& b, float* rgb) const { return ColoursOf(b, rgb); }
 
 template <class T>
-void RayScene::ColoursOf(const RayBatchOf<T>& b, float* rgb) const {
+int RayScene::ColoursOf(const RayBatchOf<T>& b, float* rgb) const {
   const int n = b.n;
   unsigned geom[RayBatch::kMax], prim[RayBatch::kMax];
-  IntersectBatch(b, geom, prim);
+  const int traced = IntersectBatch(b, geom, prim);
   // Runs of consecutive lanes on the sky, or on one rectangle, are evaluated together (vectorised); hits with a
   // noise texture in short runs (or runs with lanes that see the back) are collected per rectangle and evaluated
   // together.
@@ -1228,6 +1231,7 @@ void RayScene::ColoursOf(const RayBatchOf<T>& b, float* rgb) const {
     for (int k = 0; k < m; ++k) put(lanes[k], {colours[3 * k], colours[3 * k + 1], colours[3 * k + 2]});
     left = kept;
   }
+  return traced;
 }
 
 namespace {
@@ -1268,9 +1272,9 @@ void RingHitLanes(int i0, int i1, const double* __restrict ox, const double* __r
 
 }  // namespace
 
-void RayScene::Geometry(const RayBatch& b, HitBatch* H) const {
+int RayScene::Geometry(const RayBatch& b, HitBatch* H) const {
   unsigned geom[RayBatch::kMax], prim[RayBatch::kMax];
-  IntersectBatch(b, geom, prim);
+  const int traced = IntersectBatch(b, geom, prim);
   RectPlaneRuns<double> planes;
   // Lane k ends on its unit's mount ring at the renderer's analytic distance: the unit, else -1.
   const auto ring_unit = [&](int k) {
@@ -1322,6 +1326,7 @@ void RayScene::Geometry(const RayBatch& b, HitBatch* H) const {
     H->nx[i] = h.normal.x(), H->ny[i] = h.normal.y(), H->nz[i] = h.normal.z();
     i = j;
   }
+  return traced;
 }
 
 Hit RayScene::Trace(const Vec3d& origin, const Vec3d& direction, double tnear, int from_mirror) const {

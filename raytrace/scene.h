@@ -154,14 +154,17 @@ class RayScene {
   void Trace16(int count, const Vec3d* origins, const Vec3d* directions, const double* tnear, Hit* hits,
                const int* from_mirror = nullptr, bool colour = true) const;
   // The colour seen along each ray of a batch (3 floats per ray; black where !valid): Trace16 with colour,
-  // without the hit geometry, and with the textures evaluated in batches.
-  void Colours(const RayBatch& batch, float* rgb) const;
+  // without the hit geometry, and with the textures evaluated in batches. Returns how many of the batch's rays
+  // went to Embree (the others ended analytically: a unit's camera rays past the rim on its mount ring when
+  // nothing can lie in between, invalid lanes).
+  int Colours(const RayBatch& batch, float* rgb) const;
   // The same for single-precision rays: the plane hits and texture coordinates in float too.
-  void Colours(const RayBatchF& batch, float* rgb) const;
+  int Colours(const RayBatchF& batch, float* rgb) const;
   // The hits of a batch without colour (point, normal, id): the ground-truth path. The same values as Trace16
   // without colour, lane by lane; runs of lanes on one rectangle or on their unit's mount ring are evaluated
   // together (vectorised).
-  void Geometry(const RayBatch& batch, HitBatch* hits) const;
+  // Returns how many of the batch's rays went to Embree, as Colours.
+  int Geometry(const RayBatch& batch, HitBatch* hits) const;
   Hit Trace(const Vec3d& origin, const Vec3d& direction, double tnear = 0, int from_mirror = -1) const;
   // True if anything blocks the open segment from a to b (rtcOccluded1).
   bool Occluded(const Vec3d& a, const Vec3d& b, double eps = 1e-7) const;
@@ -211,11 +214,11 @@ class RayScene {
   // Sets OwnMount::path_clear; body_rects: by unit, the range of desc_.rects holding its camera body.
   void DecideMountPaths(const std::vector<std::pair<size_t, size_t>>& body_rects);
   // Intersects the rays of a batch: their Embree lanes set up once, then packets of 16 (rtcIntersect16) where
-  // the CPU has native 16-wide packets, else of 8 (rtcIntersect8).
+  // the CPU has native 16-wide packets, else of 8 (rtcIntersect8). Returns the number of rays given to Embree.
   template <class T>
-  void IntersectBatch(const RayBatchOf<T>& b, unsigned* geom_ids, unsigned* prim_ids) const;
+  int IntersectBatch(const RayBatchOf<T>& b, unsigned* geom_ids, unsigned* prim_ids) const;
   template <class T>
-  void ColoursOf(const RayBatchOf<T>& b, float* rgb) const;
+  int ColoursOf(const RayBatchOf<T>& b, float* rgb) const;
 
   // A rectangle's frame for shading: centre, unit normal and in-plane axes in the world.
   struct RectFrame {

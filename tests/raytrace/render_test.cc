@@ -831,7 +831,44 @@ TEST(Render, SomethingBetweenTheCameraAndItsMountIsSeenInFrontOfIt) {
     EXPECT_EQ(f.truth.data[corner * raytrace::GroundTruth::kChannels + 7], 77.0f);
     EXPECT_EQ(f.truth.data[low_corner * raytrace::GroundTruth::kChannels + 7], 78.0f);
     EXPECT_EQ(f.truth.data[far_corner * raytrace::GroundTruth::kChannels + 7], raytrace::kMountId);
+    // With something in between, every ray goes to Embree (the straight ones only up to the ring).
+    EXPECT_EQ(f.embree_rays, f.rays) << "lens " << lens;
   }
+}
+
+TEST(Render, RaysEndingOnTheMountRingAreNotCountedAsEmbreeRays) {
+  // Frame::embree_rays leaves out the camera rays past the rim that end on the unit's own mount ring without
+  // Embree (nothing can lie in between). Pixels whose ground truth (the pixel-centre ray) is the ring: that ray and,
+  // inside the ring's area, all of the pixel's samples end there; pixels on the area's border have some samples on
+  // either side.
+  SceneConfig cfg = BoardScene(false);
+  cfg.description.units[0].rig.camera = PinholeCamera<double>::FromPhysical(0.016, 4.54e-6 * 25, 110, 88);
+  const RayScene scene(cfg.description);
+  ASSERT_TRUE(scene.MountPathClear(0));
+  raytrace::RenderOptions ro;
+  ro.samples = 4;
+  const raytrace::Frame f = raytrace::Render(scene, raytrace::ViewCamera::Unit(0), ro);
+  const auto id = [&](int x, int y) {
+    return f.truth.data[(static_cast<size_t>(y) * f.width + x) * raytrace::GroundTruth::kChannels + 7];
+  };
+  const float mount = static_cast<float>(raytrace::kMountId);
+  uint64_t ring = 0, border = 0;
+  for (int y = 0; y < f.height; ++y)
+    for (int x = 0; x < f.width; ++x) {
+      const bool on = id(x, y) == mount;
+      ring += on;
+      bool edge = false;
+      for (const auto& [dx, dy] : {std::pair{1, 0}, {-1, 0}, {0, 1}, {0, -1}}) {
+        const int xx = x + dx, yy = y + dy;
+        if (xx >= 0 && yy >= 0 && xx < f.width && yy < f.height && (id(xx, yy) == mount) != on) edge = true;
+      }
+      border += edge;
+    }
+  ASSERT_GT(ring, 2000u);   // the image's corners, past the rim
+  ASSERT_EQ(f.rays, static_cast<uint64_t>(5) * f.width * f.height);   // 4 samples and the ground-truth ray
+  const double expected = static_cast<double>(f.rays) - 5.0 * static_cast<double>(ring);
+  EXPECT_NEAR(static_cast<double>(f.embree_rays), expected, 4.0 * static_cast<double>(border))
+      << "rays " << f.rays << ", ring pixels " << ring << ", border pixels " << border;
 }
 
 TEST(Texture, BatchTexturesAreTheScalarTexturesToTheBit) {
