@@ -589,6 +589,8 @@ class RayMaker {
       lens_ring_.zr = unit_->rig.mirror.RimZ();
       lens_ring_.r02 = unit_->rig.mirror.RimRadius() * unit_->rig.mirror.RimRadius();
       lens_ring_.r12 = unit_->mount_outer_radius * unit_->mount_outer_radius;
+      // Under motion blur the path from the camera to the mount ring must stay clear over the whole exposure.
+      mount_paths_clear_ = !(o.exposure_time > 0) || scene.MountPathClearDuring(cam.unit, o.exposure_time);
     } else {
       cam.pinhole.Check("render camera");
       world_from_cam_ = cam.world_from_cam;
@@ -611,7 +613,7 @@ class RayMaker {
   // within about 1e-7 relative of MakeBatch's (tests bound them), the precision Embree traces them in.
   void MakeBatchF(int n, const double* u, const double* v, RayBatchF* b) const {
     b->n = n;
-    b->timed = false, b->mirror_frame = false;
+    b->timed = false, b->mirror_frame = false, b->mount_paths_clear = true;
     const PinholeCamera<double>& cam = unit_->rig.camera;
     alignas(64) float vx[RayBatch::kMax], vy[RayBatch::kMax], vz[RayBatch::kMax];
     alignas(64) float Mx[RayBatch::kMax], My[RayBatch::kMax], Mz[RayBatch::kMax];
@@ -640,7 +642,7 @@ class RayMaker {
                  const double* tau, RayBatch* b, double* Mx, double* My, double* Mz, const double* nx = nullptr,
                  const double* ny = nullptr) const {
     b->n = n;
-    b->timed = false, b->mirror_frame = false;
+    b->timed = false, b->mirror_frame = false, b->mount_paths_clear = true;
     if ((lens_x || tau) && unit_) {
       MakeLensBatch(n, u, v, lens_x, lens_y, tau, b, Mx, My, Mz);
       return;
@@ -714,6 +716,7 @@ class RayMaker {
     std::fill(b->tnear, b->tnear + n, 1e-5f);
     // Each ray's time, at which RayScene meets the moving units' parts.
     b->timed = tau != nullptr;
+    b->mount_paths_clear = tau == nullptr || mount_paths_clear_;
     if (tau)
       for (int i = 0; i < n; ++i) b->time[i] = static_cast<float>(tau[i]);
     // The mirror rays in the mirror frame, where RayScene meets the moving unit's own parts.
@@ -771,6 +774,7 @@ class RayMaker {
   Eigen::Matrix3f R_mirror_from_cam_f_ = Eigen::Matrix3f::Identity();
   UnitMotion motion_;              // the unit's motion during the exposure
   LensRayRing lens_ring_;          // how thin-lens samples past the rim are traced
+  bool mount_paths_clear_ = true;  // RayScene::MountPathClearDuring the exposure (blurred batches)
   UnitRayFrame<double> frame_d_;   // UnitRays' view of the unit, in double and in float
   UnitRayFrame<float> frame_f_;
 

@@ -537,39 +537,100 @@ void RayScene::MapInstanceHits(int n, const unsigned* inst, unsigned* geom, unsi
 // Anything else whose box overlaps that box (another rectangle, another unit's parts) could be in between;
 // the unit's own mirror and lens face are masked off for these rays and its camera body lies behind the lens
 // face (the rays go forward from it), so they do not count.
-void RayScene::DecideMountPaths(const std::vector<std::pair<size_t, size_t>>& body_rects) {
-  for (size_t u = 0; u < own_mount_.size(); ++u) {
-    OwnMount& m = own_mount_[u];
-    if (!m.geometry) continue;
-    const CatadioptricUnit& unit = desc_.units[u];
-    Eigen::AlignedBox3d region;
-    // The camera centre and any aperture point around it (thin-lens samples leave those).
-    const Vec3d centre = (unit.world_from_mirror * unit.rig.cam_from_mirror.Inverse()).translation;
-    region.extend(centre - Vec3d::Constant(kMaxApertureRadius)).extend(centre + Vec3d::Constant(kMaxApertureRadius));
-    const double r = m.geometry->r_outer;
-    for (int k = 0; k < 4; ++k)
-      region.extend(m.geometry->world_from_local * Vec3d((k & 1) ? r : -r, (k & 2) ? r : -r, 0));
-    region.extend(region.min() - Vec3d::Constant(1e-6)).extend(region.max() + Vec3d::Constant(1e-6));
-    bool clear = true;
-    for (size_t i = 0; i < desc_.rects.size() && clear; ++i) {
-      if (i >= body_rects[u].first && i < body_rects[u].second) continue;
-      const Rect& rect = desc_.rects[i];
-      Eigen::AlignedBox3d box;
-      for (int k = 0; k < 4; ++k)
-        box.extend(rect.world_from_rect * Vec3d((k & 1) ? 0.5 * rect.width : -0.5 * rect.width,
-                                                (k & 2) ? 0.5 * rect.height : -0.5 * rect.height, 0));
-      clear = !box.intersects(region);
-    }
-    for (const auto& g : user_) {
-      if (!clear) break;
-      if (g->unit == static_cast<int>(u)) continue;  // its mirror, lens face and mount ring
-      RTCBounds b;
-      g->Bounds(g->world_from_local, &b);
-      const Eigen::AlignedBox3d box(Vec3d(b.lower_x, b.lower_y, b.lower_z), Vec3d(b.upper_x, b.upper_y, b.upper_z));
-      clear = !box.intersects(region);
-    }
-    m.path_clear = clear;
+namespace {
+
+// The world box that points given in a unit's mirror frame sweep over [0, T] (its motion: a turn about its
+// viewpoint at a constant rate and a constant velocity; at T = 0 where they are at time 0). Sampled at steps of at
+// most 0.05 rad of turn: between two steps a point at distance rho from the viewpoint strays from the chord by
+// rho (1 - cos(a / 2)) <= rho a^2 / 8 for a step of a rad (the translation is linear), and the box of the steps'
+// points holds every chord.
+Eigen::AlignedBox3d SweptBox(const CatadioptricUnit& unit, const std::vector<Vec3d>& mirror_points, double T) {
+  const double rate = unit.angular_velocity.norm();
+  const bool moves = T > 0 && (rate > 0 || unit.velocity.squaredNorm() > 0);
+  const int steps = moves ? std::max(1, static_cast<int>(std::ceil(rate * T / 0.05))) : 0;
+  Eigen::AlignedBox3d box;
+  double rho = 0;
+  for (const Vec3d& p : mirror_points) rho = std::max(rho, p.norm());
+  for (int k = 0; k <= steps; ++k) {
+    const Rigid3d w = unit.WorldFromMirrorAt(steps > 0 ? T * k / steps : 0.0);
+    for (const Vec3d& p : mirror_points) box.extend(w * p);
   }
+  const double a = steps > 0 ? rate * T / steps : 0.0, pad = rho * a * a / 8 + 1e-9;
+  return Eigen::AlignedBox3d(box.min() - Vec3d::Constant(pad), box.max() + Vec3d::Constant(pad));
+}
+
+bool Moves(const CatadioptricUnit& u) { return u.velocity.squaredNorm() > 0 || u.angular_velocity.squaredNorm() > 0; }
+
+}  // namespace
+
+bool RayScene::PathClearOver(size_t u, double T) const {
+  const OwnMount& m = own_mount_[u];
+  const CatadioptricUnit& unit = desc_.units[u];
+  const bool swept = T > 0 && Moves(unit);
+  Eigen::AlignedBox3d region;
+  // The camera centre and any aperture point around it (thin-lens samples leave those); the ring's corners.
+  const Vec3d centre_m = unit.rig.cam_from_mirror.Inverse().translation;
+  const double r = m.geometry->r_outer;
+  std::vector<Vec3d> corners;
+  for (int k = 0; k < 4; ++k) corners.push_back(m.geometry->world_from_local * Vec3d((k & 1) ? r : -r, (k & 2) ? r : -r, 0));
+  if (!swept) {
+    const Vec3d centre = unit.world_from_mirror * centre_m;
+    region.extend(centre - Vec3d::Constant(kMaxApertureRadius)).extend(centre + Vec3d::Constant(kMaxApertureRadius));
+    for (const Vec3d& c : corners) region.extend(c);
+  } else {
+    const Rigid3d mirror_from_world = unit.world_from_mirror.Inverse();
+    std::vector<Vec3d> points{centre_m};
+    const Eigen::AlignedBox3d centres = SweptBox(unit, points, T);
+    region.extend(centres.min() - Vec3d::Constant(kMaxApertureRadius))
+        .extend(centres.max() + Vec3d::Constant(kMaxApertureRadius));
+    points.clear();
+    for (const Vec3d& c : corners) points.push_back(mirror_from_world * c);
+    region.extend(SweptBox(unit, points, T));
+  }
+  region.extend(region.min() - Vec3d::Constant(1e-6)).extend(region.max() + Vec3d::Constant(1e-6));
+  // Another unit's parts (its camera body's rectangles, its analytic shapes) move with it: their boxes swept too.
+  const auto owner_moves = [&](int w) { return T > 0 && w >= 0 && Moves(desc_.units[w]); };
+  const auto world_box = [&](int w, const Eigen::AlignedBox3d& at_zero) {
+    if (!owner_moves(w)) return at_zero;
+    const Rigid3d mirror_from_world = desc_.units[w].world_from_mirror.Inverse();
+    std::vector<Vec3d> points;
+    for (int k = 0; k < 8; ++k) points.push_back(mirror_from_world * at_zero.corner(static_cast<Eigen::AlignedBox3d::CornerType>(k)));
+    return SweptBox(desc_.units[w], points, T);
+  };
+  for (size_t i = 0; i < desc_.rects.size(); ++i) {
+    if (i >= body_rects_[u].first && i < body_rects_[u].second) continue;
+    int owner = -1;
+    for (size_t w = 0; w < body_rects_.size(); ++w)
+      if (i >= body_rects_[w].first && i < body_rects_[w].second) owner = static_cast<int>(w);
+    const Rect& rect = desc_.rects[i];
+    Eigen::AlignedBox3d box;
+    for (int k = 0; k < 4; ++k)
+      box.extend(rect.world_from_rect * Vec3d((k & 1) ? 0.5 * rect.width : -0.5 * rect.width,
+                                              (k & 2) ? 0.5 * rect.height : -0.5 * rect.height, 0));
+    if (world_box(owner, box).intersects(region)) return false;
+  }
+  for (const auto& g : user_) {
+    if (g->unit == static_cast<int>(u)) continue;  // its mirror, lens face and mount ring
+    RTCBounds b;
+    g->Bounds(g->world_from_local, &b);
+    const Eigen::AlignedBox3d box(Vec3d(b.lower_x, b.lower_y, b.lower_z), Vec3d(b.upper_x, b.upper_y, b.upper_z));
+    if (world_box(g->unit, box).intersects(region)) return false;
+  }
+  return true;
+}
+
+void RayScene::DecideMountPaths(const std::vector<std::pair<size_t, size_t>>& body_rects) {
+  body_rects_ = body_rects;
+  for (size_t u = 0; u < own_mount_.size(); ++u)
+    if (own_mount_[u].geometry) own_mount_[u].path_clear = PathClearOver(u, 0.0);
+}
+
+bool RayScene::MountPathClearDuring(int unit, double exposure) const {
+  if (!MountPathClear(unit)) return false;
+  if (!(exposure > 0)) return true;
+  bool any = false;
+  for (const CatadioptricUnit& u : desc_.units) any = any || Moves(u);
+  return !any || PathClearOver(static_cast<size_t>(unit), exposure);
 }
 
 bool RayScene::MountPathClear(int unit) const {
@@ -769,7 +830,7 @@ void PrepareLanes(const RayBatchOf<T>& b, const std::vector<RayScene::OwnMount>&
   uniform = uniform && U >= 0 && static_cast<size_t>(U) < mounts.size() && mounts[U].geometry != nullptr;
   if (uniform || U < 0) {   // U < 0: no straight camera ray at all (no lane is a ring lane)
     RingLanes(n, b.valid, b.from_camera, b.mount_t, U, U >= 0 ? MountMaskBit(U) : 0u,
-              U >= 0 && mounts[U].path_clear ? 1 : 0, L->valid, L->tfar, L->mask_off,
+              U >= 0 && mounts[U].path_clear && b.mount_paths_clear ? 1 : 0, L->valid, L->tfar, L->mask_off,
               U >= 0 ? mounts[U].geom_id : RTC_INVALID_GEOMETRY_ID, L->mount_geom);
     return;
   }
@@ -787,7 +848,7 @@ void PrepareLanes(const RayBatchOf<T>& b, const std::vector<RayScene::OwnMount>&
     L->mask_off[j] = MountMaskBit(u);
     L->mount_geom[j] = mounts[u].geom_id;
     // Nothing can be in between (and the ray starts at the camera centre, as the path test assumes).
-    if (mounts[u].path_clear && b.mount_t[j] > 0) L->valid[j] = 0;
+    if (mounts[u].path_clear && b.mount_paths_clear && b.mount_t[j] > 0) L->valid[j] = 0;
   }
 }
 

@@ -121,6 +121,10 @@ struct RayBatchOf {
   // a moving unit's own parts there; without them it maps the world rays back at time 0.
   bool mirror_frame = false;
   alignas(64) T mox[kMax], moy[kMax], moz[kMax], mdx[kMax], mdy[kMax], mdz[kMax];
+  // false: something may come between a unit's camera and its mount ring during the exposure (a moving unit:
+  // RayScene::MountPathClearDuring), so the straight camera rays of the batch go to Embree up to the ring even
+  // where RayScene::MountPathClear (which looks at time 0) says nothing is in between.
+  bool mount_paths_clear = true;
 };
 using RayBatch = RayBatchOf<double>;
 using RayBatchF = RayBatchOf<float>;
@@ -187,8 +191,9 @@ class RayScene {
   struct UserGeometry;  // mirror, annulus (mount, lens face): analytic shapes, defined in scene.cc
   // A unit's mount ring, met analytically by that unit's straight camera rays (IntersectBatch).
   // When nothing but the unit's own parts lies between its camera centre (or any point of a thin-lens aperture
-  // around it, kMaxApertureRadius) and its mount ring (path_clear, decided once from bounding boxes), those rays
-  // end on the ring without going to Embree at all.
+  // around it, kMaxApertureRadius) and its mount ring (path_clear, decided once from bounding boxes at time 0),
+  // those rays end on the ring without going to Embree at all. A motion-blurred frame also needs the boxes swept
+  // over its exposure clear (MountPathClearDuring; RayBatch::mount_paths_clear).
   struct OwnMount {
     const UserGeometry* geometry = nullptr;
     unsigned geom_id = 0;
@@ -197,6 +202,10 @@ class RayScene {
   // True if unit's straight camera rays (from its camera centre, past the rim) are known to meet nothing
   // before its mount ring, so they skip Embree (see OwnMount).
   bool MountPathClear(int unit) const;
+  // MountPathClear over the whole exposure [0, exposure] (s): nothing comes between the unit's camera centre (or
+  // its aperture) and its mount ring while the units move (the unit itself, other units' parts, both at once).
+  // The same as MountPathClear when no unit moves or exposure is 0.
+  bool MountPathClearDuring(int unit, double exposure) const;
   // The longest exposure (s) over which the moving units' parts are where their motion puts them:
   // kMaxExposureTime unless a unit turns faster than about 20 rad/s (Embree takes at most 129 time steps).
   double MotionHorizon() const { return motion_horizon_; }
@@ -213,6 +222,9 @@ class RayScene {
   static void UserHit(const UserGeometry& g, const Vec3d& o, const Vec3d& d, double t, const Vec3d& n, Hit* h);
   // Sets OwnMount::path_clear; body_rects: by unit, the range of desc_.rects holding its camera body.
   void DecideMountPaths(const std::vector<std::pair<size_t, size_t>>& body_rects);
+  // Whether nothing but unit u's own parts comes near the region between its camera and its mount ring during
+  // [0, exposure] (bounding boxes, swept along the units' motions).
+  bool PathClearOver(size_t u, double exposure) const;
   // Intersects the rays of a batch: their Embree lanes set up once, then packets of 16 (rtcIntersect16) where
   // the CPU has native 16-wide packets, else of 8 (rtcIntersect8). Returns the number of rays given to Embree.
   template <class T>
@@ -236,6 +248,7 @@ class RayScene {
   std::vector<std::unique_ptr<UserGeometry>> user_;  // index = user geometry slot
   std::vector<int> geom_to_user_;                    // geomID -> slot in user_, or -1
   std::vector<OwnMount> own_mount_;  // by unit, for the units with their own Embree mask bits
+  std::vector<std::pair<size_t, size_t>> body_rects_;  // by unit, the range of desc_.rects holding its camera body
 
   // A unit that moves (velocity or angular velocity not zero) has its parts (camera body rectangles, mirror, mount
   // ring, lens face) in a scene of its own, in its mirror frame, instanced in the world with its motion over

@@ -836,6 +836,61 @@ TEST(Render, SomethingBetweenTheCameraAndItsMountIsSeenInFrontOfIt) {
   }
 }
 
+TEST(Render, SomethingAMovingUnitComesNearDuringTheExposureIsSeenInFrontOfItsMount) {
+  // The unit moves at 2 m/s along x for 0.1 s. A still plate lies 11-30 cm to the side of its camera, outside the
+  // region between camera and mount ring at time 0, but the image corner's straight ray (camera to ring) passes
+  // through it after about half the exposure. The corner's samples must see it there: the time-0 decision that
+  // nothing is in between (so those rays skip Embree) must not hold for the blurred frame.
+  SceneConfig cfg = BoardScene(false);
+  auto& unit_cfg = cfg.description.units[0];
+  unit_cfg.rig.camera = PinholeCamera<double>::FromPhysical(0.016, 4.54e-6 * 25, 110, 88);
+  const Rigid3d world_from_cam = unit_cfg.world_from_mirror * unit_cfg.rig.cam_from_mirror.Inverse();
+  Vec3d bearing;
+  ASSERT_TRUE(unit_cfg.rig.camera.CamFromImg(Vec2d(0, 0), &bearing));
+  const Vec3d dir = world_from_cam.Rotate(bearing.normalized()), c = world_from_cam.translation;
+  ASSERT_GT(dir.z(), 0.5);   // the unit stands upright: the corner's ray goes up to the ring
+  const Vec3d at = c + (0.03 / dir.z()) * dir;   // the ray 3 cm above the camera
+  ASSERT_LT(std::abs(at.x() - c.x()), 0.02);
+  raytrace::Rect plate;   // horizontal, 3 cm above the camera, x from c.x + 0.11 to c.x + 0.31
+  plate.object_id = 79;
+  plate.world_from_rect = Rigid3d::Translation(Vec3d(c.x() + 0.21, at.y(), at.z()));
+  plate.width = 0.2, plate.height = 0.1;
+  plate.front.kind = raytrace::Texture::Kind::kSolid;
+  plate.front.colour_a = {0.9f, 0.1f, 0.3f};
+  plate.double_sided = true;
+  cfg.description.rects.push_back(plate);
+  unit_cfg.velocity = Vec3d(2, 0, 0);
+  const RayScene scene(cfg.description);
+  EXPECT_TRUE(scene.MountPathClear(0));               // at time 0 nothing is in between
+  EXPECT_TRUE(scene.MountPathClearDuring(0, 0.002));  // nor within 4 mm of travel
+  EXPECT_FALSE(scene.MountPathClearDuring(0, 0.1));
+  raytrace::RenderOptions ro;
+  ro.samples = 16;
+  ro.exposure_time = 0.1;
+  const raytrace::Frame f = raytrace::Render(scene, raytrace::ViewCamera::Unit(0), ro);
+  // The corner's colour: (1 - w) mount + w plate, w the share of its samples' times past about 0.05 s.
+  const raytrace::Rgb& mount = scene.description().units[0].mount_colour;
+  const double w = (f.rgb[0] - mount[0]) / (plate.front.colour_a[0] - mount[0]);
+  EXPECT_GT(w, 0.25) << "corner colour " << f.rgb[0] << " " << f.rgb[1] << " " << f.rgb[2];
+  EXPECT_LT(w, 0.75);
+  for (int ch = 1; ch < 3; ++ch)
+    EXPECT_NEAR(f.rgb[ch], (1 - w) * mount[ch] + w * plate.front.colour_a[ch], 1e-4) << "channel " << ch;
+  // Without motion the plate stays out of the way.
+  ro.exposure_time = 0;
+  const raytrace::Frame still = raytrace::Render(scene, raytrace::ViewCamera::Unit(0), ro);
+  for (int ch = 0; ch < 3; ++ch) EXPECT_FLOAT_EQ(still.rgb[ch], mount[ch]);
+  // A turn: at 2 rad/s about y through the viewpoint, the camera (13 cm below it) swings towards -x, 11 cm in
+  // 0.5 s, into the same plate placed on that side.
+  SceneConfig turning = cfg;
+  turning.description.units[0].velocity = Vec3d::Zero();
+  turning.description.units[0].angular_velocity = Vec3d(0, 2, 0);
+  turning.description.rects.back().world_from_rect = Rigid3d::Translation(Vec3d(c.x() - 0.21, at.y(), at.z()));
+  const RayScene turns(turning.description);
+  EXPECT_TRUE(turns.MountPathClear(0));
+  EXPECT_TRUE(turns.MountPathClearDuring(0, 0.01));
+  EXPECT_FALSE(turns.MountPathClearDuring(0, 0.5));
+}
+
 TEST(Render, RaysEndingOnTheMountRingAreNotCountedAsEmbreeRays) {
   // Frame::embree_rays leaves out the camera rays past the rim that end on the unit's own mount ring without
   // Embree (nothing can lie in between). Pixels whose ground truth (the pixel-centre ray) is the ring: that ray and,
