@@ -764,17 +764,33 @@ TEST(Render, AnExposureBeyondTheMotionHorizonIsRefused) {
   EXPECT_NO_THROW(raytrace::Render(scene, raytrace::ViewCamera::Unit(0), ro));
 }
 
+// The board scene seen by unit 0 through a 110 x 88 camera (25 times the reference pixel pitch): the image's
+// corners lie past the rim, on the mount ring.
+SceneConfig SmallCameraBoardScene() {
+  SceneConfig cfg = BoardScene(false);
+  cfg.description.units[0].rig.camera = PinholeCamera<double>::FromPhysical(0.016, 4.54e-6 * 25, 110, 88);
+  return cfg;
+}
+
+// Unit 0's camera in the world and the unit world direction of its ray through the image's corner pixel (0, 0).
+bool CornerRay(const SceneConfig& cfg, Rigid3d* world_from_cam, Vec3d* dir) {
+  const auto& unit = cfg.description.units[0];
+  *world_from_cam = unit.world_from_mirror * unit.rig.cam_from_mirror.Inverse();
+  Vec3d bearing;
+  if (!unit.rig.camera.CamFromImg(Vec2d(0, 0), &bearing)) return false;
+  *dir = world_from_cam->Rotate(bearing.normalized());
+  return true;
+}
+
 TEST(Render, SomethingBetweenTheCameraAndItsMountIsSeenInFrontOfIt) {
   // A camera ray past the rim meets the mount ring analytically and goes to Embree only up to the ring: plates
   // placed on such rays, 2 cm in front of the camera and just in front of the ring, must still be seen (and the
   // ring elsewhere), on both ray paths (the pinhole samples and the thin-lens samples).
-  SceneConfig cfg = BoardScene(false);
+  SceneConfig cfg = SmallCameraBoardScene();
   auto& unit_cfg = cfg.description.units[0];
-  unit_cfg.rig.camera = PinholeCamera<double>::FromPhysical(0.016, 4.54e-6 * 25, 110, 88);
-  const Rigid3d world_from_cam = unit_cfg.world_from_mirror * unit_cfg.rig.cam_from_mirror.Inverse();
-  Vec3d bearing;
-  ASSERT_TRUE(unit_cfg.rig.camera.CamFromImg(Vec2d(0, 0), &bearing));
-  const Vec3d dir = world_from_cam.Rotate(bearing);
+  Rigid3d world_from_cam;
+  Vec3d dir, bearing;
+  ASSERT_TRUE(CornerRay(cfg, &world_from_cam, &dir));
   raytrace::Rect plate;
   plate.object_id = 77;
   // (Plate centres sit a little off the pixel's ray, so that ray does not run along the quad's diagonal, which
@@ -841,13 +857,12 @@ TEST(Render, SomethingAMovingUnitComesNearDuringTheExposureIsSeenInFrontOfItsMou
   // region between camera and mount ring at time 0, but the image corner's straight ray (camera to ring) passes
   // through it after about half the exposure. The corner's samples must see it there: the time-0 decision that
   // nothing is in between (so those rays skip Embree) must not hold for the blurred frame.
-  SceneConfig cfg = BoardScene(false);
+  SceneConfig cfg = SmallCameraBoardScene();
   auto& unit_cfg = cfg.description.units[0];
-  unit_cfg.rig.camera = PinholeCamera<double>::FromPhysical(0.016, 4.54e-6 * 25, 110, 88);
-  const Rigid3d world_from_cam = unit_cfg.world_from_mirror * unit_cfg.rig.cam_from_mirror.Inverse();
-  Vec3d bearing;
-  ASSERT_TRUE(unit_cfg.rig.camera.CamFromImg(Vec2d(0, 0), &bearing));
-  const Vec3d dir = world_from_cam.Rotate(bearing.normalized()), c = world_from_cam.translation;
+  Rigid3d world_from_cam;
+  Vec3d dir;
+  ASSERT_TRUE(CornerRay(cfg, &world_from_cam, &dir));
+  const Vec3d c = world_from_cam.translation;
   ASSERT_GT(dir.z(), 0.5);   // the unit stands upright: the corner's ray goes up to the ring
   const Vec3d at = c + (0.03 / dir.z()) * dir;   // the ray 3 cm above the camera
   ASSERT_LT(std::abs(at.x() - c.x()), 0.02);
@@ -896,9 +911,7 @@ TEST(Render, RaysEndingOnTheMountRingAreNotCountedAsEmbreeRays) {
   // Embree (nothing can lie in between). Pixels whose ground truth (the pixel-centre ray) is the ring: that ray and,
   // inside the ring's area, all of the pixel's samples end there; pixels on the area's border have some samples on
   // either side.
-  SceneConfig cfg = BoardScene(false);
-  cfg.description.units[0].rig.camera = PinholeCamera<double>::FromPhysical(0.016, 4.54e-6 * 25, 110, 88);
-  const RayScene scene(cfg.description);
+  const RayScene scene(SmallCameraBoardScene().description);
   ASSERT_TRUE(scene.MountPathClear(0));
   raytrace::RenderOptions ro;
   ro.samples = 4;
