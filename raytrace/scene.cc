@@ -273,7 +273,7 @@ RayScene::RayScene(SceneDescription description) : desc_(std::move(description))
   // through an Embree instance that follows the motion (AttachMovingUnit), the other units' in the world.
   std::vector<char> moving(desc_.units.size(), 0);
   for (size_t ui = 0; ui < desc_.units.size(); ++ui)
-    moving[ui] = desc_.units[ui].velocity != Vec3d::Zero() || desc_.units[ui].angular_velocity != Vec3d::Zero();
+    moving[ui] = desc_.units[ui].Moves();
 
   // Camera bodies of the units become rectangles (a box behind the lens face, along the optical axis): the still
   // units' first, then the moving units' (which go into their instances, not into the world's quad mesh).
@@ -546,7 +546,7 @@ namespace {
 // points holds every chord.
 Eigen::AlignedBox3d SweptBox(const CatadioptricUnit& unit, const std::vector<Vec3d>& mirror_points, double T) {
   const double rate = unit.angular_velocity.norm();
-  const bool moves = T > 0 && (rate > 0 || unit.velocity.squaredNorm() > 0);
+  const bool moves = T > 0 && unit.Moves();
   const int steps = moves ? std::max(1, static_cast<int>(std::ceil(rate * T / 0.05))) : 0;
   Eigen::AlignedBox3d box;
   double rho = 0;
@@ -559,14 +559,12 @@ Eigen::AlignedBox3d SweptBox(const CatadioptricUnit& unit, const std::vector<Vec
   return Eigen::AlignedBox3d(box.min() - Vec3d::Constant(pad), box.max() + Vec3d::Constant(pad));
 }
 
-bool Moves(const CatadioptricUnit& u) { return u.velocity.squaredNorm() > 0 || u.angular_velocity.squaredNorm() > 0; }
-
 }  // namespace
 
 bool RayScene::PathClearOver(size_t u, double T) const {
   const OwnMount& m = own_mount_[u];
   const CatadioptricUnit& unit = desc_.units[u];
-  const bool swept = T > 0 && Moves(unit);
+  const bool swept = T > 0 && unit.Moves();
   Eigen::AlignedBox3d region;
   // The camera centre and any aperture point around it (thin-lens samples leave those); the ring's corners.
   const Vec3d centre_m = unit.rig.cam_from_mirror.Inverse().translation;
@@ -589,7 +587,7 @@ bool RayScene::PathClearOver(size_t u, double T) const {
   }
   region.extend(region.min() - Vec3d::Constant(1e-6)).extend(region.max() + Vec3d::Constant(1e-6));
   // Another unit's parts (its camera body's rectangles, its analytic shapes) move with it: their boxes swept too.
-  const auto owner_moves = [&](int w) { return T > 0 && w >= 0 && Moves(desc_.units[w]); };
+  const auto owner_moves = [&](int w) { return T > 0 && w >= 0 && desc_.units[w].Moves(); };
   const auto world_box = [&](int w, const Eigen::AlignedBox3d& at_zero) {
     if (!owner_moves(w)) return at_zero;
     const Rigid3d mirror_from_world = desc_.units[w].world_from_mirror.Inverse();
@@ -629,7 +627,7 @@ bool RayScene::MountPathClearDuring(int unit, double exposure) const {
   if (!MountPathClear(unit)) return false;
   if (!(exposure > 0)) return true;
   bool any = false;
-  for (const CatadioptricUnit& u : desc_.units) any = any || Moves(u);
+  for (const CatadioptricUnit& u : desc_.units) any = any || u.Moves();
   return !any || PathClearOver(static_cast<size_t>(unit), exposure);
 }
 

@@ -49,6 +49,7 @@ struct CatadioptricUnit {
   double body_length = 0.12;       // camera body behind the lens face
   Vec3d velocity = Vec3d::Zero();          // m/s, world frame (motion blur)
   Vec3d angular_velocity = Vec3d::Zero();  // rad/s, world frame, about the viewpoint (motion blur)
+  bool Moves() const { return velocity != Vec3d::Zero() || angular_velocity != Vec3d::Zero(); }
   // The unit's pose at time tau after the start of the exposure.
   Rigid3d WorldFromMirrorAt(double tau) const {
     if (tau == 0) return world_from_mirror;
