@@ -764,15 +764,8 @@ TEST(Render, AnExposureBeyondTheMotionHorizonIsRefused) {
   EXPECT_NO_THROW(raytrace::Render(scene, raytrace::ViewCamera::Unit(0), ro));
 }
 
-// The board scene seen by unit 0 through a 110 x 88 camera (25 times the reference pixel pitch): the image's
-// corners lie past the rim, on the mount ring.
-SceneConfig SmallCameraBoardScene() {
-  SceneConfig cfg = BoardScene(false);
-  cfg.description.units[0].rig.camera = PinholeCamera<double>::FromPhysical(0.016, 4.54e-6 * 25, 110, 88);
-  return cfg;
-}
-
-// Unit 0's camera in the world and the unit world direction of its ray through the image's corner pixel (0, 0).
+// Unit 0's camera in the world and the unit world direction of its ray through the image's corner pixel (0, 0)
+// (with SmallBoardScene(25), a 110 x 88 image, the corners lie past the rim, on the mount ring).
 bool CornerRay(const SceneConfig& cfg, Rigid3d* world_from_cam, Vec3d* dir) {
   const auto& unit = cfg.description.units[0];
   *world_from_cam = unit.world_from_mirror * unit.rig.cam_from_mirror.Inverse();
@@ -786,7 +779,7 @@ TEST(Render, SomethingBetweenTheCameraAndItsMountIsSeenInFrontOfIt) {
   // A camera ray past the rim meets the mount ring analytically and goes to Embree only up to the ring: plates
   // placed on such rays, 2 cm in front of the camera and just in front of the ring, must still be seen (and the
   // ring elsewhere), on both ray paths (the pinhole samples and the thin-lens samples).
-  SceneConfig cfg = SmallCameraBoardScene();
+  SceneConfig cfg = SmallBoardScene(25);
   auto& unit_cfg = cfg.description.units[0];
   Rigid3d world_from_cam;
   Vec3d dir, bearing;
@@ -857,7 +850,7 @@ TEST(Render, SomethingAMovingUnitComesNearDuringTheExposureIsSeenInFrontOfItsMou
   // region between camera and mount ring at time 0, but the image corner's straight ray (camera to ring) passes
   // through it after about half the exposure. The corner's samples must see it there: the time-0 decision that
   // nothing is in between (so those rays skip Embree) must not hold for the blurred frame.
-  SceneConfig cfg = SmallCameraBoardScene();
+  SceneConfig cfg = SmallBoardScene(25);
   auto& unit_cfg = cfg.description.units[0];
   Rigid3d world_from_cam;
   Vec3d dir;
@@ -911,7 +904,7 @@ TEST(Render, RaysEndingOnTheMountRingAreNotCountedAsEmbreeRays) {
   // Embree (nothing can lie in between). Pixels whose ground truth (the pixel-centre ray) is the ring: that ray and,
   // inside the ring's area, all of the pixel's samples end there; pixels on the area's border have some samples on
   // either side.
-  const RayScene scene(SmallCameraBoardScene().description);
+  const RayScene scene(SmallBoardScene(25).description);
   ASSERT_TRUE(scene.MountPathClear(0));
   raytrace::RenderOptions ro;
   ro.samples = 4;
