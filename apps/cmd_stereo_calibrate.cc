@@ -233,16 +233,16 @@ Runner SetupStereoCalibrate(CLI::App* sub, const GlobalOptions* global) {
             ++excluded;
             continue;
           }
-          Vec3d bl, br;
-          if (!left.MirrorFromImg(p.pixel, &bl) || !right.MirrorFromImg(r->second, &br)) continue;
-          const auto tri = depth::Triangulate(rig, bl, br, px_rad);
+          Vec3d ol, bl, orr, br;
+          if (!left.RayFromImg(p.pixel, &ol, &bl) || !right.RayFromImg(r->second, &orr, &br)) continue;
+          const auto tri = depth::Triangulate(rig, ol, bl, orr, br, px_rad);
           if (!tri.ok) continue;
           const double true_range = (left_from_board * b->second).norm();
           const double rel = (tri.range_left - true_range) / true_range;
           const Vec3d X = left_from_board * b->second;
           Vec2d tl, tr;
-          const double el = left.ImgFromMirror(X, &tl) ? (tl - p.pixel).norm() : -1;
-          const double er = right.ImgFromMirror(right_from_board * b->second, &tr) ? (tr - r->second).norm() : -1;
+          const double el = left.ImgFromPointUnbounded(X, &tl) ? (tl - p.pixel).norm() : -1;
+          const double er = right.ImgFromPointUnbounded(right_from_board * b->second, &tr) ? (tr - r->second).norm() : -1;
           worst_list.push_back({std::abs(rel), true_range,
                                 std::acos(std::clamp(X.normalized().dot(base_dir), -1.0, 1.0)) * 180 / M_PI,
                                 tri.sigma_range / true_range, 1e3 * tri.gap, name, p.id, el, er, p.from_edges, redges[p.id]});

@@ -99,6 +99,29 @@ class AnyModel {
     return false;
   }
 
+  // Pixel of a point X (mirror frame, metres) by the model's formula without its validity domain (exact: the
+  // sheet continued past the rim, no camera occlusion; polynomial: any rho; unified: no annulus; no image
+  // bounds): false only where the formula has no value (a direction that misses the sheet, a point behind the
+  // camera). The exact model of a rig that is not single-viewpoint projects X itself, at its own distance (not
+  // at scene_distance: the point is known). For solvers over board points, whose iterates may carry a corner
+  // observed near the rim just past it: ImgFromMirror would fail there instead of pulling it back.
+  bool ImgFromPointUnbounded(const Vec3d& X, Vec2d* uv) const {
+    switch (kind_) {
+      case Kind::kExact: {
+        Vec3d M;
+        if (svp_) {
+          if (!exact_.mirror.PointAlong(X, &M)) return false;
+        } else if (exact_.SolveReflectionPoint(X, &M, false) != ProjectionStatus::kOk) {
+          return false;
+        }
+        return exact_.camera.ImgFromCam(exact_.cam_from_mirror * M, uv);
+      }
+      case Kind::kPolynomial: return poly_.ImgFromCam(X, uv);
+      case Kind::kUnified: return unified_.ImgFromCam(X, uv);
+    }
+    return false;
+  }
+
   // Unit bearing (mirror frame) of a pixel; false outside the valid domain.
   bool MirrorFromImg(const Vec2d& uv, Vec3d* bearing) const {
     if (!InImage(uv)) return false;
@@ -118,6 +141,21 @@ class AnyModel {
         return InAnnulus(uv) && unified_.CamFromImg(uv, bearing);
     }
     return false;
+  }
+
+  // The view ray of a pixel (mirror frame): its origin and unit direction; false outside the valid domain (as
+  // MirrorFromImg). The exact model's ray starts where it leaves the mirror, which for a rig that is not
+  // single-viewpoint is off the line through F1; the central models' rays start at F1 (the origin).
+  bool RayFromImg(const Vec2d& uv, Vec3d* origin, Vec3d* direction) const {
+    if (kind_ != Kind::kExact) {
+      *origin = Vec3d::Zero();
+      return MirrorFromImg(uv, direction);
+    }
+    Vec3d M, d;
+    if (!InImage(uv) || !exact_.RayFromImg(uv, &M, &d) || exact_.RayHitsCamera(M, d)) return false;
+    *origin = svp_ ? Vec3d::Zero() : M;
+    *direction = d;
+    return true;
   }
 
   // Named parameters (for headers of mapping files and reports).

@@ -128,8 +128,9 @@ struct CatadioptricCamera {
     return Finish(X, M, uv, mirror_point);
   }
 
-  // The mirror point where X reflects into the camera centre. Solved in double, lifted to T.
-  ProjectionStatus SolveReflectionPoint(const Vec3<T>& X, Vec3<T>* M) const {
+  // The mirror point where X reflects into the camera centre. Solved in double, lifted to T. within_rim false:
+  // on the whole sheet (the surface continued past the rim, for solvers whose iterates may cross it).
+  ProjectionStatus SolveReflectionPoint(const Vec3<T>& X, Vec3<T>* M, bool within_rim = true) const {
     const HyperboloidMirror<double> md = mirror.template Cast<double>();
     const Vec3d Xd = ConvertMatrix<double>(X);
     const Vec3d Cd = ConvertMatrix<double>(Vec3<T>(CameraCentre()));
@@ -154,7 +155,7 @@ struct CatadioptricCamera {
       const NewtonResult r = SolveNewton2(residual, &xy, options);
       if (!r.converged || r.residual_norm > 1e-12) continue;
       const Vec3d Md = md.SurfacePoint(xy(0), xy(1));
-      if (!md.WithinRim(Md)) return ProjectionStatus::kMissesMirror;
+      if (within_rim && !md.WithinRim(Md)) return ProjectionStatus::kMissesMirror;
       const Vec3d n = md.Normal(Md);
       if (!((Xd - Md).dot(n) > 0)) return ProjectionStatus::kInsideMirror;
       if (!((Cd - Md).dot(n) > 0)) return ProjectionStatus::kNoSolution;

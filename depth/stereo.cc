@@ -42,9 +42,14 @@ double LawOfSinesRange(double baseline, double theta_left, double theta_right) {
 
 Triangulation Triangulate(const StereoRig& rig, const Vec3d& bearing_left, const Vec3d& bearing_right,
                           double sigma_angle_rad) {
+  return Triangulate(rig, Vec3d::Zero(), bearing_left, Vec3d::Zero(), bearing_right, sigma_angle_rad);
+}
+
+Triangulation Triangulate(const StereoRig& rig, const Vec3d& origin_left, const Vec3d& bearing_left,
+                          const Vec3d& origin_right, const Vec3d& bearing_right, double sigma_angle_rad) {
   Triangulation out;
   const Rigid3d left_from_right = rig.right_from_left.Inverse();
-  const Vec3d oL = Vec3d::Zero(), oR = left_from_right.translation;
+  const Vec3d oL = origin_left, oR = left_from_right * origin_right;
   const auto solve = [&](const Vec3d& bl, const Vec3d& br, Vec3d* X, double* gap) {
     const Vec3d dL = bl.normalized(), dR = (left_from_right.rotation * br).normalized();
     double s, t;

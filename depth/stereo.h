@@ -44,9 +44,14 @@ struct Triangulation {
   double sigma_range = 0;             // m, from the angular noise
   double gap = 0;                     // distance between the two rays at their closest points, m
 };
-// Bearings in each unit's mirror frame (any length). Fails for (near-)parallel rays or a point behind a unit.
+// Bearings in each unit's mirror frame (any length), from its viewpoint F1. Fails for (near-)parallel rays or a
+// point behind a unit.
 Triangulation Triangulate(const StereoRig& rig, const Vec3d& bearing_left, const Vec3d& bearing_right,
                           double sigma_angle_rad);
+// The same for rays with their own origins (each unit's mirror frame): the rays of a unit that is not
+// single-viewpoint start on its mirror, not at F1 (AnyModel::RayFromImg).
+Triangulation Triangulate(const StereoRig& rig, const Vec3d& origin_left, const Vec3d& bearing_left,
+                          const Vec3d& origin_right, const Vec3d& bearing_right, double sigma_angle_rad);
 
 // The article's closed form (horizontal rays, parallel axes): range from the left viewpoint given the angles
 // to the baseline at both units. Exposed for tests and reports.

@@ -43,7 +43,7 @@ struct LeftCost {
   Vec2d obs;
   bool operator()(const double* q, const double* t, double* r) const {
     Vec2d uv;
-    if (!model->ImgFromMirror(ToPose(q, t) * X, &uv)) return false;
+    if (!model->ImgFromPointUnbounded(ToPose(q, t) * X, &uv)) return false;
     r[0] = uv(0) - obs(0), r[1] = uv(1) - obs(1);
     return true;
   }
@@ -54,7 +54,7 @@ struct RightCost {
   Vec2d obs;
   bool operator()(const double* qrl, const double* trl, const double* q, const double* t, double* r) const {
     Vec2d uv;
-    if (!model->ImgFromMirror(ToPose(qrl, trl) * (ToPose(q, t) * X), &uv)) return false;
+    if (!model->ImgFromPointUnbounded(ToPose(qrl, trl) * (ToPose(q, t) * X), &uv)) return false;
     r[0] = uv(0) - obs(0), r[1] = uv(1) - obs(1);
     return true;
   }
@@ -68,7 +68,7 @@ double Rms(const AnyModel& model, const Rigid3d& mirror_from_board, const std::v
     const auto it = board.find(o.id);
     if (it == board.end()) continue;
     Vec2d uv;
-    if (!model.ImgFromMirror(mirror_from_board * it->second, &uv)) continue;
+    if (!model.ImgFromPointUnbounded(mirror_from_board * it->second, &uv)) continue;
     s += (uv - o.pixel).squaredNorm();
     ++n;
   }
@@ -423,7 +423,7 @@ StereoCalibration CalibrateStereo(const AnyModel& left, const AnyModel& right,
         for (const auto& c : cs) {
           const auto it = board.find(c.id);
           Vec2d uv;
-          const double e = it != board.end() && model.ImgFromMirror(pose * it->second, &uv) ? (uv - c.pixel).norm() : HUGE_VAL;
+          const double e = it != board.end() && model.ImgFromPointUnbounded(pose * it->second, &uv) ? (uv - c.pixel).norm() : HUGE_VAL;
           if (e > o.outlier_px) {
             outliers.push_back({obs[k].name, side == 0 ? "left" : "right", c.id, e});
             ++dropped;
@@ -500,7 +500,7 @@ std::vector<int> RejectInconsistentMarkers(const AnyModel& model, std::vector<Co
     for (const auto& c : *corners) {
       const auto it = board.find(c.id);
       Vec2d uv;
-      const double e = it != board.end() && model.ImgFromMirror(pose * it->second, &uv) ? (uv - c.pixel).norm() : HUGE_VAL;
+      const double e = it != board.end() && model.ImgFromPointUnbounded(pose * it->second, &uv) ? (uv - c.pixel).norm() : HUGE_VAL;
       worst[c.id / 4] = std::max(worst[c.id / 4], e);
     }
     const auto w = std::max_element(worst.begin(), worst.end(),

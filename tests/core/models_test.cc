@@ -2,6 +2,7 @@
 // polynomial fitted to the exact model.
 #include <gtest/gtest.h>
 
+#include "core/any_model.h"
 #include "core/model_fit.h"
 #include "core/pinhole.h"
 #include "core/polynomial.h"
@@ -80,6 +81,47 @@ TEST(Unified, FromDesignReproducesTheExactProjection) {
   }
   auto tilted = test::MisalignedRig();
   EXPECT_THROW(UnifiedFromCatadioptric(tilted), Error);
+}
+
+// Solvers project with ImgFromPointUnbounded: inside a model's domain it is ImgFromMirror (of a point at the
+// exact model's scene distance, where ImgFromMirror puts bearings); past the domain's
+// edge (the rim, the annulus) it goes on smoothly instead of failing, so that a corner observed near the rim
+// does not stop a solve whose iterate carries it just past.
+TEST(AnyModel, UnboundedProjectionIsTheBoundedOneInsideAndContinuesPastTheRim) {
+  const auto rig = test::AlignedRig();
+  const PolynomialModel<double> poly = PolynomialFromCatadioptric(rig, 4);
+  const std::vector<std::pair<std::string, AnyModel>> models = {
+      {"exact", AnyModel::Exact(rig)},
+      {"exact, misaligned", AnyModel::Exact(test::MisalignedRig(), 3.0)},
+      {"polynomial", AnyModel::Polynomial(poly)},
+      {"unified", AnyModel::Unified(UnifiedFromCatadioptric(rig), poly.rho_min, poly.rho_max)}};
+  const double deg = M_PI / 180, step = 0.05 * deg;
+  const auto bearing = [](double az, double el) {
+    return Vec3d(std::cos(el) * std::cos(az), std::cos(el) * std::sin(az), std::sin(el));
+  };
+  for (const auto& [name, m] : models)
+    for (double az : {0.3, 2.0, -2.2}) {
+      // The first elevation (upwards from -60 deg) that leaves the model's domain.
+      double edge = -60 * deg;
+      Vec2d uv, ub;
+      while (edge < 60 * deg && m.ImgFromMirror(bearing(az, edge), &uv)) {
+        ASSERT_TRUE(m.ImgFromPointUnbounded(m.scene_distance() * bearing(az, edge), &ub)) << name;
+        EXPECT_LT((ub - uv).norm(), 1e-9) << name << " at elevation " << edge / deg;
+        edge += step;
+      }
+      ASSERT_LT(edge, 60 * deg) << name << ": the domain has no upper edge";
+      EXPECT_GT(edge, -30 * deg) << name;
+      // Seven pixels 0.05 deg apart, three inside the domain and four outside: evenly spaced to 1 %.
+      std::vector<Vec2d> p(7);
+      for (int k = 0; k < 7; ++k)
+        ASSERT_TRUE(m.ImgFromPointUnbounded(m.scene_distance() * bearing(az, edge + (k - 3) * step), &p[k]))
+            << name << " k " << k;
+      for (int k = 1; k < 6; ++k) {
+        const double d = (p[k + 1] - p[k]).norm();
+        EXPECT_GT(d, 0.1) << name;
+        EXPECT_LT((p[k + 1] - 2 * p[k] + p[k - 1]).norm(), 0.01 * d) << name << " at " << k;
+      }
+    }
 }
 
 TEST(Polynomial, Degree4FitReproducesTheExactModelOverTheMirror) {

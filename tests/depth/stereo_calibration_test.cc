@@ -7,6 +7,7 @@
 #include <random>
 
 #include "core/error.h"
+#include "depth/stereo.h"
 #include "depth/stereo_calibration.h"
 #include "raytrace/render.h"
 #include "scenes/dataset.h"
@@ -80,8 +81,10 @@ TEST(StereoCalibration, RecoversTheRigFromTwelvePairs) {
     EXPECT_LE(baseline_err, 0.0005);
     EXPECT_LE(rot_err, 0.02);
     if (noise == 0) {
-      EXPECT_LT(c.rms_px, 0.01);
-      EXPECT_LT(t_err, 1e-4);
+      // Exact: the solve projects the board points themselves (the misaligned right unit's projection depends on
+      // their distance; projected at a fixed scene distance they were off by 0.004 px RMS, 0.05 mm).
+      EXPECT_LT(c.rms_px, 1e-4);
+      EXPECT_LT(t_err, 1e-6);
     } else {
       EXPECT_NEAR(c.rms_px, noise * std::sqrt(2.0), 0.05);   // 2-D residuals of noise per axis
       EXPECT_LT(baseline_err, 4 * c.sigma_baseline + 1e-6) << "sigma must describe the error";
@@ -96,10 +99,48 @@ TEST(StereoCalibration, RecoversTheRigFromTwelvePairs) {
       std::printf("[ figure ] the article's 3-D residual method, same corners: translation error %.3f mm, rotation "
                   "error %.4f deg, 3-D RMS %.2f mm, reprojection RMS %.3f px\n", 1e3 * a_t_err, a_rot, 1e3 * a.rms_3d_m, a.rms_px);
       EXPECT_TRUE(a.converged) << a.solver_report;
-      EXPECT_GT(a_t_err, t_err) << "joint reprojection residuals beat the article's 3-D residual";
       EXPECT_GT(a.rms_px, c.rms_px);
     }
   }
+}
+
+// The joint reprojection solve against the article's method (per-unit board poses, then the 3-D residual alone)
+// on the same corners: over ten noise draws its translation and rotation errors are smaller in RMS. (One draw
+// may go either way: a single comparison would test the draw, not the method.)
+TEST(StereoCalibration, JointReprojectionBeatsTheArticles3dResidualOverNoiseDraws) {
+  const auto cfg = StereoScene();
+  const auto& units = cfg.description.units;
+  const auto opts = scenes::DatasetOptions::ForKind("stereo_aruco");
+  const auto poses = scenes::DrawBoardPoses(cfg, opts);
+  const auto board = BoardPoints(opts.board);
+  const Rigid3d truth = units[1].world_from_mirror.Inverse() * units[0].world_from_mirror;
+  const AnyModel left = AnyModel::Exact(units[0].rig), right = AnyModel::Exact(units[1].rig);
+  const auto errors = [&](const StereoCalibration& c) {
+    const double rot = 2 * std::asin(std::min(1.0, (c.right_from_left.rotation * truth.rotation.conjugate()).vec().norm()));
+    return std::make_pair((c.right_from_left.translation - truth.translation).norm(), rot / kDeg);
+  };
+  double joint_t = 0, joint_r = 0, article_t = 0, article_r = 0;
+  constexpr int kDraws = 10;
+  for (int seed = 0; seed < kDraws; ++seed) {
+    std::mt19937 rng(100 + seed);
+    std::vector<StereoPairObservation> pairs;
+    for (size_t i = 0; i < poses.size(); ++i)
+      pairs.push_back({"pair" + std::to_string(i), Observe(units[0], board, poses[i], 0.2, &rng),
+                       Observe(units[1], board, poses[i], 0.2, &rng)});
+    const auto [jt, jr] = errors(CalibrateStereo(left, right, pairs, board, {}));
+    StereoCalibrationOptions o3;
+    o3.residual = "3d";
+    const StereoCalibration a = CalibrateStereo(left, right, pairs, board, o3);
+    EXPECT_TRUE(a.converged) << a.solver_report;
+    const auto [at, ar] = errors(a);
+    joint_t += jt * jt, joint_r += jr * jr, article_t += at * at, article_r += ar * ar;
+  }
+  const auto rms = [](double s) { return std::sqrt(s / kDraws); };
+  std::printf("[ figure ] 12 pairs, 0.2 px noise, %d draws: translation error RMS %.3f mm joint, %.3f mm the article's "
+              "3-D residual; rotation error RMS %.4f / %.4f deg\n", kDraws, 1e3 * rms(joint_t), 1e3 * rms(article_t),
+              rms(joint_r), rms(article_r));
+  EXPECT_LT(joint_t, article_t);
+  EXPECT_LT(joint_r, article_r);
 }
 
 TEST(StereoCalibration, RejectsTooFewPairsAndPairsWithoutCommonMarkers) {
@@ -127,6 +168,44 @@ TEST(StereoCalibration, RejectsTooFewPairsAndPairsWithoutCommonMarkers) {
   } catch (const Error& e) {
     EXPECT_NE(std::string(e.what()).find("common markers"), std::string::npos) << e.what();
   }
+}
+
+// Sparse depth through the exact models: the misaligned right unit's rays start on its mirror, not at F1, so
+// exact corners triangulate to their true range only along the rays themselves (AnyModel::RayFromImg); from F1
+// (central bearings) the same corners were off by 0.03 % RMS, 0.3 % near the baseline.
+TEST(SparseDepth, ExactCornersTriangulateToTheTrueRangeAlongTheRigsOwnRays) {
+  const auto cfg = StereoScene();
+  const auto& units = cfg.description.units;
+  const auto opts = scenes::DatasetOptions::ForKind("stereo_aruco");
+  const auto poses = scenes::DrawBoardPoses(cfg, opts);
+  const auto board = BoardPoints(opts.board);
+  const StereoRig rig{AnyModel::Exact(units[0].rig), AnyModel::Exact(units[1].rig),
+                      units[1].world_from_mirror.Inverse() * units[0].world_from_mirror};
+  std::mt19937 rng(1);
+  double worst = 0, worst_central = 0;
+  int n = 0;
+  for (const auto& pose : poses) {
+    std::map<int, Vec2d> right;
+    for (const auto& c : Observe(units[1], board, pose, 0.0, &rng)) right[c.id] = c.pixel;
+    for (const auto& c : Observe(units[0], board, pose, 0.0, &rng)) {
+      if (!right.count(c.id)) continue;
+      Vec3d ol, bl, orr, br;
+      ASSERT_TRUE(rig.left.RayFromImg(c.pixel, &ol, &bl) && rig.right.RayFromImg(right[c.id], &orr, &br));
+      EXPECT_EQ(ol.norm(), 0.0) << "the aligned left unit is single-viewpoint";
+      EXPECT_GT(orr.norm(), 0.01) << "the right unit's rays start on its mirror";
+      const double truth = (units[0].world_from_mirror.Inverse() * (pose * board.at(c.id))).norm();
+      const auto t = Triangulate(rig, ol, bl, orr, br, 1e-4), central = Triangulate(rig, bl, br, 1e-4);
+      ASSERT_TRUE(t.ok && central.ok);
+      worst = std::max(worst, std::abs(t.range_left - truth) / truth);
+      worst_central = std::max(worst_central, std::abs(central.range_left - truth) / truth);
+      ++n;
+    }
+  }
+  std::printf("[ figure ] %d exact corners: worst relative range error %.2e along the rays, %.2e from F1\n", n, worst,
+              worst_central);
+  EXPECT_GT(n, 500);
+  EXPECT_LT(worst, 1e-7);
+  EXPECT_GT(worst_central, 1e-3);
 }
 
 TEST(MarkerDetection, FindsTheMarkersOfARenderAtTheirTruePixels) {
