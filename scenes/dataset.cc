@@ -182,6 +182,25 @@ void RenderSceneFolder(const SceneConfig& cfg, const fs::path& out, bool progres
   stage.Commit();
 }
 
+namespace {
+
+// True if the board at this pose passes through nothing in `scene` (which holds everything but the board): no
+// segment of its outline, nor of a grid of 5 x 5 lines across it, meets any geometry. A board drawn through the
+// ground is not a pose a real board can take, and where the ground cuts its markers it makes false corners.
+bool BoardClearOf(const raytrace::RayScene& scene, const BoardSpec& spec, const Rigid3d& world_from_board) {
+  const double hw = 0.5 * spec.Width(), hh = 0.5 * spec.Height();
+  const auto at = [&](double x, double y) { return world_from_board * Vec3d(x, y, 0); };
+  constexpr int kLines = 5;
+  for (int k = 0; k <= kLines + 1; ++k) {
+    const double f = static_cast<double>(k) / (kLines + 1);  // 0 and 1: the outline
+    const double x = -hw + 2 * hw * f, y = -hh + 2 * hh * f;
+    if (scene.Occluded(at(x, -hh), at(x, hh), 0) || scene.Occluded(at(-hw, y), at(hw, y), 0)) return false;
+  }
+  return true;
+}
+
+}  // namespace
+
 std::vector<Rigid3d> DrawBoardPoses(const SceneConfig& base, const DatasetOptions& o) {
   o.Check("dataset");
   const auto& units = base.description.units;
@@ -219,7 +238,7 @@ std::vector<Rigid3d> DrawBoardPoses(const SceneConfig& base, const DatasetOption
     Rigid3d pose = LookAt(board_centre, centre, (U(rng) * 2 - 1) * M_PI);
     const double tilt_axis = U(rng) * 2 * M_PI, tilt = U(rng) * o.max_tilt_deg * kDeg;
     pose.rotation = pose.rotation * QuaternionFromAngleAxis<double>(Vec3d(std::cos(tilt_axis), std::sin(tilt_axis), 0) * tilt);
-    bool ok = true;
+    bool ok = BoardClearOf(occluders, o.board, pose);
     for (size_t u = 0; u < n_units && ok; ++u) {
       const auto& unit = units[u];
       const Rigid3d mirror_from_world = unit.world_from_mirror.Inverse();

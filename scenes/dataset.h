@@ -58,7 +58,8 @@ void WriteDepthSequence(const SceneConfig& base, const DatasetOptions& options, 
 Rigid3d WorldFromRigAt(const SceneConfig& base, const DatasetOptions& options, int frame);
 
 // Board poses for a dataset (exposed for tests): each keeps at least min_visible_fraction of the corners
-// visible (inside the valid annulus by edge_margin_px) in unit 0 (mono) or in every unit (stereo).
+// visible (inside the valid annulus by edge_margin_px) in unit 0 (mono) or in every unit (stereo), and the board
+// passes through nothing else in the scene (the ground, boxes, the units).
 std::vector<Rigid3d> DrawBoardPoses(const SceneConfig& base, const DatasetOptions& options);
 
 }  // namespace hovs::scenes
