@@ -22,10 +22,7 @@ struct PhysicalReprojection {
   bool operator()(const T* mirror, const T* intr, const T* dist, const T* mis, const T* pose, T* residual) const {
     // Every observed corner is seen by definition: project without the visibility limits (rim, camera body,
     // sensor bounds), so a start slightly off does not reject corners near the rim.
-    CatadioptricCamera<T> rig = nominal_->Cast<T>();
-    rig.mirror.rim_diameter = T(3) * rig.mirror.rim_diameter;
-    rig.occluder_radius = T(0);
-    rig.camera.width = rig.camera.height = 0;
+    CatadioptricCamera<T> rig = nominal_->Cast<T>().Unbounded();
     rig.mirror.a = mirror[0], rig.mirror.b = mirror[1];
     rig.camera.fx = intr[0], rig.camera.fy = intr[1], rig.camera.cx = intr[2], rig.camera.cy = intr[3];
     rig.camera.distortion = {dist[0], dist[1], dist[2], dist[3]};

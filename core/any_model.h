@@ -36,6 +36,7 @@ class AnyModel {
     AnyModel m;
     m.kind_ = Kind::kExact;
     m.exact_ = rig;
+    m.unbounded_ = rig.Unbounded();
     m.scene_distance_ = scene_distance;
     m.svp_ = rig.IsSingleViewpoint();
     m.width_ = rig.camera.width, m.height_ = rig.camera.height;
@@ -99,23 +100,17 @@ class AnyModel {
     return false;
   }
 
-  // Pixel of a point X (mirror frame, metres) by the model's formula without its validity domain (exact: the
-  // sheet continued past the rim, no camera occlusion; polynomial: any rho; unified: no annulus; no image
-  // bounds): false only where the formula has no value (a direction that misses the sheet, a point behind the
-  // camera). The exact model of a rig that is not single-viewpoint projects X itself, at its own distance (not
+  // Pixel of a point X (mirror frame, metres) by the model's formula without its validity domain (exact:
+  // CatadioptricCamera::Unbounded, the sheet continued past the rim, no camera occlusion; polynomial: any rho;
+  // unified: no annulus; no image bounds): false only where the formula has no value (a direction that misses
+  // the sheet, a point behind the camera or the mirror). The exact model of a rig that is not single-viewpoint projects X itself, at its own distance (not
   // at scene_distance: the point is known). For solvers over board points, whose iterates may carry a corner
   // observed near the rim just past it: ImgFromMirror would fail there instead of pulling it back.
   bool ImgFromPointUnbounded(const Vec3d& X, Vec2d* uv) const {
     switch (kind_) {
-      case Kind::kExact: {
-        Vec3d M;
-        if (svp_) {
-          if (!exact_.mirror.PointAlong(X, &M)) return false;
-        } else if (exact_.SolveReflectionPoint(X, &M, false) != ProjectionStatus::kOk) {
-          return false;
-        }
-        return exact_.camera.ImgFromCam(exact_.cam_from_mirror * M, uv);
-      }
+      case Kind::kExact:
+        return (svp_ ? unbounded_.ImgFromMirrorSvp(X, uv) : unbounded_.ImgFromMirrorGeneral(X, uv)) ==
+               ProjectionStatus::kOk;
       case Kind::kPolynomial: return poly_.ImgFromCam(X, uv);
       case Kind::kUnified: return unified_.ImgFromCam(X, uv);
     }
@@ -203,7 +198,7 @@ class AnyModel {
   }
 
   Kind kind_ = Kind::kExact;
-  CatadioptricCamera<double> exact_;
+  CatadioptricCamera<double> exact_, unbounded_;   // unbounded_: exact_.Unbounded(), for ImgFromPointUnbounded
   PolynomialModel<double> poly_;
   UnifiedModel<double> unified_;
   std::pair<double, double> annulus_{0, 0};

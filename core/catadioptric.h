@@ -128,9 +128,8 @@ struct CatadioptricCamera {
     return Finish(X, M, uv, mirror_point);
   }
 
-  // The mirror point where X reflects into the camera centre. Solved in double, lifted to T. within_rim false:
-  // on the whole sheet (the surface continued past the rim, for solvers whose iterates may cross it).
-  ProjectionStatus SolveReflectionPoint(const Vec3<T>& X, Vec3<T>* M, bool within_rim = true) const {
+  // The mirror point where X reflects into the camera centre. Solved in double, lifted to T.
+  ProjectionStatus SolveReflectionPoint(const Vec3<T>& X, Vec3<T>* M) const {
     const HyperboloidMirror<double> md = mirror.template Cast<double>();
     const Vec3d Xd = ConvertMatrix<double>(X);
     const Vec3d Cd = ConvertMatrix<double>(Vec3<T>(CameraCentre()));
@@ -155,7 +154,7 @@ struct CatadioptricCamera {
       const NewtonResult r = SolveNewton2(residual, &xy, options);
       if (!r.converged || r.residual_norm > 1e-12) continue;
       const Vec3d Md = md.SurfacePoint(xy(0), xy(1));
-      if (within_rim && !md.WithinRim(Md)) return ProjectionStatus::kMissesMirror;
+      if (!md.WithinRim(Md)) return ProjectionStatus::kMissesMirror;
       const Vec3d n = md.Normal(Md);
       if (!((Xd - Md).dot(n) > 0)) return ProjectionStatus::kInsideMirror;
       if (!((Cd - Md).dot(n) > 0)) return ProjectionStatus::kNoSolution;
@@ -215,6 +214,17 @@ struct CatadioptricCamera {
     Vec3<T> M, d;
     if (!RayFromImg(uv, &M, &d)) return false;
     return !RayHitsCamera(M, d);
+  }
+
+  // The same rig without its visibility limits: the sheet continued to three times the rim's diameter, no
+  // camera occluder, no sensor bounds. Its projection is the model's formula wherever that has a value; for
+  // solvers over observed points, whose iterates may carry a corner seen near the rim just past it.
+  CatadioptricCamera Unbounded() const {
+    CatadioptricCamera r = *this;
+    r.mirror.rim_diameter = T(3) * r.mirror.rim_diameter;
+    r.occluder_radius = T(0);
+    r.camera.width = r.camera.height = 0;
+    return r;
   }
 
   void Check(const std::string& where = "catadioptric camera") const {
