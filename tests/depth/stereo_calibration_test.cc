@@ -29,6 +29,18 @@ std::map<int, Vec3d> BoardPoints(const scenes::BoardSpec& spec) {
   return out;
 }
 
+// The reference stereo rig with the stereo set's board at its 12 poses (seed 1), both units' exact models and
+// the true relative pose (right_from_left, mirror frames).
+struct StereoSet {
+  scenes::SceneConfig cfg = StereoScene();
+  scenes::DatasetOptions opts = scenes::DatasetOptions::ForKind("stereo_aruco");
+  std::vector<Rigid3d> poses = scenes::DrawBoardPoses(cfg, opts);
+  std::map<int, Vec3d> board = BoardPoints(opts.board);
+  const std::vector<raytrace::CatadioptricUnit>& units = cfg.description.units;
+  AnyModel left = AnyModel::Exact(units[0].rig), right = AnyModel::Exact(units[1].rig);
+  Rigid3d truth = units[1].world_from_mirror.Inverse() * units[0].world_from_mirror;
+};
+
 // Exact corner pixels of the board at world_from_board in unit u, with noise; only corners that project.
 std::vector<CornerObservation> Observe(const raytrace::CatadioptricUnit& unit, const std::map<int, Vec3d>& board,
                                        const Rigid3d& world_from_board, double noise, std::mt19937* rng) {
@@ -44,14 +56,9 @@ std::vector<CornerObservation> Observe(const raytrace::CatadioptricUnit& unit, c
 }
 
 TEST(StereoCalibration, RecoversTheRigFromTwelvePairs) {
-  const auto cfg = StereoScene();
-  const auto& units = cfg.description.units;
-  const auto opts = scenes::DatasetOptions::ForKind("stereo_aruco");
-  const auto poses = scenes::DrawBoardPoses(cfg, opts);
+  const StereoSet set;
+  const auto& [cfg, opts, poses, board, units, left, right, truth] = set;
   ASSERT_EQ(poses.size(), 12u);
-  const auto board = BoardPoints(opts.board);
-  const Rigid3d truth = units[1].world_from_mirror.Inverse() * units[0].world_from_mirror;
-  const AnyModel left = AnyModel::Exact(units[0].rig), right = AnyModel::Exact(units[1].rig);
   EXPECT_FALSE(units[1].rig.IsSingleViewpoint()) << "the right unit is misaligned in the reference rig";
   for (double noise : {0.0, 0.2}) {
     std::mt19937 rng(5);
@@ -108,13 +115,8 @@ TEST(StereoCalibration, RecoversTheRigFromTwelvePairs) {
 // on the same corners: over ten noise draws its translation and rotation errors are smaller in RMS. (One draw
 // may go either way: a single comparison would test the draw, not the method.)
 TEST(StereoCalibration, JointReprojectionBeatsTheArticles3dResidualOverNoiseDraws) {
-  const auto cfg = StereoScene();
-  const auto& units = cfg.description.units;
-  const auto opts = scenes::DatasetOptions::ForKind("stereo_aruco");
-  const auto poses = scenes::DrawBoardPoses(cfg, opts);
-  const auto board = BoardPoints(opts.board);
-  const Rigid3d truth = units[1].world_from_mirror.Inverse() * units[0].world_from_mirror;
-  const AnyModel left = AnyModel::Exact(units[0].rig), right = AnyModel::Exact(units[1].rig);
+  const StereoSet set;
+  const auto& [cfg, opts, poses, board, units, left, right, truth] = set;
   const auto errors = [&](const StereoCalibration& c) {
     const double rot = 2 * std::asin(std::min(1.0, (c.right_from_left.rotation * truth.rotation.conjugate()).vec().norm()));
     return std::make_pair((c.right_from_left.translation - truth.translation).norm(), rot / kDeg);
@@ -144,13 +146,9 @@ TEST(StereoCalibration, JointReprojectionBeatsTheArticles3dResidualOverNoiseDraw
 }
 
 TEST(StereoCalibration, RejectsTooFewPairsAndPairsWithoutCommonMarkers) {
-  const auto cfg = StereoScene();
-  const auto& units = cfg.description.units;
-  const auto opts = scenes::DatasetOptions::ForKind("stereo_aruco");
-  const auto poses = scenes::DrawBoardPoses(cfg, opts);
-  const auto board = BoardPoints(opts.board);
+  const StereoSet set;
+  const auto& [cfg, opts, poses, board, units, left, right, truth] = set;
   std::mt19937 rng(1);
-  const AnyModel left = AnyModel::Exact(units[0].rig), right = AnyModel::Exact(units[1].rig);
   std::vector<StereoPairObservation> one = {{"only", Observe(units[0], board, poses[0], 0.1, &rng),
                                              Observe(units[1], board, poses[0], 0.1, &rng)}};
   EXPECT_THROW(CalibrateStereo(left, right, one, board, {}), Error);
@@ -174,30 +172,26 @@ TEST(StereoCalibration, RejectsTooFewPairsAndPairsWithoutCommonMarkers) {
 // exact corners triangulate to their true range only along the rays themselves (AnyModel::RayFromImg); from F1
 // (central bearings) the same corners were off by 0.03 % RMS, 0.3 % near the baseline.
 TEST(SparseDepth, ExactCornersTriangulateToTheTrueRangeAlongTheRigsOwnRays) {
-  const auto cfg = StereoScene();
-  const auto& units = cfg.description.units;
-  const auto opts = scenes::DatasetOptions::ForKind("stereo_aruco");
-  const auto poses = scenes::DrawBoardPoses(cfg, opts);
-  const auto board = BoardPoints(opts.board);
-  const StereoRig rig{AnyModel::Exact(units[0].rig), AnyModel::Exact(units[1].rig),
-                      units[1].world_from_mirror.Inverse() * units[0].world_from_mirror};
+  const StereoSet set;
+  const auto& [cfg, opts, poses, board, units, left, right, truth] = set;
+  const StereoRig rig{left, right, truth};
   std::mt19937 rng(1);
   double worst = 0, worst_central = 0;
   int n = 0;
   for (const auto& pose : poses) {
-    std::map<int, Vec2d> right;
-    for (const auto& c : Observe(units[1], board, pose, 0.0, &rng)) right[c.id] = c.pixel;
+    std::map<int, Vec2d> right_px;
+    for (const auto& c : Observe(units[1], board, pose, 0.0, &rng)) right_px[c.id] = c.pixel;
     for (const auto& c : Observe(units[0], board, pose, 0.0, &rng)) {
-      if (!right.count(c.id)) continue;
+      if (!right_px.count(c.id)) continue;
       Vec3d ol, bl, orr, br;
-      ASSERT_TRUE(rig.left.RayFromImg(c.pixel, &ol, &bl) && rig.right.RayFromImg(right[c.id], &orr, &br));
+      ASSERT_TRUE(rig.left.RayFromImg(c.pixel, &ol, &bl) && rig.right.RayFromImg(right_px[c.id], &orr, &br));
       EXPECT_EQ(ol.norm(), 0.0) << "the aligned left unit is single-viewpoint";
       EXPECT_GT(orr.norm(), 0.01) << "the right unit's rays start on its mirror";
-      const double truth = (units[0].world_from_mirror.Inverse() * (pose * board.at(c.id))).norm();
+      const double range = (units[0].world_from_mirror.Inverse() * (pose * board.at(c.id))).norm();
       const auto t = Triangulate(rig, ol, bl, orr, br, 1e-4), central = Triangulate(rig, bl, br, 1e-4);
       ASSERT_TRUE(t.ok && central.ok);
-      worst = std::max(worst, std::abs(t.range_left - truth) / truth);
-      worst_central = std::max(worst_central, std::abs(central.range_left - truth) / truth);
+      worst = std::max(worst, std::abs(t.range_left - range) / range);
+      worst_central = std::max(worst_central, std::abs(central.range_left - range) / range);
       ++n;
     }
   }
