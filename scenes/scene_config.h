@@ -50,6 +50,12 @@ SceneConfig ParseSceneConfig(const std::string& yaml_text, const std::string& so
                              const std::filesystem::path& base_dir);
 SceneConfig LoadSceneConfig(const std::filesystem::path& path);
 
+// Throws when an object of the scene passes through a unit: an object (plane, box, board, the ground) meets a
+// segment spanning the unit's parts (its camera centre to the rim, the rim's and the mount's diameters, the
+// camera body along its axis). `where` names the input (the scene file, a dataset frame). ParseSceneConfig
+// calls it; so do generators that move units (depth sequences).
+void CheckUnitsClearOfObjects(const raytrace::SceneDescription& description, const std::string& where);
+
 // The same optics at 1/factor of the resolution (pixel pitch times factor): for quick runs. Throws when a
 // camera's size is not divisible by factor.
 void DownscaleCameras(SceneConfig* cfg, int factor);

@@ -105,6 +105,26 @@ TEST(Dataset, DepthSequenceMovesTheRigAndItsGroundTruth) {
   fs::remove_all(out.parent_path());
 }
 
+TEST(Dataset, ADepthSequenceDrivenIntoAnObjectIsRefusedBeforeRendering) {
+  // The street's rig heading 45 degrees at 1.5 m per frame: at frame 2 the left unit is inside the parked car
+  // (4.2 x 1.8 x 1.4 m at (3.0, 2.8)). One error naming the frame and the car; no output folder.
+  auto cfg = scenes::LoadSceneConfig(std::string(HOVS_SOURCE_DIR) + "/scenes/street.yaml");
+  scenes::DownscaleCameras(&cfg, 10);
+  auto o = scenes::DatasetOptions::ForKind("depth_sequence");
+  o.count = 4, o.step_m = 1.5, o.heading_deg = 45;
+  const fs::path out = test::Scratch("dataset", "depth-seq-crash");
+  try {
+    scenes::WriteDepthSequence(cfg, o, out, {{"hovs", "test"}});
+    ADD_FAILURE() << "the sequence was rendered";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("depth_sequence frame 2"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("'parked_car'"), std::string::npos) << e.what();
+  }
+  EXPECT_FALSE(fs::exists(out));
+  o.count = 2;   // frames 0 and 1 stay clear of it
+  EXPECT_NO_THROW(scenes::WriteDepthSequence(cfg, o, out, {{"hovs", "test"}}));
+}
+
 TEST(Dataset, CalibrationSetHasManifestImagesAndGroundTruth) {
   const auto cfg = SmallCalibrationScene();
   scenes::DatasetOptions o;

@@ -400,6 +400,21 @@ TEST(SceneConfig, RejectsBadInput) {
   expect(unit + "objects:\n  - {type: plane, pose: {position: [1, 0, 1]}, size: [1, 1], "
                 "texture: {checker: {squares: [0, 3], square: 0.1}}}\n",
          "at least 1 x 1 squares");
+  // Objects that pass through a unit, or enclose it: a wall through its axis, the ground between its camera and
+  // its mirror (F1 1.3 m up, the camera 0.13 m below), a box around it, a box cutting its camera body. A box
+  // beside it and the ground below it are fine.
+  const auto object = [&](const std::string& o) { return unit + "objects:\n  - " + o + "\n"; };
+  const std::string solid = "texture: {solid: [1, 1, 1]}}";
+  expect(object("{type: plane, name: wall, pose: {position: [0, 0, 1.3], rotation_deg: [0, 90, 0]}, size: [2, 2], " + solid),
+         "object 'wall' passes through unit 'unit0'");
+  expect(object("{type: ground, name: floor, height: 1.22, " + solid), "object 'floor' passes through unit 'unit0'");
+  expect(object("{type: box, name: crate, pose: {position: [0, 0, 0]}, size: [1, 1, 2], " + solid),
+         "unit 'unit0' is inside box 'crate'");
+  expect(object("{type: box, name: crate, pose: {position: [0.2, 0, 0]}, size: [0.5, 0.5, 1.1], " + solid),
+         "object 'crate' passes through unit 'unit0'");
+  EXPECT_NO_THROW(scenes::ParseSceneConfig(
+      object("{type: box, name: crate, pose: {position: [0.4, 0, 0]}, size: [0.5, 0.5, 2], " + solid), "ok.yaml", "."));
+  EXPECT_NO_THROW(scenes::ParseSceneConfig(object("{type: ground, name: floor, " + solid), "ok.yaml", "."));
 }
 
 TEST(RayScene, RejectsAWorldBeyondSinglePrecision) {
