@@ -103,9 +103,10 @@ class AnyModel {
   // Pixel of a point X (mirror frame, metres) by the model's formula without its validity domain (exact:
   // CatadioptricCamera::Unbounded, the sheet continued past the rim, no camera occlusion; polynomial: any rho;
   // unified: no annulus; no image bounds): false only where the formula has no value (a direction that misses
-  // the sheet, a point behind the camera or the mirror). The exact model of a rig that is not single-viewpoint projects X itself, at its own distance (not
-  // at scene_distance: the point is known). For solvers over board points, whose iterates may carry a corner
-  // observed near the rim just past it: ImgFromMirror would fail there instead of pulling it back.
+  // the sheet, a point behind the camera or the mirror). The exact model of a rig that is not single-viewpoint
+  // projects X itself, at its own distance (not at scene_distance: the point is known). For solvers over board
+  // points, whose iterates may carry a corner observed near the rim just past it: ImgFromMirror would fail there
+  // instead of pulling it back.
   bool ImgFromPointUnbounded(const Vec3d& X, Vec2d* uv) const {
     switch (kind_) {
       case Kind::kExact:

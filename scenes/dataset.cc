@@ -372,11 +372,12 @@ void WriteDepthSequence(const SceneConfig& base, const DatasetOptions& o, const 
   HOVS_REQUIRE(o.kind == "depth_sequence", "dataset", "WriteDepthSequence needs kind depth_sequence");
   HOVS_REQUIRE(!base.description.units.empty(), base.source, "the scene has no catadioptric unit");
   // The whole path first: a rig driven into an object is refused before anything is rendered.
-  for (int i = 0; i < o.count; ++i) {
-    raytrace::SceneDescription moved = base.description;
-    for (auto& u : moved.units) u.world_from_mirror = WorldFromRigAt(base, o, i) * u.world_from_mirror;
-    CheckUnitsClearOfObjects(moved, "depth_sequence frame " + std::to_string(i));
-  }
+  const UnitClearance clearance(base.description);
+  for (int i = 0; i < o.count; ++i)
+    for (raytrace::CatadioptricUnit u : base.description.units) {
+      u.world_from_mirror = WorldFromRigAt(base, o, i) * u.world_from_mirror;
+      clearance.Check(u, "depth_sequence frame " + std::to_string(i));
+    }
   StagedDirectory stage(out);
   nlohmann::json m = ManifestHead(base, o.kind, o.seed, versions);
   m["generator"] = {{"count", o.count}, {"step_m", o.step_m}, {"heading_deg", o.heading_deg},

@@ -5,6 +5,7 @@
 
 #include <cmath>
 #include <map>
+#include <memory>
 
 #include "calib/aruco_dictionary.h"
 #include "core/error.h"
@@ -393,51 +394,63 @@ SceneConfig ParseSceneConfig(const std::string& text, const std::string& source,
   return cfg;
 }
 
-void CheckUnitsClearOfObjects(const raytrace::SceneDescription& description, const std::string& where) {
-  if (description.units.empty() || description.rects.empty()) return;
+UnitClearance::UnitClearance(const raytrace::SceneDescription& description) : objects_(description.objects) {
+  if (description.rects.empty()) return;
   raytrace::SceneDescription objects = description;
   objects.units.clear();
-  const raytrace::RayScene scene(objects);
-  for (const auto& u : description.units) {
-    const auto& m = u.rig.mirror;
-    const double rim = m.RimRadius(), z = m.RimZ();
-    const double mount = u.mount_outer_radius > 0 ? u.mount_outer_radius : rim + 0.015;
-    const Vec3d C = u.rig.CameraCentre();
-    const auto world = [&](const Vec3d& p) { return u.world_from_mirror * p; };
-    std::vector<std::pair<Vec3d, Vec3d>> segments = {{world(C), world(C - u.body_length * u.rig.OpticalAxis())}};
-    for (int k = 0; k < 8; ++k) {
-      const double a = k * M_PI / 4, ca = std::cos(a), sa = std::sin(a);
-      segments.push_back({world(C), world(Vec3d(rim * ca, rim * sa, z))});
-      if (k < 4) {
-        segments.push_back({world(Vec3d(rim * ca, rim * sa, z)), world(Vec3d(-rim * ca, -rim * sa, z))});
-        segments.push_back({world(Vec3d(mount * ca, mount * sa, z)), world(Vec3d(-mount * ca, -mount * sa, z))});
-      }
-    }
-    // Inside a box (whose faces face outwards: seen from inside, the scene shows through them): the six axis
-    // directions from the camera centre all meet that box.
-    int inside = -1;
-    for (int k = 0; k < 6 && inside != -2; ++k) {
-      Vec3d d = Vec3d::Zero();
-      d(k / 2) = k % 2 ? -1.0 : 1.0;
-      const raytrace::Hit h = scene.Trace(world(C), d);
-      const bool box = h.hit && std::any_of(description.objects.begin(), description.objects.end(), [&](const auto& o) {
-        return o.id == h.object_id && o.type == "box";
-      });
-      inside = box && (inside == -1 || inside == h.object_id) ? h.object_id : -2;
-    }
-    for (const auto& o : description.objects)
-      HOVS_REQUIRE(o.id != inside, where, "unit '", u.name, "' is inside box '", o.name, "'");
-    for (const auto& [a, b] : segments) {
-      if (!scene.Occluded(a, b, 0)) continue;
-      const raytrace::Hit h = scene.Trace(a, (b - a).normalized());
-      std::string name = "id " + std::to_string(h.object_id);
-      for (const auto& o : description.objects)
-        if (o.id == h.object_id) name = "'" + o.name + "'";
-      throw Error(where, internal::Concat("object ", name, " passes through unit '", u.name,
-                                          "' (its mirror, mount or camera body) near (", h.point.x(), ", ", h.point.y(),
-                                          ", ", h.point.z(), ") m"));
+  scene_ = std::make_unique<raytrace::RayScene>(objects);
+}
+
+UnitClearance::~UnitClearance() = default;
+
+void UnitClearance::Check(const raytrace::CatadioptricUnit& u, const std::string& where) const {
+  if (!scene_) return;
+  const auto name_of = [&](int id) {
+    for (const auto& o : objects_)
+      if (o.id == id) return o.name;
+    return "id " + std::to_string(id);
+  };
+  const auto& m = u.rig.mirror;
+  const double rim = m.RimRadius(), z = m.RimZ();
+  const double mount = u.mount_outer_radius > 0 ? u.mount_outer_radius : rim + 0.015;
+  const auto world = [&](const Vec3d& p) { return u.world_from_mirror * p; };
+  const Vec3d C = world(u.rig.CameraCentre());
+  // Inside a box (whose faces face outwards: seen from inside, the scene shows through them): the six axis
+  // directions from the camera centre all meet that box.
+  int inside = -1;
+  for (int k = 0; k < 6 && inside != -2; ++k) {
+    Vec3d d = Vec3d::Zero();
+    d(k / 2) = k % 2 ? -1.0 : 1.0;
+    const raytrace::Hit h = scene_->Trace(C, d);
+    const bool box = h.hit && std::any_of(objects_.begin(), objects_.end(), [&](const auto& o) {
+      return o.id == h.object_id && o.type == "box";
+    });
+    inside = box && (inside == -1 || inside == h.object_id) ? h.object_id : -2;
+  }
+  HOVS_REQUIRE(inside < 0, where, "unit '", u.name, "' is inside box '", name_of(inside), "'");
+  std::vector<std::pair<Vec3d, Vec3d>> segments = {
+      {C, world(u.rig.CameraCentre() - u.body_length * u.rig.OpticalAxis())}};
+  for (int k = 0; k < 8; ++k) {
+    const double a = k * M_PI / 4, ca = std::cos(a), sa = std::sin(a);
+    segments.push_back({C, world(Vec3d(rim * ca, rim * sa, z))});
+    if (k < 4) {
+      segments.push_back({world(Vec3d(rim * ca, rim * sa, z)), world(Vec3d(-rim * ca, -rim * sa, z))});
+      segments.push_back({world(Vec3d(mount * ca, mount * sa, z)), world(Vec3d(-mount * ca, -mount * sa, z))});
     }
   }
+  for (const auto& [a, b] : segments) {
+    if (!scene_->Occluded(a, b, 0)) continue;
+    const raytrace::Hit h = scene_->Trace(a, (b - a).normalized());
+    throw Error(where, internal::Concat("object '", name_of(h.object_id), "' passes through unit '", u.name,
+                                        "' (its mirror, mount or camera body) near (", h.point.x(), ", ", h.point.y(),
+                                        ", ", h.point.z(), ") m"));
+  }
+}
+
+void CheckUnitsClearOfObjects(const raytrace::SceneDescription& description, const std::string& where) {
+  if (description.units.empty()) return;
+  const UnitClearance clearance(description);
+  for (const auto& u : description.units) clearance.Check(u, where);
 }
 
 SceneConfig LoadSceneConfig(const std::filesystem::path& path) {

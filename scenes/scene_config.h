@@ -4,6 +4,7 @@
 #pragma once
 
 #include <filesystem>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -50,10 +51,21 @@ SceneConfig ParseSceneConfig(const std::string& yaml_text, const std::string& so
                              const std::filesystem::path& base_dir);
 SceneConfig LoadSceneConfig(const std::filesystem::path& path);
 
-// Throws when an object of the scene passes through a unit: an object (plane, box, board, the ground) meets a
-// segment spanning the unit's parts (its camera centre to the rim, the rim's and the mount's diameters, the
-// camera body along its axis). `where` names the input (the scene file, a dataset frame). ParseSceneConfig
-// calls it; so do generators that move units (depth sequences).
+// Whether units stand clear of a scene's objects (planes, boxes, boards, the ground), the objects traced once
+// for units at any pose. Check throws when an object meets a segment spanning the unit's parts (its camera
+// centre to the rim, the rim's and the mount's diameters, the camera body along its axis), or when the unit's
+// camera centre is inside a box; `where` names the input (the scene file, a dataset frame).
+class UnitClearance {
+ public:
+  explicit UnitClearance(const raytrace::SceneDescription& description);   // its units are ignored
+  ~UnitClearance();
+  void Check(const raytrace::CatadioptricUnit& unit, const std::string& where) const;
+
+ private:
+  std::vector<raytrace::SceneObjectInfo> objects_;
+  std::unique_ptr<raytrace::RayScene> scene_;   // the objects alone; null without any
+};
+// Every unit of the description (ParseSceneConfig calls it on each scene file).
 void CheckUnitsClearOfObjects(const raytrace::SceneDescription& description, const std::string& where);
 
 // The same optics at 1/factor of the resolution (pixel pitch times factor): for quick runs. Throws when a
