@@ -237,9 +237,9 @@ Runner SetupStereoCalibrate(CLI::App* sub, const GlobalOptions* global) {
           if (!left.RayFromImg(p.pixel, &ol, &bl) || !right.RayFromImg(r->second, &orr, &br)) continue;
           const auto tri = depth::Triangulate(rig, ol, bl, orr, br, px_rad);
           if (!tri.ok) continue;
-          const double true_range = (left_from_board * b->second).norm();
-          const double rel = (tri.range_left - true_range) / true_range;
           const Vec3d X = left_from_board * b->second;
+          const double true_range = X.norm();
+          const double rel = (tri.range_left - true_range) / true_range;
           Vec2d tl, tr;
           const double el = left.ImgFromPointUnbounded(X, &tl) ? (tl - p.pixel).norm() : -1;
           const double er = right.ImgFromPointUnbounded(right_from_board * b->second, &tr) ? (tr - r->second).norm() : -1;
