@@ -23,7 +23,6 @@
 #include "calib/polynomial_calibration.h"
 #include "core/error.h"
 #include "core/io.h"
-#include "design/study.h"
 #include "results/html.h"
 #include "results/plot.h"
 #include "scenes/ground_truth.h"
@@ -447,7 +446,7 @@ Runner SetupCalibrate(CLI::App* sub, const GlobalOptions* global) {
     }
     nlohmann::json j;
     j["tool"] = "hovs calibrate";
-    j["versions"] = design::DesignVersions();
+    j["versions"] = Versions();
     j["input"] = in.description;
     j["input"]["images"] = in.obs.size();
     if (!in.detection.empty()) j["detection"] = in.detection;

@@ -9,7 +9,6 @@
 #include "apps/commands.h"
 #include "apps/sources.h"
 #include "core/error.h"
-#include "design/study.h"
 #include "hw/capture.h"
 
 namespace hovs::apps {
@@ -63,7 +62,7 @@ Runner SetupCapture(CLI::App* sub, const GlobalOptions* global) {
     co.software_trigger = o->source.trigger == "software";
     co.progress = !global->quiet;
     co.unit_names = src.units;
-    const hw::CaptureResult r = hw::CaptureDataset(src.Raw(), co, o->out, design::DesignVersions(), &g_stop);
+    const hw::CaptureResult r = hw::CaptureDataset(src.Raw(), co, o->out, Versions(), &g_stop);
     if (global->json) {
       std::cout << r.manifest.dump(1) << "\n";
     } else if (!global->quiet) {

@@ -17,7 +17,6 @@
 #include "core/error.h"
 #include "core/io.h"
 #include "depth/stereo.h"
-#include "design/study.h"
 #include "raytrace/render.h"
 #include "scenes/ground_truth.h"
 
@@ -149,7 +148,7 @@ Runner SetupDepth(CLI::App* sub, const GlobalOptions* global) {
       for (size_t k = 0; k < f.size(); ++k) f[k] = d.disparity[k] > 0 ? float(d.disparity[k] / dop.num_disparities) : 0.f;
       raytrace::WriteImage(staged.staging() / "disparity.png", d.width, d.height, 1, f, 16);
     }
-    const nlohmann::json versions = design::DesignVersions();
+    const nlohmann::json versions = Versions();
     depth::WriteRangeExr(staged.staging() / "range.exr", d,
                          {{"hovs:what", "range from the left viewpoint (Z) and its sigma (Z.sigma), m, rectified grid"},
                           {"hovs:dataset", o->dataset}, {"hovs:versions", versions.dump()}});

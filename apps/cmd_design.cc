@@ -31,7 +31,7 @@ Runner SetupDesign(CLI::App* sub, const GlobalOptions* global) {
 
 Runner SetupVersion(CLI::App*, const GlobalOptions*) {
   return []() {
-    for (const auto& [k, v] : design::DesignVersions()) std::cout << k << ": " << v << "\n";
+    for (const auto& [k, v] : Versions()) std::cout << k << ": " << v << "\n";
     return 0;
   };
 }

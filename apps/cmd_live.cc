@@ -16,7 +16,6 @@
 #include "apps/sources.h"
 #include "core/error.h"
 #include "core/io.h"
-#include "design/study.h"
 #include "raytrace/render.h"
 #include "unwrap/layout.h"
 #include "unwrap/remap.h"
@@ -82,7 +81,7 @@ Runner SetupLive(CLI::App* sub, const GlobalOptions* global) {
     const unwrap::RemapTable table =
         o->map.empty() ? unwrap::BuildRemapTable(LoadModelSpec(o->model, o->unit, o->scene_distance),
                                                  unwrap::ResolveLayout(o->layout), unwrap::RemapOptions(),
-                                                 nlohmann::json(design::DesignVersions()).dump())
+                                                 nlohmann::json(Versions()).dump())
                        : unwrap::LoadRemapTable(o->map);
     const double table_ms = Ms(tb, Clock::now());
     OpenedSources src = OpenSources(o->source);
@@ -165,7 +164,7 @@ Runner SetupLive(CLI::App* sub, const GlobalOptions* global) {
     std::signal(SIGINT, previous);
     const double wall = Ms(t_start, Clock::now()) / 1e3;
     const auto stats = cam.Stats();
-    nlohmann::json j = {{"tool", "hovs live"}, {"versions", design::DesignVersions()},
+    nlohmann::json j = {{"tool", "hovs live"}, {"versions", Versions()},
                         {"source", cam.Info()}, {"pixel_format", o->source.pixel_format},
                         {"views", table.views.size()}, {"interpolation", o->interp}, {"mapping_ms", table_ms},
                         {"frames_processed", processed}, {"frames_incomplete", incomplete}, {"frames_written", written},

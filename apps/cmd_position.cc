@@ -12,7 +12,6 @@
 #include "calib/rim_positioning.h"
 #include "core/error.h"
 #include "core/io.h"
-#include "design/study.h"
 #include "scenes/ground_truth.h"
 #include "scenes/scene_config.h"
 
@@ -70,7 +69,7 @@ Runner SetupPosition(CLI::App* sub, const GlobalOptions* global) {
     calib::RimEdge edge;
     const calib::MirrorPosition p = calib::LocateMirror(grey.data(), img.width, img.height, design, o->edge, &edge);
     const Vec3d mm = 1e3 * p.offset;
-    nlohmann::json j = {{"tool", "hovs position"}, {"versions", design::DesignVersions()}, {"image", o->image},
+    nlohmann::json j = {{"tool", "hovs position"}, {"versions", Versions()}, {"image", o->image},
                         {"design", o->scene}, {"unit", unit_name},
                         {"camera_offset_mm", {mm.x(), mm.y(), mm.z()}},
                         {"note", "camera centre minus the design's second focus, mirror frame (z towards the mirror), "

@@ -2,7 +2,6 @@
 
 #include "apps/commands.h"
 #include "core/error.h"
-#include "design/study.h"
 #include "scenes/dataset.h"
 #include "scenes/scene_config.h"
 
@@ -29,7 +28,7 @@ Runner SetupRender(CLI::App* sub, const GlobalOptions* global) {
     if (samples->count() > 0) cfg.render.samples = o->samples;
     if (o->seed >= 0) cfg.render.seed = static_cast<uint64_t>(o->seed);
     cfg.render.Check("--samples/--seed");
-    scenes::RenderSceneFolder(cfg, o->out, !global->quiet, design::DesignVersions());
+    scenes::RenderSceneFolder(cfg, o->out, !global->quiet, Versions());
     if (!global->quiet) std::cout << "hovs render: " << cfg.name << " -> " << o->out << "/dataset.json\n";
     return 0;
   };
@@ -78,8 +77,8 @@ Runner SetupDataset(CLI::App* sub, const GlobalOptions* global) {
     d.seed = o->seed;
     d.progress = !global->quiet;
     d.step_m = o->step, d.heading_deg = o->heading, d.yaw_step_deg = o->yaw_step;
-    if (d.kind == "depth_sequence") scenes::WriteDepthSequence(cfg, d, o->out, design::DesignVersions());
-    else scenes::WriteCalibrationDataset(cfg, d, o->out, design::DesignVersions());
+    if (d.kind == "depth_sequence") scenes::WriteDepthSequence(cfg, d, o->out, Versions());
+    else scenes::WriteCalibrationDataset(cfg, d, o->out, Versions());
     if (!global->quiet) std::cout << "hovs dataset: " << d.count << " frames (" << d.kind << ") -> " << o->out << "/dataset.json\n";
     return 0;
   };

@@ -20,7 +20,6 @@
 #include "core/io.h"
 #include "depth/stereo.h"
 #include "depth/stereo_calibration.h"
-#include "design/study.h"
 #include "raytrace/render.h"
 #include "scenes/ground_truth.h"
 #include "scenes/scene_config.h"
@@ -142,7 +141,7 @@ Runner SetupStereoCalibrate(CLI::App* sub, const GlobalOptions* global) {
                      {"rms_right_px", c.pair_rms_right_px[k]}, {"corners_left", c.pair_corners_left[k]},
                      {"corners_right", c.pair_corners_right[k]},
                      {"above_10px", std::max(c.pair_rms_left_px[k], c.pair_rms_right_px[k]) > 10}});
-    nlohmann::json j = {{"tool", "hovs stereo-calibrate"}, {"versions", design::DesignVersions()},
+    nlohmann::json j = {{"tool", "hovs stereo-calibrate"}, {"versions", Versions()},
                         {"dataset", o->dataset}, {"models", {left.KindName(), right.KindName()}},
                         {"right_from_left", {{"q", {q.w(), q.x(), q.y(), q.z()}}, {"t", {t.x(), t.y(), t.z()}}}},
                         {"baseline_m", c.baseline}, {"sigma_baseline_m", c.sigma_baseline},

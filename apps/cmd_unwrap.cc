@@ -21,7 +21,6 @@
 #include "core/error.h"
 #include "core/io.h"
 #include "core/large_pages.h"
-#include "design/study.h"
 #include "raytrace/render.h"
 #include "scenes/ground_truth.h"
 #include "scenes/scene_config.h"
@@ -144,7 +143,7 @@ Runner SetupUnwrap(CLI::App* sub, const GlobalOptions* global) {
       const AnyModel model = LoadModelSpec(o->model, o->unit, o->scene_distance);
       unwrap::RemapOptions ro;
       ro.tile = o->tile;
-      const nlohmann::json versions = design::DesignVersions();
+      const nlohmann::json versions = Versions();
       const unwrap::Layout layout = unwrap::ResolveLayout(o->layout);
       unwrap::CheckViewsMemory("--layout " + o->layout, layout.views, AvailableMemoryBytes());
       table = unwrap::BuildRemapTable(model, layout, ro, versions.dump());
@@ -259,7 +258,7 @@ Runner SetupUnwrap(CLI::App* sub, const GlobalOptions* global) {
     for (const auto& vt : table.views) views_json.push_back(ViewJson(vt));
     std::vector<double> sorted = remap_ms;
     std::sort(sorted.begin(), sorted.end());
-    nlohmann::json j = {{"tool", "hovs unwrap"}, {"versions", design::DesignVersions()},
+    nlohmann::json j = {{"tool", "hovs unwrap"}, {"versions", Versions()},
                               {"mapping", nlohmann::json::parse(table.header)}, {"mapping_source", source},
                               {"interpolation", o->interp}, {"views", views_json}, {"frames", frames_json},
                               {"timing", {{"mapping_ms", table_ms}, {"median_remap_ms", sorted[sorted.size() / 2]},

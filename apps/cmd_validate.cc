@@ -22,7 +22,6 @@
 #include "apps/commands.h"
 #include "core/error.h"
 #include "core/io.h"
-#include "design/study.h"
 #include "results/html.h"
 #include "results/plot.h"
 
@@ -91,7 +90,7 @@ class Validation {
  public:
   Validation(Preset p, fs::path out, uint64_t seed, std::string source_dir, bool quiet)
       : p_(std::move(p)), out_(std::move(out)), seed_(seed), src_(std::move(source_dir)), quiet_(quiet) {
-    metrics_ = {{"tool", "hovs validate"}, {"versions", design::DesignVersions()}, {"status", "running"},
+    metrics_ = {{"tool", "hovs validate"}, {"versions", Versions()}, {"status", "running"},
                 {"config", {{"preset", p_.name}, {"seed", seed_}, {"downscale", p_.downscale},
                             {"mono_frames", p_.mono_count}, {"mono_samples", p_.mono_samples},
                             {"stereo_pairs", p_.stereo_count}, {"stereo_samples", p_.stereo_samples},

@@ -2,10 +2,21 @@
 
 #include <iostream>
 
+#include "calib/checkerboard_detector.h"
 #include "core/error.h"
 #include "core/version.h"
+#include "design/study.h"
+#include "hw/camera_source.h"
+#include "raytrace/render.h"
 
 namespace hovs::apps {
+
+std::map<std::string, std::string> Versions() {
+  auto v = design::DesignVersions();
+  for (const auto& more : {raytrace::RaytraceVersions(), calib::CalibVersions(), hw::HwVersions()})
+    v.insert(more.begin(), more.end());
+  return v;
+}
 
 const std::vector<Command>& Commands() {
   static const std::vector<Command> table = {

@@ -4,6 +4,7 @@
 
 #include <CLI/CLI.hpp>
 #include <functional>
+#include <map>
 #include <string>
 #include <vector>
 
@@ -23,6 +24,11 @@ struct Command {
 };
 
 const std::vector<Command>& Commands();
+
+// Every library version a hovs output may depend on, recorded in each output's "versions": hovs itself, the
+// compiler, Eigen, Ceres, VTK, NLopt, TBB (design), Embree, OpenImageIO, OpenEXR (raytrace), OpenCV (calib) and
+// Aravis (hw).
+std::map<std::string, std::string> Versions();
 
 // Parses and runs one command line (argv[0] is the program). rethrow = false: errors are printed and turned into
 // exit codes (2 bad input, 3 internal); rethrow = true: hovs::Error propagates (used by hovs validate, which

@@ -395,4 +395,6 @@ BoardObservation ToObservation(const CheckerboardDetection& detection, const std
   return o;
 }
 
+std::map<std::string, std::string> CalibVersions() { return {{"opencv", cv::getVersionString()}}; }
+
 }  // namespace hovs::calib

@@ -26,6 +26,7 @@
 
 #include <functional>
 #include <opencv2/core.hpp>
+#include <map>
 #include <string>
 #include <vector>
 
@@ -75,5 +76,9 @@ CheckerboardDetection DetectCheckerboard(const cv::Mat& image, const Checkerboar
 
 // Convenience: a detection as a calibration observation.
 BoardObservation ToObservation(const CheckerboardDetection& detection, const std::string& image_name);
+
+// Versions of the libraries calibration uses beside the core's: "opencv" (the one loaded; detection, ArUco,
+// the omnidir comparison).
+std::map<std::string, std::string> CalibVersions();
 
 }  // namespace hovs::calib

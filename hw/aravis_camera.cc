@@ -335,4 +335,9 @@ std::unique_ptr<CameraSource> OpenAravisCamera(const std::string& id, const Capt
   return std::make_unique<AravisCamera>(id, settings);
 }
 
+std::map<std::string, std::string> HwVersions() {
+  return {{"aravis", std::to_string(arv_get_major_version()) + "." + std::to_string(arv_get_minor_version()) + "." +
+                         std::to_string(arv_get_micro_version())}};
+}
+
 }  // namespace hovs::hw

@@ -70,6 +70,9 @@ class CameraSource {
 // Throws hovs::Error naming the camera: not found, unsupported pixel format, a feature that cannot be set.
 std::unique_ptr<CameraSource> OpenAravisCamera(const std::string& id, const CaptureSettings& settings);
 
+// Versions of the libraries capture uses beside the core's: "aravis" (the one loaded).
+std::map<std::string, std::string> HwVersions();
+
 // Replays the images of one unit of a dataset manifest (or every image of a folder, sorted) as frames, with the
 // manifest's timestamps when it has them. pixel_format: Mono8 (grey conversion) or BayerRG8 (the file is a
 // mosaic already) .

@@ -1232,4 +1232,21 @@ ExrChannels ReadExr(const std::filesystem::path& path) {
   return out;
 }
 
+std::map<std::string, std::string> RaytraceVersions() {
+  std::map<std::string, std::string> v;
+  v["embree"] = RTC_VERSION_STRING;
+  const int oiio = OIIO::openimageio_version();   // 10000 * major + 100 * minor + patch
+  v["openimageio"] = std::to_string(oiio / 10000) + "." + std::to_string(oiio / 100 % 100) + "." + std::to_string(oiio % 100);
+  // "openexr:OpenEXR 3.1.5;tiff:LIBTIFF Version 4.5.0;...": the entry's last word.
+  std::string list;
+  if (OIIO::getattribute("library_list", list)) {
+    const size_t at = list.find("openexr:");
+    if (at != std::string::npos) {
+      const std::string entry = list.substr(at, list.find(';', at) - at);
+      v["openexr"] = entry.substr(entry.find_last_of(' ') + 1);
+    }
+  }
+  return v;
+}
+
 }  // namespace hovs::raytrace

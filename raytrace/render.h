@@ -147,4 +147,9 @@ struct ExrChannels {
 };
 ExrChannels ReadExr(const std::filesystem::path& path);
 
+// Versions of the libraries that make a render, for the outputs that record what made them: "embree" (the
+// headers built against; Debian ships them with the library), "openimageio" and "openexr" (the ones loaded:
+// OpenImageIO's own report, which names the OpenEXR it writes the ground truth with).
+std::map<std::string, std::string> RaytraceVersions();
+
 }  // namespace hovs::raytrace

@@ -20,6 +20,12 @@ namespace {
 using hovs::Vec2d;
 using hovs::Vec3d;
 
+// The renderer's libraries in the report's context, beside what bench_main.cc records (CPU, core versions).
+const bool kContext = [] {
+  for (const auto& [name, version] : hovs::raytrace::RaytraceVersions()) benchmark::AddCustomContext(name, version);
+  return true;
+}();
+
 const hovs::scenes::SceneConfig& Scene() {
   static const auto cfg = hovs::scenes::LoadSceneConfig(std::string(HOVS_SOURCE_DIR) + "/scenes/reference_board.yaml");
   return cfg;

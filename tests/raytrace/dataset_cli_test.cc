@@ -6,6 +6,8 @@
 #include <cstdio>
 #include <fstream>
 #include <nlohmann/json.hpp>
+#include <OpenEXR/OpenEXRConfig.h>
+#include <OpenImageIO/oiioversion.h>
 
 #include "calib/checkerboard_detector.h"
 #include "core/io.h"
@@ -346,6 +348,17 @@ TEST(RenderCli, RendersAndRejectsBadInput) {
   ASSERT_EQ(ok.exit_code, 0) << ok.output;
   EXPECT_TRUE(fs::is_regular_file(dir / "out" / "dataset.json"));
   EXPECT_TRUE(fs::is_regular_file(dir / "out" / "truth" / "unit0.exr"));
+  {
+    // The manifest names every library the render and its later stages depend on, at the versions built with.
+    const auto versions = nlohmann::json::parse(ReadFile(dir / "out" / "dataset.json"))["versions"];
+    EXPECT_EQ(versions.value("embree", ""), RTC_VERSION_STRING);
+    EXPECT_EQ(versions.value("opencv", ""), CV_VERSION);
+    EXPECT_EQ(versions.value("openimageio", ""), std::to_string(OIIO_VERSION_MAJOR) + "." +
+                                                   std::to_string(OIIO_VERSION_MINOR) + "." +
+                                                   std::to_string(OIIO_VERSION_PATCH));
+    EXPECT_EQ(versions.value("openexr", ""), OPENEXR_VERSION_STRING);
+    EXPECT_NE(versions.value("aravis", ""), "") << versions;
+  }
 
   const auto rejected = [&](const std::string& yaml, const std::string& needle, const std::string& extra = "") {
     std::ofstream(dir / "bad.yaml") << yaml;
