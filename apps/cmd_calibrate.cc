@@ -563,7 +563,7 @@ Runner SetupCalibrate(CLI::App* sub, const GlobalOptions* global) {
                            {"mean_ray_angle_aligned_deg", n ? sum_al / n : 0.0}, {"max_ray_angle_aligned_deg", worst_al},
                            {"frame_rotation_deg", frame_rot}, {"true_centre", {rig.camera.cx, rig.camera.cy}}};
     }
-    StagedDirectory stage(o->out);
+    StagedDirectory stage(o->out, "calibrate");
     WriteFileAtomic(stage.staging() / "calibration.json", j.dump(2) + "\n");
     WriteFileAtomic(stage.staging() / "calib_results.txt", calib::FormatOcamCalibResults(chosen->model));
     {

@@ -2,22 +2,20 @@
 // simulator serving a rendered dataset (--simulate), written as a hovs dataset (dataset.json without ground
 // truth, per-frame metadata, stream statistics). Ctrl-C ends the capture with a valid manifest.
 #include <atomic>
-#include <csignal>
+#include <cmath>
 #include <cstdio>
 #include <iostream>
 
 #include "apps/commands.h"
 #include "apps/sources.h"
 #include "core/error.h"
+#include "core/interrupt.h"
+#include "core/io.h"
 #include "hw/capture.h"
 
 namespace hovs::apps {
 namespace {
 namespace fs = std::filesystem;
-
-std::atomic<bool> g_stop{false};
-extern "C" void OnSigint(int) { g_stop.store(true); }
-
 }  // namespace
 
 Runner SetupCapture(CLI::App* sub, const GlobalOptions* global) {
@@ -42,15 +40,17 @@ Runner SetupCapture(CLI::App* sub, const GlobalOptions* global) {
       ->capture_default_str();
   sub->add_option("-o,--out", o->out, "dataset folder (must not exist or be empty)")->capture_default_str();
   return [o, global]() {
+    // A capture is written where it is going (an interrupted one keeps its frames) and never replaces anything:
+    // the folder must be new or empty.
+    CheckOutputFolder(o->out, "capture");
     HOVS_REQUIRE(!fs::exists(o->out) || fs::is_empty(o->out), o->out,
-                 "the output folder exists and is not empty (captures are never mixed)");
-    // Ctrl-C from here on ends the capture with a valid manifest (even before the first frame).
-    g_stop.store(false);
-    auto previous = std::signal(SIGINT, OnSigint);
-    struct Restore {
-      void (*handler)(int);
-      ~Restore() { std::signal(SIGINT, handler); }
-    } restore{previous};
+                 "the output folder exists and is not empty (captures are never mixed or replaced)");
+    HOVS_REQUIRE(std::isfinite(o->pair_ms) && o->pair_ms > 0 && o->pair_ms <= 10000, "--pair-tolerance-ms",
+                 "must be in (0, 10000] ms (got ", o->pair_ms, ")");
+    // Ctrl-C (or SIGTERM) from here on ends the capture with a valid manifest (even before the first frame); a
+    // second one ends the process.
+    std::atomic<bool> stop{false};
+    const InterruptScope interrupt(&stop);
     OpenedSources src = OpenSources(o->source);
     hw::CaptureOptions co;
     co.frames = o->frames, co.max_seconds = o->seconds, co.grab_timeout_s = o->timeout;
@@ -62,7 +62,7 @@ Runner SetupCapture(CLI::App* sub, const GlobalOptions* global) {
     co.software_trigger = o->source.trigger == "software";
     co.progress = !global->quiet;
     co.unit_names = src.units;
-    const hw::CaptureResult r = hw::CaptureDataset(src.Raw(), co, o->out, Versions(), &g_stop);
+    const hw::CaptureResult r = hw::CaptureDataset(src.Raw(), co, o->out, Versions(), &stop);
     if (global->json) {
       std::cout << r.manifest.dump(1) << "\n";
     } else if (!global->quiet) {

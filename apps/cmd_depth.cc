@@ -16,9 +16,11 @@
 #include "apps/model_files.h"
 #include "core/error.h"
 #include "core/io.h"
+#include "core/json.h"
 #include "depth/stereo.h"
 #include "raytrace/render.h"
 #include "scenes/ground_truth.h"
+#include "io/image_io.h"
 
 namespace hovs::apps {
 namespace {
@@ -96,8 +98,8 @@ Runner SetupDepth(CLI::App* sub, const GlobalOptions* global) {
                          ur.world_from_mirror.Inverse() * ul.world_from_mirror};
     std::string pose_source = "manifest";
     if (!o->stereo.empty()) {
-      const auto sj = nlohmann::json::parse(ReadFile(o->stereo), nullptr, false);
-      HOVS_REQUIRE(!sj.is_discarded() && sj.contains("right_from_left"), o->stereo,
+      const auto sj = ReadJsonFile(o->stereo);
+      HOVS_REQUIRE(sj.is_object() && sj.contains("right_from_left"), o->stereo,
                    "not a hovs stereo-calibrate result (no right_from_left)");
       try {
         const auto& q = sj["right_from_left"].at("q");
@@ -135,18 +137,18 @@ Runner SetupDepth(CLI::App* sub, const GlobalOptions* global) {
     dop.sigma_disparity_px = o->sigma_px, dop.max_relative_sigma = o->max_rel_sigma;
     const depth::DenseDepth d = depth::ComputeDenseDepth(rect, left[0], right[0], dop);
 
-    StagedDirectory staged(o->out);
+    StagedDirectory staged(o->out, "depth");
     const auto write8 = [&](const std::string& name, const unwrap::Image8& im) {
       std::vector<float> f(im.data.size());
       for (size_t k = 0; k < f.size(); ++k) f[k] = im.data[k] / 255.f;
-      raytrace::WriteImage(staged.staging() / name, im.width, im.height, im.channels, f, 8);
+      io::WriteImage(staged.staging() / name, im.width, im.height, im.channels, f, 8);
     };
     write8("rectified_left.png", left[0]);
     write8("rectified_right.png", right[0]);
     {
       std::vector<float> f(d.disparity.size());
       for (size_t k = 0; k < f.size(); ++k) f[k] = d.disparity[k] > 0 ? float(d.disparity[k] / dop.num_disparities) : 0.f;
-      raytrace::WriteImage(staged.staging() / "disparity.png", d.width, d.height, 1, f, 16);
+      io::WriteImage(staged.staging() / "disparity.png", d.width, d.height, 1, f, 16);
     }
     const nlohmann::json versions = Versions();
     depth::WriteRangeExr(staged.staging() / "range.exr", d,
@@ -187,7 +189,7 @@ Runner SetupDepth(CLI::App* sub, const GlobalOptions* global) {
     std::string table;
     if (!vl.exr.empty()) {
       // Ground truth: the left unit's range channel at each rectified pixel's source pixel.
-      const auto exr = raytrace::ReadExr(vl.exr);
+      const auto exr = io::ReadExr(vl.exr);
       const auto& Z = exr.at("Z");
       std::vector<float> mx, my;
       rect.left.DecodeView(0, &mx, &my);
@@ -225,7 +227,7 @@ Runner SetupDepth(CLI::App* sub, const GlobalOptions* global) {
         table += line;
       }
       j["ground_truth"] = {{"exr", vl.exr.string()}, {"bands", rows}, {"error_map", "error_map.png"}};
-      raytrace::WriteImage(staged.staging() / "error_map.png", d.width, d.height, 3, emap, 8);
+      io::WriteImage(staged.staging() / "error_map.png", d.width, d.height, 3, emap, 8);
     }
     WriteFileAtomic(staged.staging() / "depth.json", j.dump(1));
     staged.Commit();

@@ -5,9 +5,9 @@
 #include <atomic>
 #include <chrono>
 #include <cmath>
-#include <csignal>
 #include <cstdio>
 #include <iostream>
+#include <optional>
 #include <opencv2/highgui.hpp>
 #include <opencv2/imgproc.hpp>
 
@@ -15,19 +15,18 @@
 #include "apps/model_files.h"
 #include "apps/sources.h"
 #include "core/error.h"
+#include "core/interrupt.h"
 #include "core/io.h"
 #include "raytrace/render.h"
 #include "unwrap/layout.h"
 #include "unwrap/remap.h"
 #include "unwrap/remap_table.h"
+#include "io/image_io.h"
 
 namespace hovs::apps {
 namespace {
 namespace fs = std::filesystem;
 using Clock = std::chrono::steady_clock;
-
-std::atomic<bool> g_live_stop{false};
-extern "C" void OnLiveSigint(int) { g_live_stop.store(true); }
 
 double Ms(Clock::time_point a, Clock::time_point b) { return std::chrono::duration<double, std::milli>(b - a).count(); }
 
@@ -86,19 +85,28 @@ Runner SetupLive(CLI::App* sub, const GlobalOptions* global) {
     const double table_ms = Ms(tb, Clock::now());
     OpenedSources src = OpenSources(o->source);
     hw::CameraSource& cam = *src.sources[0];
-    if (!o->out.empty()) fs::create_directories(o->out);
+    // The output folder is staged like a report and committed when the run ends (its frame count, Ctrl-C or
+    // q); an error leaves an earlier output as it was.
+    std::optional<StagedDirectory> staged;
+    if (!o->out.empty()) staged.emplace(o->out, "live");
+    const fs::path out_dir = staged ? staged->staging() : fs::path();
     unwrap::Remapper remapper(table);
     const unwrap::PixelFormat fmt =
         o->source.pixel_format == "BayerRG8" ? unwrap::PixelFormat::kBayerRggb8 : unwrap::PixelFormat::kGray8;
     std::vector<double> wait_ms, remap_ms, write_ms, display_ms, total_ms;
     int processed = 0, incomplete = 0, written = 0;
-    g_live_stop.store(false);
-    auto previous = std::signal(SIGINT, OnLiveSigint);
+    std::atomic<bool> stop{false};
+    const InterruptScope interrupt(&stop);   // Ctrl-C ends the run with its figures; a second one ends the process
     cam.Start();
     const auto t_start = Clock::now();
     std::vector<unwrap::Image8> views;
     try {
-      while (!g_live_stop.load()) {
+      // Every wait is bounded overall: a frame must be processed within --timeout of the previous one (or of the
+      // start), whatever the source delivers meanwhile (incomplete frames).
+      auto last_progress = Clock::now();
+      while (!stop.load()) {
+        HOVS_REQUIRE(Ms(last_progress, Clock::now()) <= 1e3 * o->timeout, "hovs live", "no complete frame within ",
+                     o->timeout, " s (", incomplete, " incomplete frames; --timeout sets the wait)");
         if (o->frames > 0 && processed >= o->frames) break;
         if (o->seconds > 0 && Ms(t_start, Clock::now()) > 1e3 * o->seconds) break;
         if (o->source.trigger == "software") cam.SoftwareTrigger();
@@ -106,7 +114,7 @@ Runner SetupLive(CLI::App* sub, const GlobalOptions* global) {
         auto f = cam.Grab(o->timeout);
         const auto t1 = Clock::now();
         if (!f) {
-          HOVS_REQUIRE(!o->source.replay.empty() || g_live_stop.load(), "hovs live", "no frame within ",
+          HOVS_REQUIRE(!o->source.replay.empty() || stop.load(), "hovs live", "no frame within ",
                        o->timeout, " s (timeout)");
           break;  // the replay ended
         }
@@ -122,9 +130,7 @@ Runner SetupLive(CLI::App* sub, const GlobalOptions* global) {
             for (size_t k = 0; k < fl.size(); ++k) fl[k] = views[v].data[k] / 255.f;
             char rel[160];
             std::snprintf(rel, sizeof rel, "frame%06d_%s.png", processed, table.views[v].spec.name.c_str());
-            const fs::path tmp = fs::path(o->out) / (std::string(".") + rel + ".tmp.png");
-            raytrace::WriteImage(tmp, views[v].width, views[v].height, views[v].channels, fl, 8);
-            fs::rename(tmp, fs::path(o->out) / rel);
+            io::WriteImage(out_dir / rel, views[v].width, views[v].height, views[v].channels, fl, 8);
           }
           ++written;
         }
@@ -146,7 +152,7 @@ Runner SetupLive(CLI::App* sub, const GlobalOptions* global) {
           if (scale < 1) cv::resize(mosaic, mosaic, cv::Size(), scale, scale, cv::INTER_AREA);
           cv::imshow("hovs live", mosaic);
           const int key = cv::waitKey(1);
-          if (key == 'q' || key == 27) g_live_stop.store(true);
+          if (key == 'q' || key == 27) stop.store(true);
         }
         const auto t4 = Clock::now();
         wait_ms.push_back(Ms(t0, t1)), remap_ms.push_back(Ms(t1, t2));
@@ -154,14 +160,13 @@ Runner SetupLive(CLI::App* sub, const GlobalOptions* global) {
         if (o->display) display_ms.push_back(Ms(t3, t4));
         total_ms.push_back(Ms(t1, t4));
         ++processed;
+        last_progress = Clock::now();
       }
     } catch (...) {
       cam.Stop();
-      std::signal(SIGINT, previous);
       throw;
     }
     cam.Stop();
-    std::signal(SIGINT, previous);
     const double wall = Ms(t_start, Clock::now()) / 1e3;
     const auto stats = cam.Stats();
     nlohmann::json j = {{"tool", "hovs live"}, {"versions", Versions()},
@@ -175,7 +180,10 @@ Runner SetupLive(CLI::App* sub, const GlobalOptions* global) {
                                      {"frame_to_output", Stats(total_ms)}}},
                         {"note", "remap: all views of one frame, TBB threads; wait_for_frame includes the camera's "
                                  "frame period"}};
-    if (!o->out.empty()) WriteFileAtomic(fs::path(o->out) / "live.json", j.dump(1) + "\n");
+    if (staged) {
+      WriteFileAtomic(out_dir / "live.json", j.dump(1) + "\n");
+      staged->Commit();
+    }
     if (global->json) {
       std::cout << j.dump(1) << "\n";
     } else if (!global->quiet) {

@@ -105,7 +105,7 @@ Runner SetupPosition(CLI::App* sub, const GlobalOptions* global) {
     draw_rim(design, cv::Scalar(255, 120, 0));
     draw_rim(calib::WithCameraOffset(design, p.offset), cv::Scalar(0, 200, 0));
     for (const Vec2d& e : edge.points) cv::circle(fig, cv::Point2d(e.x(), e.y()), std::max(1, img.width / 700), cv::Scalar(0, 0, 255), cv::FILLED);
-    StagedDirectory stage(o->out);
+    StagedDirectory stage(o->out, "position");
     WriteFileAtomic(stage.staging() / "position.json", j.dump(2) + "\n");
     WriteFileAtomic(stage.staging() / "summary.txt", buf);
     HOVS_REQUIRE(cv::imwrite((stage.staging() / "rim.png").string(), fig), o->out, "cannot write rim.png");

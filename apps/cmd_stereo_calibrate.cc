@@ -304,7 +304,7 @@ Runner SetupStereoCalibrate(CLI::App* sub, const GlobalOptions* global) {
         summary += line;
       }
     }
-    StagedDirectory staged(o->out);
+    StagedDirectory staged(o->out, "stereo-calibrate");
     // Reprojection figure per pair and unit (the article's Fig. 28): a crop of the catadioptric image around
     // the board, detected corners (green circles), reprojected corners (red crosses) and the residual magnified
     // 20 times (yellow).

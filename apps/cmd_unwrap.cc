@@ -25,6 +25,7 @@
 #include "scenes/ground_truth.h"
 #include "scenes/scene_config.h"
 #include "unwrap/remap.h"
+#include "io/image_io.h"
 
 namespace hovs::apps {
 namespace {
@@ -190,7 +191,7 @@ Runner SetupUnwrap(CLI::App* sub, const GlobalOptions* global) {
         truth[v] = std::move(bytes);
       }
     }
-    StagedDirectory staged(o->out);
+    StagedDirectory staged(o->out, "unwrap");
     unwrap::Remapper remapper(table);
     nlohmann::json frames_json = nlohmann::json::array();
     nlohmann::json truth_json = nlohmann::json::object();
@@ -200,7 +201,7 @@ Runner SetupUnwrap(CLI::App* sub, const GlobalOptions* global) {
     std::vector<unwrap::Image8> views;
     for (size_t f = 0; f < frames.size(); ++f) {
       int w = 0, h = 0, c = 0;
-      const raytrace::PixelBuffer px = raytrace::ReadImage(frames[f].image, &w, &h, &c);
+      const io::PixelBuffer px = io::ReadImage(frames[f].image, &w, &h, &c);
       unwrap::PixelFormat fmt;
       if (o->format == "auto") {
         HOVS_REQUIRE(c == 1 || c == 3 || c == 4, frames[f].image.string(), "unsupported channel count ", c);
@@ -225,7 +226,7 @@ Runner SetupUnwrap(CLI::App* sub, const GlobalOptions* global) {
         const std::string rel = frames[f].name + "/" + table.views[v].spec.name + ".png";
         std::vector<float> fl(views[v].data.size());
         for (size_t k = 0; k < fl.size(); ++k) fl[k] = views[v].data[k] / 255.f;
-        raytrace::WriteImage(staged.staging() / rel, views[v].width, views[v].height, views[v].channels, fl, 8);
+        io::WriteImage(staged.staging() / rel, views[v].width, views[v].height, views[v].channels, fl, 8);
         outs[table.views[v].spec.name] = rel;
         if (truth[v] && views[v].channels == 3) {
           // PSNR over the view's valid pixels (those the mapping fills).
@@ -241,7 +242,7 @@ Runner SetupUnwrap(CLI::App* sub, const GlobalOptions* global) {
           const double psnr = n ? 10 * std::log10(255.0 * 255.0 * n / std::max(se, 1e-9)) : 0.0;
           const std::string trel = frames[f].name + "/" + table.views[v].spec.name + "_truth.png";
           for (size_t k = 0; k < fl.size(); ++k) fl[k] = (*truth[v])[k] / 255.f;
-          raytrace::WriteImage(staged.staging() / trel, views[v].width, views[v].height, 3, fl, 8);
+          io::WriteImage(staged.staging() / trel, views[v].width, views[v].height, 3, fl, 8);
           truth_json[frames[f].name][table.views[v].spec.name] = {{"psnr_db", psnr}, {"truth", trel},
                                                                   {"valid_fraction", double(n / 3) / mx.size()}};
           if (!global->quiet)

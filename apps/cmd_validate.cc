@@ -22,6 +22,7 @@
 #include "apps/commands.h"
 #include "core/error.h"
 #include "core/io.h"
+#include "core/json.h"
 #include "results/html.h"
 #include "results/plot.h"
 
@@ -75,7 +76,7 @@ std::string Fmt(const char* f, double v) {
   return b;
 }
 
-json ReadJson(const fs::path& p) { return json::parse(ReadFile(p)); }
+json ReadJson(const fs::path& p) { return ReadJsonFile(p); }
 
 double Num(const json& j, const std::vector<std::string>& path) {
   const json* x = &j;
@@ -88,8 +89,10 @@ double Num(const json& j, const std::vector<std::string>& path) {
 
 class Validation {
  public:
-  Validation(Preset p, fs::path out, uint64_t seed, std::string source_dir, bool quiet)
-      : p_(std::move(p)), out_(std::move(out)), seed_(seed), src_(std::move(source_dir)), quiet_(quiet) {
+  // out: the staging folder the stages write into; target: where it goes when the run is complete.
+  Validation(Preset p, fs::path out, fs::path target, uint64_t seed, std::string source_dir, bool quiet)
+      : p_(std::move(p)), out_(std::move(out)), target_(std::move(target)), seed_(seed), src_(std::move(source_dir)),
+        quiet_(quiet) {
     metrics_ = {{"tool", "hovs validate"}, {"versions", Versions()}, {"status", "running"},
                 {"config", {{"preset", p_.name}, {"seed", seed_}, {"downscale", p_.downscale},
                             {"mono_frames", p_.mono_count}, {"mono_samples", p_.mono_samples},
@@ -116,8 +119,9 @@ class Validation {
     json stage = {{"name", name}, {"commands", json::array()}};
     try {
       for (auto args : commands) {
+        // The command as it reads in the finished report: paths in the target folder, not in the staging one.
         std::string line = "hovs";
-        for (const auto& a : args) line += " " + a;
+        for (const auto& a : args) line += " " + Displayed(a);
         stage["commands"].push_back(line);
         if (quiet_) args.insert(args.begin(), "--quiet");
         const int rc = RunCommandLine(args, true);
@@ -177,7 +181,7 @@ class Validation {
 
   std::string Summary() const {
     std::string s = "hovs validate (" + p_.name + "): " + metrics_["status"].get<std::string>() + " -> " +
-                    (out_ / "report.html").string() + "\n";
+                    (target_ / "report.html").string() + "\n";
     for (const auto& c : metrics_["checks"]) {
       const std::string v = c["value"].is_null() ? "n/a" : Fmt("%.4g", c["value"].get<double>());
       const bool gate = c["gate"].get<bool>(), pass = c["pass"].get<bool>();
@@ -193,6 +197,11 @@ class Validation {
   }
 
  private:
+  std::string Displayed(const std::string& arg) const {
+    const std::string staging = out_.string();
+    return arg.rfind(staging, 0) == 0 ? target_.string() + arg.substr(staging.size()) : arg;
+  }
+
   static double Seconds(std::chrono::steady_clock::time_point t0) {
     return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   }
@@ -205,7 +214,7 @@ class Validation {
   std::string Report() const;
 
   Preset p_;
-  fs::path out_;
+  fs::path out_, target_;
   uint64_t seed_;
   std::string src_;
   bool quiet_;
@@ -350,14 +359,15 @@ Runner SetupValidate(CLI::App* sub, const GlobalOptions* global) {
     if (o->mono_frames > 0) p.mono_count = o->mono_frames;
     if (o->stereo_pairs > 0) p.stereo_count = o->stereo_pairs;
     if (o->samples > 0) p.mono_samples = p.stereo_samples = p.street_samples = p.truth_samples = o->samples;
-    const fs::path out = o->out.empty() ? fs::path("results") / ("validate-" + p.name) : fs::path(o->out);
+    const fs::path target = o->out.empty() ? fs::path("results") / ("validate-" + p.name) : fs::path(o->out);
     for (const char* f : {"scenes/reference_stereo.yaml", "scenes/street.yaml", "design/reference.yaml"})
       HOVS_REQUIRE(fs::exists(fs::path(o->source) / f), "--source", "no ", f, " under '", o->source,
                    "' (run from the source tree or give --source)");
-    fs::remove_all(out);
-    fs::create_directories(out);
+    // Staged like every report: a failed or interrupted run leaves an earlier report as it was.
+    StagedDirectory stage(target, "validate", {o->source, o->real});
+    const fs::path out = stage.staging();
     const auto t0 = std::chrono::steady_clock::now();
-    Validation v(p, out, o->seed, o->source, global->quiet);
+    Validation v(p, out, target, o->seed, o->source, global->quiet);
     const std::string seed = std::to_string(o->seed), ds = std::to_string(p.downscale);
     const std::string stereo_scene = v.Src("scenes/reference_stereo.yaml"), street = v.Src("scenes/street.yaml");
 
@@ -542,6 +552,7 @@ Runner SetupValidate(CLI::App* sub, const GlobalOptions* global) {
       v.Skip("real images", "not in this preset");
     }
     v.Finish(std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());
+    stage.Commit();
     if (global->json) std::cout << v.metrics().dump(1) << "\n";
     else if (!global->quiet) std::cout << v.Summary();
     return v.Failed() ? 1 : 0;

@@ -1,15 +1,60 @@
 #include "apps/commands.h"
 
+#include <filesystem>
 #include <iostream>
 
 #include "calib/checkerboard_detector.h"
 #include "core/error.h"
+#include "core/io.h"
 #include "core/version.h"
 #include "design/study.h"
 #include "hw/camera_source.h"
 #include "raytrace/render.h"
 
 namespace hovs::apps {
+namespace {
+
+// Errors print on one line: a multi-line message (a list of images) is joined with "; ".
+std::string OneLine(std::string s) {
+  while (!s.empty() && (s.back() == '\n' || s.back() == ' ')) s.pop_back();
+  std::string out;
+  for (size_t i = 0; i < s.size(); ++i) {
+    if (s[i] != '\n') {
+      out += s[i];
+      continue;
+    }
+    while (!out.empty() && (out.back() == ':' || out.back() == ' ')) out.pop_back();
+    out += "; ";
+    while (i + 1 < s.size() && s[i + 1] == ' ') ++i;
+  }
+  return out;
+}
+
+std::string FileSystemMessage(const std::filesystem::filesystem_error& e) {
+  std::string what = e.code().message();
+  if (!e.path1().empty()) return e.path1().string() + ": " + what;
+  return what;
+}
+
+// A given --out is checked before the command does any work (CheckOutputFolder): every other option whose value
+// names an existing file or folder is one of its inputs. The command checks again when it writes.
+void CheckOutputOption(const CLI::App& sub) {
+  const CLI::Option* out = sub.get_option_no_throw("--out");
+  if (out == nullptr || out->count() == 0) return;
+  const std::string target = out->results().front();
+  if (target.empty()) return;
+  std::vector<std::filesystem::path> inputs;
+  for (const CLI::Option* opt : sub.get_options()) {
+    if (opt == out || opt->get_name() == "--save-map" || opt->get_name() == "--layout-out") continue;
+    for (const std::string& value : opt->results()) {
+      std::error_code ec;
+      if (!value.empty() && std::filesystem::exists(value, ec)) inputs.emplace_back(value);
+    }
+  }
+  CheckOutputFolder(target, sub.get_name(), inputs);
+}
+
+}  // namespace
 
 std::map<std::string, std::string> Versions() {
   auto v = design::DesignVersions();
@@ -48,6 +93,17 @@ int RunCommandLine(int argc, const char* const* argv, bool rethrow) {
     CLI::App* sub = app.add_subcommand(cmd.name, cmd.help);
     runners.emplace_back(sub, cmd.setup(sub, &global));
   }
+  // An unknown subcommand is named as such (CLI11 would say that a subcommand is required).
+  if (argc > 1 && argv[1][0] != '-') {
+    bool known = false;
+    for (const auto& cmd : Commands()) known = known || std::string(argv[1]) == cmd.name;
+    if (!known) {
+      const std::string message = std::string("unknown command '") + argv[1] + "' (hovs --help lists them)";
+      if (rethrow) throw Error("command line", message);
+      std::cerr << "hovs: error: " << message << "\n";
+      return 2;
+    }
+  }
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
@@ -59,12 +115,25 @@ int RunCommandLine(int argc, const char* const* argv, bool rethrow) {
   }
   for (auto& [sub, run] : runners) {
     if (!sub->parsed()) continue;
-    if (rethrow) return run();
+    ClearNotedInputs();
+    if (rethrow) {
+      CheckOutputOption(*sub);
+      return run();
+    }
     try {
+      CheckOutputOption(*sub);
       return run();
     } catch (const Error& e) {
-      std::cerr << "hovs " << sub->get_name() << ": error: " << e.what() << "\n";
+      std::cerr << "hovs " << sub->get_name() << ": error: " << OneLine(e.what()) << "\n";
       return 2;
+    } catch (const std::filesystem::filesystem_error& e) {
+      // A file system refusal (permissions, a full disk, a path that is a file) is about the paths given.
+      std::cerr << "hovs " << sub->get_name() << ": error: " << FileSystemMessage(e) << "\n";
+      return 2;
+    } catch (const std::bad_alloc&) {
+      std::cerr << "hovs " << sub->get_name() << ": error: out of memory (an input or option asks for more memory "
+                << "than this machine has)\n";
+      return 3;
     } catch (const std::exception& e) {
       std::cerr << "hovs " << sub->get_name() << ": internal error: " << e.what() << "\n";
       return 3;

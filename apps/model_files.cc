@@ -8,16 +8,18 @@
 #include "calib/omnidir_io.h"
 #include "core/error.h"
 #include "core/io.h"
+#include "core/json.h"
 #include "raytrace/render.h"
 #include "scenes/ground_truth.h"
 #include "scenes/scene_config.h"
+#include "io/image_io.h"
 
 namespace hovs::apps {
 
 PolynomialModel<double> LoadPolynomialModelFile(const std::filesystem::path& path) {
   if (path.extension() == ".txt") return calib::LoadOcamCalibResults(path);
-  const auto j = nlohmann::json::parse(ReadFile(path), nullptr, false);
-  HOVS_REQUIRE(!j.is_discarded() && j.contains("polynomial"), path.string(),
+  const auto j = ReadJsonFile(path);
+  HOVS_REQUIRE(j.contains("polynomial"), path.string(),
                "not calib_results.txt or a hovs calibration.json (no 'polynomial' model)");
   const auto& p = j["polynomial"];
   PolynomialModel<double> m;
@@ -45,16 +47,15 @@ AnyModel LoadCalibratedModel(const std::filesystem::path& path, const std::strin
   }
   if (prefer == "unified") {
     // calibration.json names its OpenCV YAML file, written beside it.
-    const auto j = nlohmann::json::parse(ReadFile(path), nullptr, false);
-    HOVS_REQUIRE(!j.is_discarded() && j.contains("unified") && j["unified"].contains("opencv_yaml"), path.string(),
+    const auto j = ReadJsonFile(path);
+    HOVS_REQUIRE(j.contains("unified") && j["unified"].contains("opencv_yaml"), path.string(),
                  "has no unified model (a calibration.json of hovs calibrate, or its unified.yaml)");
     return LoadCalibratedModel(path.parent_path() / j["unified"]["opencv_yaml"].get<std::string>(), "unified",
                                scene_distance);
   }
   if (path.extension() != ".txt" && prefer != "polynomial") {
-    const auto j = nlohmann::json::parse(ReadFile(path), nullptr, false);
-    HOVS_REQUIRE(!j.is_discarded(), path.string(), "not JSON");
-    if (j.contains("physical") && j["physical"].contains("unit"))
+    const auto j = ReadJsonFile(path);
+        if (j.contains("physical") && j["physical"].contains("unit"))
       return AnyModel::Exact(scenes::UnitFromJson(j["physical"]["unit"], path.string() + " (physical.unit)").rig,
                              scene_distance);
     HOVS_REQUIRE(prefer != "physical", path.string(), "has no physical model (calibrate with --physical)");
@@ -87,8 +88,7 @@ AnyModel LoadModelSpec(const std::string& spec, const std::string& unit, double 
     return AnyModel::Exact(units[i].rig, scene_distance);
   }
   if (EndsWith(spec, ".txt")) return AnyModel::Polynomial(LoadPolynomialModelFile(path));
-  const auto j = nlohmann::json::parse(ReadFile(path), nullptr, false);
-  HOVS_REQUIRE(!j.is_discarded(), path.string(), "not JSON, YAML or calib_results.txt");
+  const auto j = ReadJsonFile(path);
   if (j.is_object() && j.value("format", "") == "hovs-dataset") {
     CheckDatasetManifest(j, path.string());   // units are objects with string names from here on
     const auto& units = j["units"];
@@ -101,7 +101,7 @@ AnyModel LoadModelSpec(const std::string& spec, const std::string& unit, double 
 
 unwrap::Image8 LoadImage8(const std::filesystem::path& path) {
   int w = 0, h = 0, c = 0;
-  const raytrace::PixelBuffer px = raytrace::ReadImage(path, &w, &h, &c);
+  const io::PixelBuffer px = io::ReadImage(path, &w, &h, &c);
   HOVS_REQUIRE(c == 1 || c >= 3, path.string(), "unsupported channel count ", c, " (grey or RGB expected)");
   unwrap::Image8 im;
   im.width = w, im.height = h, im.channels = c == 1 ? 1 : 3;

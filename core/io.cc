@@ -8,10 +8,15 @@
 #include <cctype>
 #include <cerrno>
 #include <chrono>
+#include <cstring>
 #include <fstream>
+#include <mutex>
+#include <nlohmann/json.hpp>
 #include <sstream>
 
 #include "core/error.h"
+#include "core/interrupt.h"
+#include "core/version.h"
 
 namespace hovs {
 namespace fs = std::filesystem;
@@ -22,56 +27,120 @@ std::string UniqueSuffix() {
   const auto now = std::chrono::steady_clock::now().time_since_epoch().count();
   return std::to_string(::getpid()) + "-" + std::to_string(now) + "-" + std::to_string(counter++);
 }
+
+std::mutex g_inputs_mutex;
+std::vector<fs::path>& Inputs() {
+  static std::vector<fs::path> inputs;
+  return inputs;
+}
+
+// The absolute, normalised form of a path whose last parts may not exist (symbolic links resolved where they
+// do), for comparing places.
+fs::path Resolved(const fs::path& p) {
+  std::error_code ec;
+  fs::path r = fs::weakly_canonical(fs::absolute(p, ec), ec);
+  if (ec) r = fs::absolute(p).lexically_normal();
+  return r;
+}
+
+// Whether `inner` is `outer` or lies below it (both resolved).
+bool Within(const fs::path& inner, const fs::path& outer) {
+  auto i = inner.begin(), o = outer.begin();
+  for (; o != outer.end(); ++o, ++i) {
+    if (o->empty()) continue;   // a trailing separator
+    if (i == inner.end() || *i != *o) return false;
+  }
+  return true;
+}
 }  // namespace
+
+void NoteInput(const fs::path& path) {
+  std::lock_guard<std::mutex> lock(g_inputs_mutex);
+  Inputs().push_back(path);
+}
+
+void ClearNotedInputs() {
+  std::lock_guard<std::mutex> lock(g_inputs_mutex);
+  Inputs().clear();
+}
+
+std::vector<fs::path> NotedInputs() {
+  std::lock_guard<std::mutex> lock(g_inputs_mutex);
+  return Inputs();
+}
 
 void WriteFileAtomic(const fs::path& path, const std::string& content) {
   const fs::path parent = path.has_parent_path() ? path.parent_path() : fs::path(".");
   std::error_code ec;
   fs::create_directories(parent, ec);
   HOVS_REQUIRE(!ec, parent.string(), "cannot create folder: ", ec.message());
+  HOVS_REQUIRE(!fs::is_directory(path, ec), path.string(), "is a folder; a file was to be written there");
   const fs::path tmp = parent / ("." + path.filename().string() + ".tmp-" + UniqueSuffix());
+  RegisterForCleanup(tmp);
+  const auto fail = [&](const std::string& what) {
+    std::error_code ignore;
+    fs::remove(tmp, ignore);
+    UnregisterCleanup(tmp);
+    throw Error(path.string(), what);
+  };
   {
     std::ofstream out(tmp, std::ios::binary | std::ios::trunc);
-    HOVS_REQUIRE(out.good(), tmp.string(), "cannot open for writing");
+    if (!out.good()) fail("cannot open for writing (" + std::string(std::strerror(errno)) + ")");
     out.write(content.data(), static_cast<std::streamsize>(content.size()));
     out.flush();
-    if (!out.good()) {
-      out.close();
-      fs::remove(tmp, ec);
-      throw Error(path.string(), "write failed (disk full?)");
-    }
+    if (!out.good()) fail("write failed (disk full?)");
   }
   fs::rename(tmp, path, ec);
-  if (ec) {
-    std::error_code ec2;
-    fs::remove(tmp, ec2);
-    throw Error(path.string(), "cannot rename into place: " + ec.message());
-  }
+  if (ec) fail("cannot rename into place: " + ec.message());
+  UnregisterCleanup(tmp);
 }
 
-std::string ReadFile(const fs::path& path) {
+std::string ReadFile(const fs::path& path, size_t max_bytes) {
+  std::error_code ec;
+  const auto st = fs::status(path, ec);
+  HOVS_REQUIRE(fs::exists(st), path.string(), "file not found");
+  HOVS_REQUIRE(!fs::is_directory(st), path.string(), "is a folder, not a file");
+  HOVS_REQUIRE(fs::is_regular_file(st), path.string(), "is not a regular file");
+  const auto size = fs::file_size(path, ec);
+  HOVS_REQUIRE(!ec, path.string(), "cannot read: ", ec.message());
+  HOVS_REQUIRE(size <= max_bytes, path.string(), "is ", size, " bytes; at most ", max_bytes, " are read");
   std::ifstream in(path, std::ios::binary);
   HOVS_REQUIRE(in.good(), path.string(), "cannot open for reading");
-  std::ostringstream ss;
-  ss << in.rdbuf();
-  return ss.str();
+  NoteInput(path);
+  std::string data(size, '\0');
+  in.read(data.data(), static_cast<std::streamsize>(size));
+  HOVS_REQUIRE(static_cast<size_t>(in.gcount()) == size, path.string(), "read failed");
+  return data;
 }
 
 std::vector<fs::path> ListImageFiles(const fs::path& folder) {
   HOVS_REQUIRE(fs::is_directory(folder), folder.string(), "not a folder");
   std::vector<fs::path> files;
-  for (const auto& e : fs::directory_iterator(folder)) {
+  std::error_code ec;
+  for (const auto& e : fs::directory_iterator(folder, ec)) {
     if (!e.is_regular_file()) continue;
     std::string ext = e.path().extension().string();
     std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return std::tolower(c); });
     for (const char* x : {".png", ".jpg", ".jpeg", ".tif", ".tiff", ".exr", ".bmp", ".pgm"})
       if (ext == x) files.push_back(e.path());
   }
+  HOVS_REQUIRE(!ec, folder.string(), "cannot list the folder: ", ec.message());
   std::sort(files.begin(), files.end());
   HOVS_REQUIRE(!files.empty() || !fs::is_regular_file(folder / "dataset.json"), folder.string(),
                "the folder holds no images but a dataset manifest: give ", (folder / "dataset.json").string());
   HOVS_REQUIRE(!files.empty(), folder.string(), "the folder holds no images (png, jpg, tif, exr, bmp, pgm)");
   return files;
+}
+
+fs::path ContainedPath(const fs::path& root, const std::string& relative, const std::string& where) {
+  HOVS_REQUIRE(!relative.empty(), where, "empty path");
+  HOVS_REQUIRE(relative.find('\0') == std::string::npos, where, "the path holds a NUL character");
+  const fs::path rel(relative);
+  HOVS_REQUIRE(rel.is_relative() && !rel.has_root_name() && !rel.has_root_directory(), where, "the path '", relative,
+               "' is absolute; paths in the file are relative to its folder");
+  for (const auto& part : rel)
+    HOVS_REQUIRE(part != "..", where, "the path '", relative, "' leaves the file's folder ('..')");
+  return root / rel;
 }
 
 namespace {
@@ -84,10 +153,12 @@ fs::path HiddenSibling(const fs::path& parent, const std::string& name, const ch
   return parent / ("." + name + tag + UniqueSuffix());
 }
 
-// Removes what earlier runs for the same target left behind when they were killed before their destructor ran
-// (Ctrl-C, a crash): hidden siblings .<name>.partial-<pid>-... and .<name>.old-<pid>-... whose process no longer
-// exists. A folder of a live process (another run writing the same target now) is left alone.
-void RemoveStaleStaging(const fs::path& parent, const std::string& name) {
+// What earlier runs for the same target left behind when they were killed before their destructor ran (a
+// crash, SIGKILL): hidden siblings .<name>.partial-<pid>-... and .<name>.old-<pid>-... whose process no longer
+// exists. A folder of a live process (another run writing the same target now) is left alone. Staging folders
+// are removed, or with `keep` renamed to <name>.interrupted-<pid>; old outputs are removed (their replacement
+// was committed).
+void CleanStaleStaging(const fs::path& parent, const std::string& name, bool keep) {
   std::error_code ec;
   for (const auto& e : fs::directory_iterator(parent, ec)) {
     const std::string f = e.path().filename().string();
@@ -98,27 +169,91 @@ void RemoveStaleStaging(const fs::path& parent, const std::string& name) {
       const std::string digits = f.substr(prefix.size(), end == std::string::npos ? std::string::npos : end - prefix.size());
       if (digits.empty() || digits.size() > 9 || !std::all_of(digits.begin(), digits.end(), ::isdigit)) continue;
       const pid_t pid = static_cast<pid_t>(std::stol(digits));
-      if (pid > 0 && ::kill(pid, 0) != 0 && errno == ESRCH) {
-        std::error_code ignore;
-        fs::remove_all(e.path(), ignore);
+      if (pid <= 0 || ::kill(pid, 0) == 0 || errno != ESRCH) continue;
+      std::error_code ignore;
+      if (keep && tag == kStagingTag) {
+        fs::rename(e.path(), parent / (name + ".interrupted-" + digits), ignore);
+        if (!ignore) continue;
       }
+      fs::remove_all(e.path(), ignore);
     }
   }
 }
 
+std::string MarkerText(const std::string& command) {
+  return nlohmann::json{{"format", "hovs-output"}, {"command", command}, {"hovs", HovsVersion()}}.dump(1) + "\n";
+}
+
+// The command named by a folder's marker, or "" when it has none (or an unreadable one).
+std::string MarkerCommand(const fs::path& folder) {
+  std::error_code ec;
+  const fs::path m = folder / kOutputMarker;
+  if (!fs::is_regular_file(m, ec) || fs::file_size(m, ec) > 4096) return "";
+  std::ifstream in(m, std::ios::binary);
+  std::stringstream ss;
+  ss << in.rdbuf();
+  const auto j = nlohmann::json::parse(ss.str(), nullptr, false);
+  if (j.is_discarded() || !j.is_object() || j.value("format", "") != "hovs-output") return "";
+  const auto c = j.find("command");
+  return c != j.end() && c->is_string() ? c->get<std::string>() : "";
+}
+
 }  // namespace
 
-StagedDirectory::StagedDirectory(fs::path target) : target_(std::move(target)) {
+void WriteOutputMarker(const fs::path& folder, const std::string& command) {
+  WriteFileAtomic(folder / kOutputMarker, MarkerText(command));
+}
+
+void CheckOutputFolder(const fs::path& target, const std::string& command, const std::vector<fs::path>& inputs) {
+  const std::string where = target.string();
+  HOVS_REQUIRE(!target.empty(), "output folder", "empty path");
+  const fs::path resolved = Resolved(target);
+  std::error_code ec;
+  const fs::path cwd = fs::current_path(ec);
+  HOVS_REQUIRE(ec || !Within(Resolved(cwd), resolved), where,
+               "the output folder holds the current directory; hovs replaces its output folder, so give a folder "
+               "below it (for example --out ", (target / "out").string(), ")");
+  std::vector<fs::path> all = inputs;
+  for (const auto& p : NotedInputs()) all.push_back(p);
+  for (const auto& in : all) {
+    if (in.empty()) continue;
+    const fs::path r = Resolved(in);
+    HOVS_REQUIRE(r != resolved, where, "is an input of this run; hovs never writes its output over an input");
+    HOVS_REQUIRE(!Within(r, resolved), where, "the output folder holds the input ", in.string(),
+                 "; a run would delete it: choose another --out");
+  }
+  const auto st = fs::symlink_status(target, ec);
+  if (!fs::exists(st)) return;
+  HOVS_REQUIRE(!fs::is_symlink(st), where, "is a symbolic link; hovs replaces output folders and never follows a link "
+               "to do so: give the folder itself");
+  HOVS_REQUIRE(fs::is_directory(st), where, "exists and is not a folder; hovs never replaces a file with its output");
+  if (fs::is_empty(target, ec) && !ec) return;
+  const std::string marker = MarkerCommand(target);
+  HOVS_REQUIRE(!marker.empty(), where, "holds files hovs did not write (no ", kOutputMarker,
+               " marker): hovs only replaces its own earlier output; choose another --out or remove the folder "
+               "yourself");
+  HOVS_REQUIRE(marker == command, where, "holds the output of 'hovs ", marker, "', not of 'hovs ", command,
+               "'; choose another --out");
+}
+
+StagedDirectory::StagedDirectory(fs::path target, std::string command, std::vector<fs::path> inputs,
+                                 bool keep_interrupted)
+    : target_(std::move(target)), command_(std::move(command)), inputs_(std::move(inputs)) {
   HOVS_REQUIRE(!target_.empty(), "output folder", "empty path");
   if (target_.filename().empty()) target_ = target_.parent_path();
+  HOVS_REQUIRE(target_.filename() != "." && target_.filename() != "..", target_.string(),
+               "name the output folder itself (not '.' or '..')");
+  CheckOutputFolder(target_, command_, inputs_);
   const fs::path parent = target_.has_parent_path() ? target_.parent_path() : fs::path(".");
   std::error_code ec;
   fs::create_directories(parent, ec);
   HOVS_REQUIRE(!ec, parent.string(), "cannot create folder: ", ec.message());
-  RemoveStaleStaging(parent, target_.filename().string());
+  CleanStaleStaging(parent, target_.filename().string(), keep_interrupted);
   staging_ = HiddenSibling(parent, target_.filename().string(), kStagingTag);
   fs::create_directory(staging_, ec);
-  HOVS_REQUIRE(!ec, staging_.string(), "cannot create staging folder: ", ec.message());
+  HOVS_REQUIRE(!ec, staging_.string(), "cannot create the staging folder: ", ec.message());
+  RegisterForCleanup(staging_);
+  WriteOutputMarker(staging_, command_);
 }
 
 StagedDirectory::~StagedDirectory() {
@@ -126,13 +261,16 @@ StagedDirectory::~StagedDirectory() {
     std::error_code ec;
     fs::remove_all(staging_, ec);
   }
+  UnregisterCleanup(staging_);
 }
 
 void StagedDirectory::Commit() {
+  CheckOutputFolder(target_, command_, inputs_);
   std::error_code ec;
   fs::path old;
-  if (fs::exists(target_)) {
-    old = HiddenSibling(target_.parent_path(), target_.filename().string(), kOldTag);
+  if (fs::exists(fs::symlink_status(target_, ec))) {
+    old = HiddenSibling(target_.parent_path().empty() ? fs::path(".") : target_.parent_path(),
+                        target_.filename().string(), kOldTag);
     fs::rename(target_, old, ec);
     HOVS_REQUIRE(!ec, target_.string(), "cannot move the previous output aside: ", ec.message());
   }
@@ -145,6 +283,7 @@ void StagedDirectory::Commit() {
     throw Error(target_.string(), "cannot move the finished output into place: " + ec.message());
   }
   committed_ = true;
+  UnregisterCleanup(staging_);
   if (!old.empty()) fs::remove_all(old, ec);
 }
 

@@ -1,5 +1,6 @@
-// Output that is never half-written: files are written to a temporary name and renamed; report folders are
-// built in a staging folder and renamed into place only when complete.
+// Output that is never half-written and never replaces what hovs did not write: files are written to a temporary
+// name and renamed; report folders are built in a staging folder and renamed into place only when complete, and
+// only over a folder that an earlier run of the same command wrote (its marker file says so).
 #pragma once
 
 #include <filesystem>
@@ -11,19 +12,49 @@ namespace hovs {
 // Writes content to path atomically (temporary file in the same folder, then rename). Throws hovs::Error.
 void WriteFileAtomic(const std::filesystem::path& path, const std::string& content);
 
-// Reads a whole file. Throws hovs::Error naming the file.
-std::string ReadFile(const std::filesystem::path& path);
+// Reads a whole file, at most max_bytes (a larger file is an error naming it: inputs are parsed in memory). The
+// path is noted as an input of this process (NoteInput). Throws hovs::Error naming the file.
+std::string ReadFile(const std::filesystem::path& path, size_t max_bytes = size_t(1) << 30);
 
 // The image files of a folder (png, jpg, jpeg, tif, tiff, exr, bmp, pgm; any case), sorted by name. Throws
 // hovs::Error naming the folder when it is not a folder or holds no image.
 std::vector<std::filesystem::path> ListImageFiles(const std::filesystem::path& folder);
 
-// A report folder under construction. Files go into staging(); Commit() replaces `target` with the staged
-// folder in one rename (an existing target is moved aside first and removed after). If Commit() is never
-// called (an error was thrown), the destructor removes the staging folder and `target` is left untouched.
+// A path inside `root` given by a file that hovs reads (a manifest's image, a sidecar's EXR): relative, without
+// "..", resolved against root. Throws hovs::Error(where) otherwise: a shared dataset must not make hovs open
+// /etc/passwd or a file beside it.
+std::filesystem::path ContainedPath(const std::filesystem::path& root, const std::string& relative,
+                                    const std::string& where);
+
+// Inputs of this process: every file ReadFile and the image readers opened. An output folder may never be one
+// that holds an input (CheckOutputFolder, StagedDirectory::Commit).
+void NoteInput(const std::filesystem::path& path);
+std::vector<std::filesystem::path> NotedInputs();
+// Forgets the noted inputs: each command of a process (hovs validate runs several) starts with none.
+void ClearNotedInputs();
+
+// The marker file in every hovs output folder: {"format": "hovs-output", "command": "<command>", "hovs": version}.
+inline constexpr const char* kOutputMarker = ".hovs-output";
+// Writes it into folder (for outputs that are not staged: a capture, written as it goes).
+void WriteOutputMarker(const std::filesystem::path& folder, const std::string& command);
+
+// Throws hovs::Error naming `target` unless it may become the output folder of `command`: it does not exist, or
+// it is an empty folder, or a folder whose marker names the same command. Never a file or a symbolic link,
+// never a folder that holds one of `inputs` (or of NotedInputs()), never one that holds the current directory.
+void CheckOutputFolder(const std::filesystem::path& target, const std::string& command,
+                       const std::vector<std::filesystem::path>& inputs = {});
+
+// A report folder under construction. The constructor checks the target (CheckOutputFolder) before any work
+// is done and writes the marker into the staging folder; files go into staging(); Commit() checks again and
+// replaces `target` with the staged folder in one rename (an earlier output is moved aside first and removed
+// after). If Commit() is never called (an error was thrown), the destructor removes the staging folder and
+// `target` is left untouched; an interrupt removes it too (core/interrupt.h). Staging folders that a killed run
+// left behind for the same target are removed (or, with keep_interrupted, renamed to a visible
+// <name>.interrupted-<pid> beside it: a capture's frames are kept).
 class StagedDirectory {
  public:
-  explicit StagedDirectory(std::filesystem::path target);
+  StagedDirectory(std::filesystem::path target, std::string command, std::vector<std::filesystem::path> inputs = {},
+                  bool keep_interrupted = false);
   ~StagedDirectory();
   StagedDirectory(const StagedDirectory&) = delete;
   StagedDirectory& operator=(const StagedDirectory&) = delete;
@@ -34,6 +65,8 @@ class StagedDirectory {
 
  private:
   std::filesystem::path target_;
+  std::string command_;
+  std::vector<std::filesystem::path> inputs_;
   std::filesystem::path staging_;
   bool committed_ = false;
 };

@@ -174,7 +174,7 @@ DesignStudy RunDesignStudy(const DesignConfig& cfg) {
 }
 
 std::string WriteDesignReport(const DesignConfig& cfg, const DesignStudy& st, const std::filesystem::path& out_dir) {
-  StagedDirectory stage(out_dir);
+  StagedDirectory stage(out_dir, "design", {cfg.source});
   const auto& dir = stage.staging();
   const SweepResult& s = st.sweep;
   const auto versions = DesignVersions();

@@ -12,7 +12,7 @@
 
 #include "core/error.h"
 #include "core/io.h"
-#include "raytrace/render.h"
+#include "io/image_io.h"
 
 namespace hovs::hw {
 namespace fs = std::filesystem;
@@ -56,11 +56,7 @@ void WriteFrameImage(const fs::path& path, const Frame& f) {
   } else {
     for (size_t k = 0; k < v.size(); ++k) v[k] = f.data[k] / 255.f;
   }
-  const fs::path tmp = path.parent_path() / ("." + path.filename().string() + ".tmp.png");
-  raytrace::WriteImage(tmp, f.width, f.height, 1, v, f.pixel_format == "Mono16" ? 16 : 8);
-  std::error_code ec;
-  fs::rename(tmp, path, ec);
-  HOVS_REQUIRE(!ec, path.string(), "cannot rename the written image into place: ", ec.message());
+  io::WriteImage(path, f.width, f.height, 1, v, f.pixel_format == "Mono16" ? 16 : 8);
 }
 
 }  // namespace
@@ -69,6 +65,7 @@ CaptureResult CaptureDataset(const std::vector<CameraSource*>& sources, const Ca
                              const nlohmann::json& versions, const std::atomic<bool>* stop) {
   o.Check(sources.size(), "capture");
   fs::create_directories(out / "images");
+  WriteOutputMarker(out, "capture");
   std::vector<std::string> names = o.unit_names;
   for (size_t k = names.size(); k < sources.size(); ++k) names.push_back("unit" + std::to_string(k));
   CaptureResult r;
@@ -163,6 +160,9 @@ CaptureResult CaptureDataset(const std::vector<CameraSource*>& sources, const Ca
     if (writer.joinable()) writer.join();
   };
   int queued = 0;
+  // Every wait is bounded overall: a frame set must be queued within grab_timeout_s of the previous one (or of
+  // the start), whatever the cameras deliver meanwhile (incomplete frames, frames without a partner).
+  auto last_progress = std::chrono::steady_clock::now();
   try {
     while (queued < o.frames) {
       {
@@ -176,6 +176,12 @@ CaptureResult CaptureDataset(const std::vector<CameraSource*>& sources, const Ca
       if (o.max_seconds > 0 &&
           std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count() > o.max_seconds)
         break;
+      {
+        const double idle = std::chrono::duration<double>(std::chrono::steady_clock::now() - last_progress).count();
+        HOVS_REQUIRE(idle <= o.grab_timeout_s, "capture", "no complete frame", sources.size() > 1 ? " pair" : "",
+                     " within ", o.grab_timeout_s, " s (", r.incomplete, " incomplete frames, ", r.unpaired,
+                     " without a partner; --timeout sets the wait)");
+      }
       if (o.software_trigger)
         for (auto* s : sources) s->SoftwareTrigger();
       std::vector<std::vector<Frame>> got(sources.size());
@@ -189,8 +195,6 @@ CaptureResult CaptureDataset(const std::vector<CameraSource*>& sources, const Ca
           std::lock_guard<std::mutex> lock(mu);
           m["incomplete_frames"].push_back({{"unit", names[k]}, {"frame_id", f->frame_id}, {"status", f->status},
                                             {"device_ns", f->device_ns}});
-          std::fprintf(stderr, "capture: %s frame %llu incomplete (%s), not written\n", names[k].c_str(),
-                       static_cast<unsigned long long>(f->frame_id), f->status.c_str());
           continue;
         }
         got[k].push_back(std::move(*f));
@@ -219,6 +223,7 @@ CaptureResult CaptureDataset(const std::vector<CameraSource*>& sources, const Ca
         not_full.wait(lock, [&] { return static_cast<int>(queue.size()) < o.write_queue || writer_error; });
         if (writer_error) break;
         queue.push_back(std::move(p));
+        last_progress = std::chrono::steady_clock::now();
         r.max_queue_depth = std::max(r.max_queue_depth, static_cast<int>(queue.size()));
         ++queued;
         lock.unlock();
@@ -231,7 +236,14 @@ CaptureResult CaptureDataset(const std::vector<CameraSource*>& sources, const Ca
     finish_writer();
     for (auto* s : sources) s->Stop();
     std::lock_guard<std::mutex> lock(mu);
-    m["status"] = "stopped by an error after " + std::to_string(r.written) + " frames";
+    std::string why;
+    try {
+      throw;
+    } catch (const std::exception& e) {
+      why = std::string(": ") + e.what();
+    } catch (...) {
+    }
+    m["status"] = "stopped by an error after " + std::to_string(r.written) + " frames" + why;
     try {
       write_manifest_locked();
     } catch (...) {
@@ -242,6 +254,14 @@ CaptureResult CaptureDataset(const std::vector<CameraSource*>& sources, const Ca
   for (auto* s : sources) s->Stop();
   snapshot_stats();
   std::lock_guard<std::mutex> lock(mu);
+  if (r.written == 0 && !r.interrupted) {
+    // The time limit came before any complete frame: a failed capture, said so in the manifest too.
+    const std::string why = "no complete frame within the " + std::to_string(o.max_seconds) + " s limit (" +
+                            std::to_string(r.incomplete) + " incomplete frames)";
+    m["status"] = "stopped by an error after 0 frames: " + why;
+    write_manifest_locked();
+    throw Error("capture", why);
+  }
   m["status"] = r.interrupted ? "interrupted after " + std::to_string(r.written) + " frames" : "complete";
   write_manifest_locked();
   return r;

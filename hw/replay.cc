@@ -6,9 +6,10 @@
 
 #include "core/error.h"
 #include "core/io.h"
+#include "core/json.h"
 #include "core/manifest.h"
 #include "hw/camera_source.h"
-#include "raytrace/render.h"
+#include "io/image_io.h"
 
 namespace hovs::hw {
 namespace {
@@ -44,7 +45,7 @@ class Replay : public CameraSource {
     if (next_ >= items_.size() && !loop_) return std::nullopt;
     const ReplayItem& it = items_[next_ % items_.size()];
     int w = 0, h = 0, c = 0;
-    const raytrace::PixelBuffer px = raytrace::ReadImage(it.image, &w, &h, &c);
+    const io::PixelBuffer px = io::ReadImage(it.image, &w, &h, &c);
     Frame f;
     f.width = w, f.height = h, f.pixel_format = format_;
     f.frame_id = next_;
@@ -80,8 +81,8 @@ std::unique_ptr<CameraSource> OpenReplay(const fs::path& src, const std::string&
     for (const auto& f : ListImageFiles(src)) items.push_back({f, 0});
     for (size_t k = 0; k < items.size(); ++k) items[k].device_ns = k * 100'000'000ull;
   } else {
-    const auto m = nlohmann::json::parse(ReadFile(src), nullptr, false);
-    HOVS_REQUIRE(!m.is_discarded() && m.is_object() && m.value("format", "") == "hovs-dataset", src.string(),
+    const auto m = ReadJsonFile(src);
+    HOVS_REQUIRE(m.is_object() && m.value("format", "") == "hovs-dataset", src.string(),
                  "neither a folder of images nor a hovs dataset manifest");
     CheckDatasetManifest(m, src.string());
     for (const auto& fr : m["frames"])

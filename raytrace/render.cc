@@ -1,6 +1,5 @@
 #include "raytrace/render.h"
 
-#include <OpenImageIO/imageio.h>
 #include <tbb/parallel_for.h>
 #include <unistd.h>
 
@@ -1133,119 +1132,19 @@ PixelBuffer ApplySensor(const Frame& f, const SensorOptions& s, uint64_t seed, i
   return out;
 }
 
-namespace {
-std::filesystem::path TempSibling(const std::filesystem::path& path) {
-  const auto parent = path.has_parent_path() ? path.parent_path() : std::filesystem::path(".");
-  return parent / ("." + path.stem().string() + ".tmp-" + std::to_string(::getpid()) + path.extension().string());
-}
-
-void Publish(const std::filesystem::path& tmp, const std::filesystem::path& path) {
-  std::error_code ec;
-  std::filesystem::rename(tmp, path, ec);
-  if (ec) {
-    std::filesystem::remove(tmp, ec);
-    throw Error(path.string(), "cannot rename into place");
-  }
-}
-}  // namespace
-
-void WriteImage(const std::filesystem::path& path, int width, int height, int channels, const float* values,
-                size_t count, int bit_depth) {
-  HOVS_REQUIRE(count == static_cast<size_t>(width) * height * channels, path.string(), "image buffer size mismatch");
-  if (path.has_parent_path()) std::filesystem::create_directories(path.parent_path());
-  const auto tmp = TempSibling(path);
-  auto out = OIIO::ImageOutput::create(path.string());
-  HOVS_REQUIRE(out != nullptr, path.string(), "no image writer for this extension: ", OIIO::geterror());
-  OIIO::ImageSpec spec(width, height, channels, bit_depth == 16 ? OIIO::TypeDesc::UINT16 : OIIO::TypeDesc::UINT8);
-  spec.attribute("Software", "hovs");
-  // zlib level 3 instead of libpng's 6: half the time for a 3 % larger file (BM_WritePng).
-  spec.attribute("png:compressionLevel", 3);
-  const bool ok = out->open(tmp.string(), spec) && out->write_image(OIIO::TypeDesc::FLOAT, values) && out->close();
-  if (!ok) {
-    std::error_code ec;
-    std::filesystem::remove(tmp, ec);
-    throw Error(path.string(), "cannot write image: " + out->geterror());
-  }
-  Publish(tmp, path);
-}
-
 void WriteGroundTruthExr(const std::filesystem::path& path, const Frame& frame,
                          const std::vector<std::pair<std::string, std::string>>& metadata) {
   HOVS_REQUIRE(!frame.truth.data.empty(), path.string(), "the frame has no ground truth");
-  if (path.has_parent_path()) std::filesystem::create_directories(path.parent_path());
-  const auto tmp = TempSibling(path);
-  auto out = OIIO::ImageOutput::create("exr");
-  HOVS_REQUIRE(out != nullptr, path.string(), "no OpenEXR writer: ", OIIO::geterror());
-  OIIO::ImageSpec spec(frame.width, frame.height, GroundTruth::kChannels, OIIO::TypeDesc::FLOAT);
-  spec.channelnames.assign(GroundTruth::kNames, GroundTruth::kNames + GroundTruth::kChannels);
-  // PIZ: lossless like zip, 17 % smaller and 25 % faster on these channels (BM_WriteGroundTruthExr); every
-  // channel stays 32-bit float (half normals and ids were no smaller after compression, and slower to write).
-  spec.attribute("compression", "piz");
-  spec.attribute("Software", "hovs");
-  for (const auto& [k, v] : metadata) spec.attribute("hovs:" + k, v);
-  const bool ok = out->open(tmp.string(), spec) && out->write_image(OIIO::TypeDesc::FLOAT, frame.truth.data.data()) &&
-                  out->close();
-  if (!ok) {
-    std::error_code ec;
-    std::filesystem::remove(tmp, ec);
-    throw Error(path.string(), "cannot write OpenEXR: " + out->geterror());
-  }
-  Publish(tmp, path);
-}
-
-PixelBuffer ReadImage(const std::filesystem::path& path, int* width, int* height, int* channels) {
-  auto in = OIIO::ImageInput::open(path.string());
-  HOVS_REQUIRE(in != nullptr, path.string(), "cannot read image: ", OIIO::geterror());
-  const OIIO::ImageSpec& spec = in->spec();
-  *width = spec.width, *height = spec.height, *channels = spec.nchannels;
-  PixelBuffer data(static_cast<size_t>(spec.width) * spec.height * spec.nchannels);   // all read below
-  const bool ok = in->read_image(0, 0, 0, spec.nchannels, OIIO::TypeDesc::FLOAT, data.data());
-  in->close();
-  HOVS_REQUIRE(ok, path.string(), "cannot decode image");
-  return data;
-}
-
-const std::vector<float>& ExrChannels::at(const std::string& name) const {
-  const auto it = channels.find(name);
-  HOVS_REQUIRE(it != channels.end(), "ground truth", "no channel '", name, "'");
-  return it->second;
-}
-
-ExrChannels ReadExr(const std::filesystem::path& path) {
-  auto in = OIIO::ImageInput::open(path.string());
-  HOVS_REQUIRE(in != nullptr, path.string(), "cannot read OpenEXR: ", OIIO::geterror());
-  const OIIO::ImageSpec& spec = in->spec();
-  ExrChannels out;
-  out.width = spec.width, out.height = spec.height;
-  // The interleaved file (290 MB for a full-size frame's 12 channels) in huge pages, as a frame's buffers.
-  PixelBuffer data(static_cast<size_t>(spec.width) * spec.height * spec.nchannels);
-  const bool ok = in->read_image(0, 0, 0, spec.nchannels, OIIO::TypeDesc::FLOAT, data.data());
-  HOVS_REQUIRE(ok, path.string(), "cannot decode OpenEXR: ", in->geterror());
-  for (int c = 0; c < spec.nchannels; ++c) {
-    std::vector<float>& ch = out.channels[spec.channelnames[c]];
-    ch.resize(static_cast<size_t>(spec.width) * spec.height);
-    for (size_t i = 0; i < ch.size(); ++i) ch[i] = data[i * spec.nchannels + c];
-  }
-  for (const auto& p : spec.extra_attribs)
-    if (p.type() == OIIO::TypeDesc::STRING) out.attributes[p.name().string()] = p.get_string();
-  in->close();
-  return out;
+  std::vector<std::pair<std::string, std::string>> attributes;
+  for (const auto& [k, v] : metadata) attributes.emplace_back("hovs:" + k, v);
+  io::WriteExr(path, frame.width, frame.height,
+               std::vector<std::string>(GroundTruth::kNames, GroundTruth::kNames + GroundTruth::kChannels),
+               frame.truth.data.data(), attributes);
 }
 
 std::map<std::string, std::string> RaytraceVersions() {
-  std::map<std::string, std::string> v;
+  std::map<std::string, std::string> v = io::IoVersions();
   v["embree"] = RTC_VERSION_STRING;
-  const int oiio = OIIO::openimageio_version();   // 10000 * major + 100 * minor + patch
-  v["openimageio"] = std::to_string(oiio / 10000) + "." + std::to_string(oiio / 100 % 100) + "." + std::to_string(oiio % 100);
-  // "openexr:OpenEXR 3.1.5;tiff:LIBTIFF Version 4.5.0;...": the entry's last word.
-  std::string list;
-  if (OIIO::getattribute("library_list", list)) {
-    const size_t at = list.find("openexr:");
-    if (at != std::string::npos) {
-      const std::string entry = list.substr(at, list.find(';', at) - at);
-      v["openexr"] = entry.substr(entry.find_last_of(' ') + 1);
-    }
-  }
   return v;
 }
 

@@ -13,6 +13,7 @@
 #include <vector>
 
 #include "core/large_pages.h"
+#include "io/image_io.h"
 #include "raytrace/scene.h"
 
 namespace hovs::raytrace {
@@ -68,10 +69,9 @@ struct ViewCamera {
 //   id      object id (0 sky, 1 mirror mount, 2 camera body, 3 mirror back, 4.. scene objects in order)
 //   mask    1 where the pixel's ray is reflected by the mirror (inside the rim) and does not see the camera
 //   M.X/Y/Z the mirror reflection point in the unit's mirror frame (0 where mask is 0 and the rim is missed)
-// A float buffer whose resize() leaves new elements uninitialised (the renderer fills frames in parallel
-// instead of zeroing hundreds of megabytes on one thread), in huge pages when large (core/large_pages.h).
-// Otherwise a std::vector<float>.
-using PixelBuffer = std::vector<float, LargePageAllocator<float, /*UninitialisedConstruct=*/true>>;
+// The frame's buffers: left uninitialised by resize() (the renderer fills frames in parallel instead of zeroing
+// hundreds of megabytes on one thread), in huge pages when large (io/image_io.h).
+using io::PixelBuffer;
 
 struct GroundTruth {
   static constexpr int kChannels = 12;
@@ -122,34 +122,13 @@ void CheckFrameMemory(const std::string& where, int width, int height, bool grou
 // The result is a PixelBuffer: written in parallel, in huge pages (no single-threaded zeroing of 72 MB first).
 PixelBuffer ApplySensor(const Frame& frame, const SensorOptions& sensor, uint64_t seed, int* channels);
 
-// Writers, atomic (temporary file + rename). PNG for 8/16-bit images; OpenEXR (float) for ground truth,
-// with `metadata` stored as string attributes.
-void WriteImage(const std::filesystem::path& path, int width, int height, int channels, const float* values,
-                size_t count, int bit_depth);
-template <class Allocator>
-void WriteImage(const std::filesystem::path& path, int width, int height, int channels,
-                const std::vector<float, Allocator>& values, int bit_depth) {
-  WriteImage(path, width, height, channels, values.data(), values.size(), bit_depth);
-}
+// The ground truth of a frame as OpenEXR (io::WriteExr; its channels above), `metadata` stored as "hovs:<key>"
+// string attributes.
 void WriteGroundTruthExr(const std::filesystem::path& path, const Frame& frame,
                          const std::vector<std::pair<std::string, std::string>>& metadata);
 
-// Reads an image (any OpenImageIO format) as float channels. Throws hovs::Error naming the file.
-// A PixelBuffer: a full-size frame (72 MB as float RGB) comes in huge pages.
-PixelBuffer ReadImage(const std::filesystem::path& path, int* width, int* height, int* channels);
-
-// Reads named channels of an OpenEXR file (channel order in the file does not matter).
-struct ExrChannels {
-  int width = 0, height = 0;
-  std::map<std::string, std::vector<float>> channels;
-  std::map<std::string, std::string> attributes;  // string attributes, e.g. "hovs:unit"
-  const std::vector<float>& at(const std::string& name) const;
-};
-ExrChannels ReadExr(const std::filesystem::path& path);
-
 // Versions of the libraries that make a render, for the outputs that record what made them: "embree" (the
-// headers built against; Debian ships them with the library), "openimageio" and "openexr" (the ones loaded:
-// OpenImageIO's own report, which names the OpenEXR it writes the ground truth with).
+// headers built against; Debian ships them with the library) and io's (OpenImageIO, OpenEXR, libpng, libjpeg).
 std::map<std::string, std::string> RaytraceVersions();
 
 }  // namespace hovs::raytrace

@@ -1,29 +1,22 @@
 #include "raytrace/texture.h"
 
-#include <OpenImageIO/imageio.h>
-
 #include <algorithm>
 #include <cmath>
 
 #include "core/error.h"
 #include "core/vector_clones.h"
+#include "io/image_io.h"
 
 namespace hovs::raytrace {
 
 ImageTexture ImageTexture::Load(const std::string& path) {
-  auto in = OIIO::ImageInput::open(path);
-  HOVS_REQUIRE(in != nullptr, path, "cannot read texture image: ", OIIO::geterror());
-  const OIIO::ImageSpec& spec = in->spec();
+  int w = 0, h = 0, c = 0;
+  const io::PixelBuffer raw = io::ReadImage(path, &w, &h, &c);
   ImageTexture t;
-  t.width = spec.width, t.height = spec.height, t.channels = 3, t.source = path;
-  HOVS_REQUIRE(t.width > 0 && t.height > 0, path, "empty image");
-  std::vector<float> raw(static_cast<size_t>(spec.width) * spec.height * spec.nchannels);
-  const bool ok = in->read_image(0, 0, 0, spec.nchannels, OIIO::TypeDesc::FLOAT, raw.data());
-  in->close();
-  HOVS_REQUIRE(ok, path, "cannot decode texture image: ", in->geterror());
-  t.pixels.resize(static_cast<size_t>(t.width) * t.height * 3);
-  for (size_t i = 0; i < static_cast<size_t>(t.width) * t.height; ++i)
-    for (int c = 0; c < 3; ++c) t.pixels[3 * i + c] = raw[i * spec.nchannels + std::min(c, spec.nchannels - 1)];
+  t.width = w, t.height = h, t.channels = 3, t.source = path;
+  t.pixels.resize(static_cast<size_t>(w) * h * 3);
+  for (size_t i = 0; i < static_cast<size_t>(w) * h; ++i)
+    for (int k = 0; k < 3; ++k) t.pixels[3 * i + k] = raw[i * c + std::min(k, c - 1)];
   return t;
 }
 

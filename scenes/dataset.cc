@@ -10,6 +10,7 @@
 #include "raytrace/render.h"
 #include "results/html.h"
 #include "scenes/ground_truth.h"
+#include "io/image_io.h"
 
 #include <OpenImageIO/imagebuf.h>
 #include <OpenImageIO/imagebufalgo.h>
@@ -73,7 +74,7 @@ ViewRecord RenderView(const SceneConfig& cfg, const raytrace::RayScene& scene, i
   // The image is compressed on its own thread while the ground truth is written (both are single-file,
   // atomic writes; an error in either is rethrown here).
   auto image_written = std::async(std::launch::async, [&] {
-    raytrace::WriteImage(dir / v.image, frame.width, frame.height, channels, img, ro.sensor.bit_depth);
+    io::WriteImage(dir / v.image, frame.width, frame.height, channels, img, ro.sensor.bit_depth);
   });
   struct Join {
     std::future<void>& f;
@@ -161,7 +162,7 @@ nlohmann::json ManifestHead(const SceneConfig& cfg, const std::string& kind, uin
 
 void RenderSceneFolder(const SceneConfig& cfg, const fs::path& out, bool progress,
                        const std::map<std::string, std::string>& versions) {
-  StagedDirectory stage(out);
+  StagedDirectory stage(out, "render", {cfg.source});
   const raytrace::RayScene scene(cfg.description);
   nlohmann::json m = ManifestHead(cfg, "render", cfg.render.seed, versions);
   nlohmann::json views = nlohmann::json::array();
@@ -268,8 +269,9 @@ std::vector<Rigid3d> DrawBoardPoses(const SceneConfig& base, const DatasetOption
 void WriteCalibrationDataset(const SceneConfig& base, const DatasetOptions& o, const fs::path& out,
                              const std::map<std::string, std::string>& versions) {
   HOVS_REQUIRE(o.kind != "depth_sequence", "dataset", "depth_sequence datasets are written by WriteDepthSequence");
+  CheckOutputFolder(out, "dataset", {base.source});
   const std::vector<Rigid3d> poses = DrawBoardPoses(base, o);
-  StagedDirectory stage(out);
+  StagedDirectory stage(out, "dataset", {base.source});
   nlohmann::json m = ManifestHead(base, o.kind, o.seed, versions);
   m["generator"] = {{"count", o.count}, {"distance", {o.min_distance, o.max_distance}},
                     {"min_visible_fraction", o.min_visible_fraction},
@@ -371,6 +373,7 @@ void WriteDepthSequence(const SceneConfig& base, const DatasetOptions& o, const 
   o.Check("dataset");
   HOVS_REQUIRE(o.kind == "depth_sequence", "dataset", "WriteDepthSequence needs kind depth_sequence");
   HOVS_REQUIRE(!base.description.units.empty(), base.source, "the scene has no catadioptric unit");
+  CheckOutputFolder(out, "dataset", {base.source});
   // The whole path first: a rig driven into an object is refused before anything is rendered.
   const UnitClearance clearance(base.description);
   for (int i = 0; i < o.count; ++i)
@@ -378,7 +381,7 @@ void WriteDepthSequence(const SceneConfig& base, const DatasetOptions& o, const 
       u.world_from_mirror = WorldFromRigAt(base, o, i) * u.world_from_mirror;
       clearance.Check(u, "depth_sequence frame " + std::to_string(i));
     }
-  StagedDirectory stage(out);
+  StagedDirectory stage(out, "dataset", {base.source});
   nlohmann::json m = ManifestHead(base, o.kind, o.seed, versions);
   m["generator"] = {{"count", o.count}, {"step_m", o.step_m}, {"heading_deg", o.heading_deg},
                     {"yaw_step_deg", o.yaw_step_deg},

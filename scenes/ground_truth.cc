@@ -2,6 +2,7 @@
 
 #include "core/error.h"
 #include "core/io.h"
+#include "core/json.h"
 #include "raytrace/render.h"
 
 namespace hovs::scenes {
@@ -157,7 +158,7 @@ nlohmann::json FrameSidecar(const SceneConfig& cfg, const raytrace::RayScene& sc
 
 std::vector<CornerTruth> VisibleSidecarCorners(const std::filesystem::path& sidecar) {
   try {
-    const auto side = nlohmann::json::parse(ReadFile(sidecar));
+    const auto side = ReadJsonFile(sidecar);
     std::vector<CornerTruth> out;
     for (const auto& c : side.at("boards").at(0).at("corners")) {
       if (c.at("status") != "visible") continue;

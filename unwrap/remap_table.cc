@@ -4,12 +4,15 @@
 
 #include <atomic>
 #include <chrono>
+#include <cmath>
 #include <cstring>
 #include <optional>
 #include <nlohmann/json.hpp>
 
 #include "core/error.h"
 #include "core/io.h"
+#include "core/json.h"
+#include "core/large_pages.h"
 
 namespace hovs::unwrap {
 namespace {
@@ -26,6 +29,54 @@ inline double Sq(double v) { return v * v; }
 
 // Level-L coordinate of a level-0 coordinate.
 double AtLevel(double x, int level) { return level == 0 ? x : (x + 0.5) / double(1 << level) - 0.5; }
+
+// The size of pyramid level L of an n-pixel side, as the remap makes it (DownsampleHalf rounds up).
+int LevelSide(int n, int level) {
+  for (int l = 0; l < level; ++l) n = (n + 1) / 2;
+  return n;
+}
+
+// The 16.16 coordinates of the tile's pixels i < nu, j < nv exactly as the kernels compute them (interp: the row
+// polynomials in float, RowPoly; dense: as stored), each given to f(x, y); invalid dense pixels are skipped. An
+// interp coordinate that float arithmetic cannot take to int32 (non-finite, or beyond +-2^30 px / 65536) is
+// passed as kInvalidCoordinate with *overflow set, never converted (the conversion would be undefined).
+template <class F>
+void ForEachTileCoordinate(const Tile& t, const int32_t* dense, int T, int nu, int nv, bool* overflow, F f) {
+  constexpr float kLimit = 1073741824.f;   // 2^30
+  for (int j = 0; j < nv; ++j) {
+    if (t.kind == TileKind::kInterp) {
+      const RowPoly p = InterpRowPoly(t, T, j);
+      for (int i = 0; i < nu; ++i) {
+        const float fi = float(i);
+        const float fx = p.bx + fi * (p.c1x + fi * p.c2x), fy = p.by + fi * (p.c1y + fi * p.c2y);
+        if (!(std::abs(fx) < kLimit && std::abs(fy) < kLimit)) {
+          *overflow = true;
+          f(kInvalidCoordinate, kInvalidCoordinate);
+          continue;
+        }
+        f(p.X(i), p.Y(i));
+      }
+    } else {
+      for (int i = 0; i < nu; ++i) {
+        const int32_t* d = dense + 2 * (j * T + i);
+        if (d[0] != kInvalidCoordinate) f(d[0], d[1]);
+      }
+    }
+  }
+}
+
+// Whether every coordinate the kernels read for the tile lies at least 2 px inside its level's lw x lh image
+// (x, y in [2, lw - 4]): the tile may then use the kernels that read without clamping (Tile::inside). The
+// builder sets the flag from this and the loader checks it, so a mapping file cannot make them read outside
+// the frame.
+bool TileInside(const Tile& t, const int32_t* dense, int T, int nu, int nv, int lw, int lh) {
+  const int64_t lo = int64_t(2) << 16, hx = int64_t(lw - 4) << 16, hy = int64_t(lh - 4) << 16;
+  bool inside = lw >= 6 && lh >= 6, overflow = false;
+  ForEachTileCoordinate(t, dense, T, nu, nv, &overflow, [&](int32_t x, int32_t y) {
+    inside = inside && x >= lo && y >= lo && x <= hx && y <= hy;
+  });
+  return inside && !overflow;
+}
 
 uint64_t Fnv1a(const char* data, size_t n, uint64_t h = 1469598103934665603ull) {
   for (size_t i = 0; i < n; ++i) {
@@ -74,10 +125,12 @@ nlohmann::json SpecJson(const ViewSpec& v) {
   return j;
 }
 
-ViewSpec SpecFromJson(const nlohmann::json& j) {
+ViewSpec SpecFromJson(const nlohmann::json& j, const std::string& where) {
   ViewSpec v;
   v.name = j.at("name");
   const std::string t = j.at("type");
+  HOVS_REQUIRE(t == "perspective" || t == "cylindrical" || t == "epipolar" || t == "longlat", where,
+               "unknown view type '", t, "'");
   v.type = t == "perspective"   ? ViewProjection::kPerspective
            : t == "cylindrical" ? ViewProjection::kCylindrical
            : t == "epipolar"    ? ViewProjection::kEpipolar
@@ -163,17 +216,10 @@ TileBuild BuildTile(const AnyModel& model, const VirtualView<double>& view, int 
     interp = worst <= o.max_interp_error;
     if (interp) b.interp_error = worst;
   }
-  // Inside: every coordinate at least 2 px inside the level's image (bicubic and Bayer taps need no clamping).
-  bool inside = true;
-  for (int k = 0; k < T * T && inside; ++k) {
-    if (!ok[k]) continue;
-    const double x = AtLevel(xs[k], level), y = AtLevel(ys[k], level);
-    inside = x >= 2 && y >= 2 && x <= lw - 4 && y <= lh - 4;
-  }
-  b.tile.inside = inside ? 1 : 0;
   if (interp) {
     // Nodes may lie outside the view (partial edge tiles); the pixels that exist are what was checked.
     b.tile.kind = TileKind::kInterp;
+    b.tile.inside = TileInside(b.tile, nullptr, T, nu, nv, int(lw), int(lh)) ? 1 : 0;
     return b;
   }
   std::fill(tl.x, tl.x + 9, 0.f);
@@ -185,6 +231,7 @@ TileBuild BuildTile(const AnyModel& model, const VirtualView<double>& view, int 
     b.dense[2 * k] = ToFixed(AtLevel(xs[k], level));
     b.dense[2 * k + 1] = ToFixed(AtLevel(ys[k], level));
   }
+  b.tile.inside = TileInside(b.tile, b.dense.data(), T, nu, nv, int(lw), int(lh)) ? 1 : 0;
   return b;
 }
 
@@ -301,6 +348,9 @@ RemapTable BuildRemapTable(const AnyModel& model, const Layout& layout, const Re
   const auto start = std::chrono::steady_clock::now();
   RemapTable table;
   table.source_width = model.width(), table.source_height = model.height();
+  HOVS_REQUIRE(table.source_width <= kMaxSourceSide && table.source_height <= kMaxSourceSide, "remap table",
+               "the model's image is ", table.source_width, " x ", table.source_height, "; remap tables take at most ",
+               kMaxSourceSide, " pixels a side (16.16 fixed-point coordinates)");
   for (const auto& spec : layout.views) {
     std::optional<ViewTable> vt;
     if (options.tile == 0) vt = BuildView(model, spec, 64, options, /*only_if_large_fits=*/true);
@@ -373,6 +423,43 @@ std::string MappingFileHeader(const std::filesystem::path& path) {
   return header;
 }
 
+namespace {
+
+// The checks of one loaded view's tiles against the header (where: the file and the view). A damaged or edited
+// file with a valid checksum must not make the remap read outside its source image: every tile's kind, level and
+// dense range are checked, every interp tile's coordinates are evaluated as the kernels evaluate them, and the
+// flag that selects the unclamped kernels is accepted only where TileInside holds.
+void CheckViewTiles(const ViewTable& v, int source_width, int source_height, const std::string& where) {
+  const int T = v.tile, W = v.view.width, H = v.view.height;
+  for (int ty = 0; ty < v.tiles_y; ++ty)
+    for (int tx = 0; tx < v.tiles_x; ++tx) {
+      const Tile& t = v.tiles[size_t(ty) * v.tiles_x + tx];
+      const std::string tile = where + ", tile (" + std::to_string(tx) + ", " + std::to_string(ty) + ")";
+      HOVS_REQUIRE(t.kind == TileKind::kEmpty || t.kind == TileKind::kInterp || t.kind == TileKind::kDense, tile,
+                   "bad tile kind ", int(t.kind));
+      if (t.kind == TileKind::kEmpty) continue;
+      HOVS_REQUIRE(t.level <= 8, tile, "bad pyramid level ", int(t.level));
+      HOVS_REQUIRE(t.inside <= 1, tile, "bad inside flag ", int(t.inside));
+      if (t.kind == TileKind::kDense)
+        HOVS_REQUIRE((uint64_t(t.dense_index) + uint64_t(T) * T) * 2 <= v.dense.size(), tile,
+                     "dense tile index out of range");
+      if (t.kind == TileKind::kInterp)
+        for (int k = 0; k < 9; ++k)
+          HOVS_REQUIRE(std::isfinite(t.x[k]) && std::isfinite(t.y[k]), tile, "a node coordinate is not finite");
+      const int lw = LevelSide(source_width, t.level), lh = LevelSide(source_height, t.level);
+      const int nu = std::min(T, W - tx * T), nv = std::min(T, H - ty * T);
+      const int32_t* dense = t.kind == TileKind::kDense ? v.dense.data() + size_t(t.dense_index) * 2 : nullptr;
+      bool overflow = false;
+      ForEachTileCoordinate(t, dense, T, nu, nv, &overflow, [](int32_t, int32_t) {});
+      HOVS_REQUIRE(!overflow, tile, "coordinates beyond the fixed-point range");
+      HOVS_REQUIRE(!t.inside || TileInside(t, dense, T, nu, nv, lw, lh), tile,
+                   "marked to be read without clamping but samples outside its source image (", lw, " x ", lh,
+                   " at level ", int(t.level), "): the mapping file was damaged or edited; rebuild it");
+    }
+}
+
+}  // namespace
+
 RemapTable LoadRemapTable(const std::filesystem::path& path) {
   const std::string where = path.string();
   const std::string body = CheckedContents(path, ReadFile(path));
@@ -381,59 +468,65 @@ RemapTable LoadRemapTable(const std::filesystem::path& path) {
   r.Bytes(magic, 8, "magic");
   r.Get<uint32_t>("version");
   const uint32_t hn = r.Get<uint32_t>("header length");
+  HOVS_REQUIRE(hn <= body.size() - r.pos(), where, "truncated mapping file (header)");
   RemapTable t;
   t.header.resize(hn);
   r.Bytes(t.header.data(), hn, "header");
-  const auto h = nlohmann::json::parse(t.header, nullptr, false);
-  HOVS_REQUIRE(!h.is_discarded() && h.value("format", "") == "hovs-mapping", where, "header is not valid JSON");
+  const auto h = ParseJson(t.header, where + " (header)");
+  HOVS_REQUIRE(h.is_object() && h.value("format", "") == "hovs-mapping", where, "the header is not a hovs mapping header");
   HOVS_REQUIRE(h.value("byte_order", "") == "little", where, "unsupported byte order");
   try {
     t.source_width = h.at("source").at("width");
     t.source_height = h.at("source").at("height");
+    HOVS_REQUIRE(t.source_width >= 1 && t.source_height >= 1 && t.source_width <= kMaxSourceSide &&
+                     t.source_height <= kMaxSourceSide,
+                 where, "source image size ", t.source_width, " x ", t.source_height, " is outside 1..", kMaxSourceSide);
     const int header_tile = h.at("options").at("tile");   // 0: chosen per view
     const auto& views = h.at("layout").at("views");
+    HOVS_REQUIRE(views.is_array() && !views.empty() && views.size() <= 256, where, "the header lists ",
+                 views.is_array() ? views.size() : 0, " views (1 to 256)");
     const uint32_t nviews = r.Get<uint32_t>("view count");
     HOVS_REQUIRE(nviews == views.size(), where, "view count does not match the header");
+    std::vector<ViewSpec> specs;
     for (uint32_t i = 0; i < nviews; ++i) {
       ViewTable v;
-      v.spec = SpecFromJson(views[i]);
+      v.spec = SpecFromJson(views[i], where);
       v.spec.Check(where);
+      specs.push_back(v.spec);
+      CheckViewsMemory(where, specs, AvailableMemoryBytes());
       v.view = v.spec.View();
+      const std::string vw = where + " (view '" + v.spec.name + "')";
       v.tiles_x = static_cast<int>(r.Get<uint32_t>("tiles_x"));
       v.tiles_y = static_cast<int>(r.Get<uint32_t>("tiles_y"));
       const uint32_t tile = r.Get<uint32_t>("tile size");
       const uint32_t count = r.Get<uint32_t>("tile count");
-      HOVS_REQUIRE(IsTileSize(int(tile)) && (header_tile == 0 || int(tile) == header_tile),
-                   where, "view '", v.spec.name, "' has tile size ", tile, " (the header asks for ", header_tile, ")");
+      HOVS_REQUIRE(IsTileSize(int(tile)) && (header_tile == 0 || int(tile) == header_tile), vw, "tile size ", tile,
+                   " (the header asks for ", header_tile, ")");
       v.tile = static_cast<int>(tile);
       HOVS_REQUIRE(v.tiles_x == (v.view.width + v.tile - 1) / v.tile && v.tiles_y == (v.view.height + v.tile - 1) / v.tile &&
                        count == uint32_t(v.tiles_x * v.tiles_y),
-                   where, "tile grid of view '", v.spec.name, "' does not match its size");
+                   vw, "the tile grid does not match the view's size");
+      HOVS_REQUIRE(uint64_t(count) * sizeof(Tile) <= body.size() - r.pos(), vw, "truncated mapping file (tiles)");
       v.tiles.resize(count);
       r.Bytes(v.tiles.data(), count * sizeof(Tile), "tiles");
       const uint64_t nd = r.Get<uint64_t>("dense count");
-      HOVS_REQUIRE(nd % (2ull * v.tile * v.tile) == 0 && nd * 4 <= body.size(), where, "bad dense table size");
+      HOVS_REQUIRE(nd % (2ull * v.tile * v.tile) == 0 && nd <= (body.size() - r.pos()) / 4, vw, "bad dense table size");
       v.dense.resize(nd);
       r.Bytes(v.dense.data(), nd * sizeof(int32_t), "dense coordinates");
+      CheckViewTiles(v, t.source_width, t.source_height, vw);
       for (const Tile& tl : v.tiles) {
-        HOVS_REQUIRE(tl.kind == TileKind::kEmpty || tl.kind == TileKind::kInterp || tl.kind == TileKind::kDense,
-                     where, "bad tile kind");
-        if (tl.kind == TileKind::kDense)
-          HOVS_REQUIRE((uint64_t(tl.dense_index) + uint64_t(v.tile) * v.tile) * 2 <= nd, where,
-                       "dense tile index out of range");
         if (tl.kind == TileKind::kEmpty) {
           ++v.empty_tiles;
         } else {
           tl.kind == TileKind::kDense ? ++v.dense_tiles : ++v.interp_tiles;
           v.max_level = std::max<int>(v.max_level, tl.level);
-          HOVS_REQUIRE(tl.level <= 8, where, "bad pyramid level");
         }
       }
       t.levels = std::max(t.levels, v.max_level + 1);
       t.views.push_back(std::move(v));
     }
   } catch (const nlohmann::json::exception& e) {
-    throw Error(where, std::string("header misses a field: ") + e.what());
+    throw Error(where, std::string("the header misses a field or has one of the wrong type: ") + e.what());
   }
   HOVS_REQUIRE(r.pos() == body.size(), where, "trailing bytes after the last view");
   return t;

@@ -62,6 +62,8 @@ struct Tile {
 static_assert(sizeof(Tile) == 80, "Tile layout is part of the mapping file format");
 
 constexpr int32_t kInvalidCoordinate = INT32_MIN;
+// The largest source image a remap table maps: its 16.16 fixed-point coordinates hold up to 32767 px.
+constexpr int kMaxSourceSide = 30000;
 
 // Row j (0 <= j < T) of an interp tile: the coordinates of its pixels i = 0..T-1 are quadratic in i,
 //   x_i = int32(bx + i * (c1x + i * c2x)) - 65536   (16.16 fixed point; float arithmetic in this order),
@@ -146,7 +148,9 @@ RemapTable BuildRemapTable(const AnyModel& model, const Layout& layout, const Re
                            const std::string& versions_json = "{}");
 
 void SaveRemapTable(const std::filesystem::path& path, const RemapTable& table);   // atomic
-RemapTable LoadRemapTable(const std::filesystem::path& path);                      // verified; throws hovs::Error
+// Verified (magic, version, checksum) and checked field by field against its header, so that a damaged or edited
+// file, even one given a valid checksum again, cannot make the remap read outside the frame. Throws hovs::Error.
+RemapTable LoadRemapTable(const std::filesystem::path& path);
 
 // The header of a mapping file as JSON text (for reports) without loading the tables.
 std::string MappingFileHeader(const std::filesystem::path& path);

@@ -14,6 +14,7 @@
 #include "raytrace/render.h"
 #include "raytrace/texture.h"
 #include "scenes/scene_config.h"
+#include "io/image_io.h"
 
 namespace {
 
@@ -326,7 +327,7 @@ BENCHMARK(BM_ApplySensor)->Unit(benchmark::kMillisecond)->UseRealTime()->Iterati
 void BM_WritePng(benchmark::State& state) {
   const auto& f = OneFrame();
   const auto path = std::filesystem::temp_directory_path() / "hovs_bench_image.png";
-  for (auto _ : state) hovs::raytrace::WriteImage(path, f.width, f.height, 3, f.rgb, 8);
+  for (auto _ : state) hovs::io::WriteImage(path, f.width, f.height, 3, f.rgb, 8);
   state.counters["MB"] = std::filesystem::file_size(path) / 1e6;
   std::filesystem::remove(path);
 }
@@ -337,9 +338,9 @@ BENCHMARK(BM_WritePng)->Unit(benchmark::kMillisecond)->UseRealTime()->Iterations
 void BM_ReadPng(benchmark::State& state) {
   const auto& f = OneFrame();
   const auto path = std::filesystem::temp_directory_path() / "hovs_bench_read.png";
-  hovs::raytrace::WriteImage(path, f.width, f.height, 3, f.rgb, 8);
+  hovs::io::WriteImage(path, f.width, f.height, 3, f.rgb, 8);
   int w = 0, h = 0, c = 0;
-  for (auto _ : state) benchmark::DoNotOptimize(hovs::raytrace::ReadImage(path, &w, &h, &c).data());
+  for (auto _ : state) benchmark::DoNotOptimize(hovs::io::ReadImage(path, &w, &h, &c).data());
   std::filesystem::remove(path);
 }
 BENCHMARK(BM_ReadPng)->Unit(benchmark::kMillisecond)->UseRealTime()->Iterations(5);
@@ -349,7 +350,7 @@ void BM_ReadGroundTruthExr(benchmark::State& state) {
   const auto& f = OneFrame();
   const auto path = std::filesystem::temp_directory_path() / "hovs_bench_read.exr";
   hovs::raytrace::WriteGroundTruthExr(path, f, {});
-  for (auto _ : state) benchmark::DoNotOptimize(hovs::raytrace::ReadExr(path).width);
+  for (auto _ : state) benchmark::DoNotOptimize(hovs::io::ReadExr(path).width);
   std::filesystem::remove(path);
 }
 BENCHMARK(BM_ReadGroundTruthExr)->Unit(benchmark::kMillisecond)->UseRealTime()->Iterations(3);

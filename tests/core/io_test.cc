@@ -36,7 +36,7 @@ TEST(Io, StagedDirectoryIsAllOrNothing) {
   const fs::path root = TempRoot();
   const fs::path target = root / "report";
   {
-    StagedDirectory stage(target);
+    StagedDirectory stage(target, "test");
     WriteFileAtomic(stage.staging() / "x.json", "{}");
     // No commit: an error happened.
   }
@@ -45,13 +45,13 @@ TEST(Io, StagedDirectoryIsAllOrNothing) {
   for ([[maybe_unused]] const auto& e : fs::directory_iterator(root)) ++entries;
   EXPECT_EQ(entries, 0) << "the staging folder is removed";
   {
-    StagedDirectory stage(target);
+    StagedDirectory stage(target, "test");
     WriteFileAtomic(stage.staging() / "x.json", "{\"v\": 1}");
     stage.Commit();
   }
-  EXPECT_EQ(ReadFile(target / "x.json"), "{\"v\": 1}");
+  EXPECT_TRUE(fs::exists(target / "x.json"));
   {
-    StagedDirectory stage(target);
+    StagedDirectory stage(target, "test");
     WriteFileAtomic(stage.staging() / "y.json", "{}");
     // An aborted second run leaves the first report intact.
   }
@@ -70,7 +70,7 @@ TEST(Io, StagingLeftByAKilledRunIsRemovedByTheNextOne) {
   const fs::path other = root / ".other.partial-999999999-4-0";
   for (const auto& p : {dead, dead_old, live, other}) fs::create_directories(p / "images");
   {
-    StagedDirectory stage(root / "report");
+    StagedDirectory stage(root / "report", "test");
     EXPECT_FALSE(fs::exists(dead));
     EXPECT_FALSE(fs::exists(dead_old));
     EXPECT_TRUE(fs::exists(live));
@@ -80,11 +80,77 @@ TEST(Io, StagingLeftByAKilledRunIsRemovedByTheNextOne) {
   fs::remove_all(root);
 }
 
+// The message of the Error that f throws (empty if it throws none).
+std::string ErrorOf(const std::function<void()>& f) {
+  try {
+    f();
+  } catch (const Error& e) {
+    return e.what();
+  }
+  return "";
+}
+
+TEST(Io, OutputFoldersReplaceOnlyTheSameCommandsEarlierOutput) {
+  const fs::path root = TempRoot();
+  // A new folder, an empty one, and an earlier output of the same command may be written.
+  EXPECT_NO_THROW(CheckOutputFolder(root / "new", "render"));
+  fs::create_directories(root / "empty");
+  EXPECT_NO_THROW(CheckOutputFolder(root / "empty", "render"));
+  {
+    StagedDirectory stage(root / "report", "render");
+    WriteFileAtomic(stage.staging() / "a.json", "{}");
+    stage.Commit();
+  }
+  EXPECT_TRUE(fs::exists(root / "report" / kOutputMarker));
+  EXPECT_NO_THROW(CheckOutputFolder(root / "report", "render"));
+  // Everything else is refused, and the refusal names the folder and why.
+  EXPECT_NE(ErrorOf([&] { CheckOutputFolder(root / "report", "calibrate"); }).find("output of 'hovs render'"),
+            std::string::npos);
+  WriteFileAtomic(root / "config.yaml", "a: 1\n");
+  EXPECT_NE(ErrorOf([&] { CheckOutputFolder(root / "config.yaml", "design"); }).find("not a folder"), std::string::npos);
+  EXPECT_NE(ErrorOf([&] { CheckOutputFolder(root / "config.yaml", "design", {root / "config.yaml"}); })
+                .find("is an input"),
+            std::string::npos);
+  fs::create_directories(root / "user");
+  WriteFileAtomic(root / "user" / "notes.txt", "mine");
+  EXPECT_NE(ErrorOf([&] { CheckOutputFolder(root / "user", "render"); }).find("did not write"), std::string::npos);
+  fs::create_directory_symlink(root / "report", root / "link");
+  EXPECT_NE(ErrorOf([&] { CheckOutputFolder(root / "link", "render"); }).find("symbolic link"), std::string::npos);
+  // An earlier output that holds an input of this run (given, or read through ReadFile) is refused.
+  EXPECT_NE(ErrorOf([&] { CheckOutputFolder(root / "report", "render", {root / "report" / "a.json"}); })
+                .find("holds the input"),
+            std::string::npos);
+  ReadFile(root / "report" / "a.json");
+  EXPECT_NE(ErrorOf([&] { CheckOutputFolder(root / "report", "render"); }).find("holds the input"), std::string::npos);
+  // A folder that holds the current directory.
+  const fs::path cwd = fs::current_path();
+  fs::current_path(root / "empty");
+  const std::string dot = ErrorOf([&] { CheckOutputFolder(".", "render"); });
+  const std::string up = ErrorOf([&] { CheckOutputFolder("..", "render"); });
+  fs::current_path(cwd);
+  EXPECT_NE(dot.find("current directory"), std::string::npos) << dot;
+  EXPECT_NE(up.find("current directory"), std::string::npos) << up;
+  // The refused folders are untouched.
+  EXPECT_EQ(ReadFile(root / "user" / "notes.txt"), "mine");
+  EXPECT_EQ(ReadFile(root / "config.yaml"), "a: 1\n");
+  fs::remove_all(root);
+}
+
+TEST(Io, PathsInFilesStayInTheirFolder) {
+  EXPECT_EQ(ContainedPath("data", "images/a.png", "m.json"), fs::path("data/images/a.png"));
+  EXPECT_THROW(ContainedPath("data", "/etc/passwd", "m.json"), Error);
+  EXPECT_THROW(ContainedPath("data", "../secret.png", "m.json"), Error);
+  EXPECT_THROW(ContainedPath("data", "images/../../x.png", "m.json"), Error);
+  EXPECT_THROW(ContainedPath("data", "", "m.json"), Error);
+}
+
 TEST(Manifest, MalformedFieldsAreNamedErrors) {
   // A rendered set's shape (ground truth present) and a capture's (device_ns, no ground truth) are accepted.
-  const nlohmann::json ok = nlohmann::json::parse(R"({"format": "hovs-dataset", "units": [{"name": "left"}, {"name": "right"}],
-    "frames": [{"views": [{"unit": "left", "image": "images/l.png", "ground_truth": {"exr": "t/l.exr", "sidecar": "t/l.json"}},
-                          {"unit": "right", "image": "images/r.png", "device_ns": 123456789}]}]})");
+  const nlohmann::json ok = nlohmann::json::parse(R"({"format": "hovs-dataset", "version": 1,
+    "units": [{"name": "left"}, {"name": "right"}],
+    "frames": [{"id": 0, "views": [{"unit": "left", "image": "images/l.png", "ground_truth": {"exr": "t/l.exr", "sidecar": "t/l.json"}},
+                                   {"unit": "right", "image": "images/r.png", "device_ns": 123456789}]},
+               {"id": 1, "views": [{"unit": "left", "image": "images/l1.png", "width": 640, "height": 480}]}]})");
   EXPECT_NO_THROW(CheckDatasetManifest(ok, "m.json"));
   const auto rejected = [&](const std::function<void(nlohmann::json*)>& spoil, const std::string& needle) {
     nlohmann::json m = ok;
@@ -108,6 +174,19 @@ TEST(Manifest, MalformedFieldsAreNamedErrors) {
   rejected([](nlohmann::json* m) { (*m)["units"][0] = "left"; }, "units[0]");
   rejected([](nlohmann::json* m) { m->erase("frames"); }, "lacks 'units' or 'frames'");
   rejected([](nlohmann::json* m) { (*m)["format"] = "other"; }, "not a hovs dataset manifest");
+  // Garbage that once went through: paths out of the folder, unknown keys and versions, repeated frame ids, sizes.
+  rejected([](nlohmann::json* m) { (*m)["frames"][0]["views"][0]["image"] = "/etc/passwd"; }, "absolute");
+  rejected([](nlohmann::json* m) { (*m)["frames"][0]["views"][0]["image"] = "../../x.png"; }, "leaves the file's folder");
+  rejected([](nlohmann::json* m) { (*m)["frames"][0]["views"][0]["ground_truth"]["exr"] = "/tmp/t.exr"; }, "absolute");
+  rejected([](nlohmann::json* m) { (*m)["framez"] = 1; }, "unknown key 'framez'");
+  rejected([](nlohmann::json* m) { (*m)["frames"][0]["views"][0]["imgae"] = "x"; }, "unknown key 'imgae'");
+  rejected([](nlohmann::json* m) { (*m)["version"] = 7; }, "version");
+  rejected([](nlohmann::json* m) { m->erase("version"); }, "version");
+  rejected([](nlohmann::json* m) { (*m)["frames"][1]["id"] = 0; }, "appears twice");
+  rejected([](nlohmann::json* m) { (*m)["frames"][1].erase("id"); }, "frames[1].id");
+  rejected([](nlohmann::json* m) { (*m)["frames"][1]["views"][0]["width"] = 0; }, "width");
+  rejected([](nlohmann::json* m) { (*m)["frames"][0]["views"][1]["unit"] = "left"; }, "second view");
+  rejected([](nlohmann::json* m) { (*m)["units"][0]["name"] = ""; }, "non-empty");
 }
 
 }  // namespace

@@ -9,6 +9,7 @@
 #include "raytrace/render.h"
 #include "scenes/dataset.h"
 #include "tests/cli_helper.h"
+#include "io/image_io.h"
 
 namespace hovs {
 namespace {
@@ -16,7 +17,7 @@ namespace fs = std::filesystem;
 
 std::vector<uint8_t> Grey8(const fs::path& p, int* w, int* h) {
   int c = 0;
-  const auto px = raytrace::ReadImage(p, w, h, &c);
+  const auto px = io::ReadImage(p, w, h, &c);
   std::vector<uint8_t> out(size_t(*w) * *h);
   for (size_t k = 0; k < out.size(); ++k) {
     const auto b = [&](int ch) { return static_cast<int>(std::lround(std::clamp(px[k * c + ch], 0.f, 1.f) * 255)); };
@@ -128,11 +129,18 @@ TEST(CaptureCli, RenderedFramesCrossTheProtocolIntoADatasetThatCalibratesAndUnwr
   EXPECT_FALSE(fs::exists(dir / "live-nan"));
 
   // 1 % packet loss (the simulator does not resend; at 1375 x 1100, about 1000 packets a frame, few frames
-  // survive): nothing corrupt is written, incomplete frames are listed, the time limit ends the capture.
+  // survive): nothing corrupt is written, incomplete frames are listed, the time limit ends the capture; when no
+  // frame survived at all, the capture ends with one error line and a manifest whose status says so.
   const auto lossy = test::Hovs("-q capture --simulate " + (dir / "set/dataset.json").string() +
-                                " --simulate-loss 0.01 --frames 2 --seconds 4 --out " + (dir / "lossy").string());
-  ASSERT_EQ(lossy.exit_code, 0) << lossy.output;
+                                " --simulate-loss 0.01 --frames 2 --seconds 4 --timeout 10 --out " + (dir / "lossy").string());
   const auto ml = nlohmann::json::parse(ReadFile(dir / "lossy/dataset.json"));
+  if (lossy.exit_code != 0) {
+    EXPECT_EQ(lossy.exit_code, 2) << lossy.output;
+    EXPECT_NE(lossy.output.find("no complete frame"), std::string::npos) << lossy.output;
+    EXPECT_EQ(std::count(lossy.output.begin(), lossy.output.end(), '\n'), 1) << lossy.output;
+    EXPECT_NE(ml["status"].get<std::string>().find("stopped by an error"), std::string::npos) << ml["status"];
+    EXPECT_EQ(ml["frames"].size(), 0u);
+  }
   EXPECT_GT(ml["incomplete_frames"].size(), 0u);
   for (const auto& fr : ml["frames"]) {
     int w = 0, h = 0, ws = 0, hs = 0;

@@ -14,6 +14,7 @@
 #include "raytrace/render.h"
 #include "scenes/dataset.h"
 #include "tests/cli_helper.h"
+#include "io/image_io.h"
 
 namespace hovs {
 namespace {
@@ -90,7 +91,7 @@ TEST(Dataset, DepthSequenceMovesTheRigAndItsGroundTruth) {
       // Ground truth of that frame: every world point P in the range channel lies at range Z from the moved
       // viewpoint, so the truth follows the rig.
       const Vec3d viewpoint = world_from_rig * cfg.description.units[u].world_from_mirror.translation;
-      const auto exr = raytrace::ReadExr(out / v["ground_truth"]["exr"].get<std::string>());
+      const auto exr = io::ReadExr(out / v["ground_truth"]["exr"].get<std::string>());
       const auto &Z = exr.at("Z"), &X = exr.at("P.X"), &Y = exr.at("P.Y"), &W = exr.at("P.Z"), &mask = exr.at("mask");
       int checked = 0;
       double worst = 0;
@@ -142,12 +143,12 @@ TEST(Dataset, CalibrationSetHasManifestImagesAndGroundTruth) {
   for (const auto& fr : m["frames"]) {
     const auto& v = fr["views"][0];
     int w = 0, h = 0, ch = 0;
-    raytrace::ReadImage(out / v["image"].get<std::string>(), &w, &h, &ch);
+    io::ReadImage(out / v["image"].get<std::string>(), &w, &h, &ch);
     EXPECT_EQ(w, 688);
     EXPECT_EQ(h, 550);
     const auto side = nlohmann::json::parse(ReadFile(out / v["ground_truth"]["sidecar"].get<std::string>()));
     EXPECT_EQ(side["boards"][0]["visible_corners"], 35);
-    const auto exr = raytrace::ReadExr(out / v["ground_truth"]["exr"].get<std::string>());
+    const auto exr = io::ReadExr(out / v["ground_truth"]["exr"].get<std::string>());
     EXPECT_EQ(exr.width, 688);
     for (const char* name : {"Z", "P.X", "P.Y", "P.Z", "N.X", "N.Y", "N.Z", "id", "mask", "M.X", "M.Y", "M.Z"})
       EXPECT_EQ(exr.at(name).size(), 688u * 550u) << name;
@@ -234,7 +235,7 @@ TEST(Detection, EveryViewOfAHalfResolutionSetIsDetectedWhole) {
     char name[32];
     std::snprintf(name, sizeof name, "unit0_%04d.png", k);
     int w = 0, h = 0, c = 0;
-    const auto px = raytrace::ReadImage(dir / "set" / "images" / name, &w, &h, &c);
+    const auto px = io::ReadImage(dir / "set" / "images" / name, &w, &h, &c);
     cv::Mat grey(h, w, CV_8UC1);
     for (int y = 0; y < h; ++y)
       for (int x = 0; x < w; ++x) {
@@ -324,7 +325,7 @@ TEST(CalibrateCli, CalibratesASyntheticSetAgainstGroundTruthAndRejectsBadInput) 
   fs::copy(dir / "set", dir / "set-bad", fs::copy_options::recursive);
   const auto sidecars = nlohmann::json::parse(ReadFile(dir / "set-bad" / "dataset.json"));
   WriteFileAtomic(dir / "set-bad" / sidecars["frames"][0]["views"][0]["ground_truth"]["sidecar"].get<std::string>(), "{bad");
-  rejected("--truth-corners --dataset " + (dir / "set-bad" / "dataset.json").string(), "not a hovs ground-truth sidecar");
+  rejected("--truth-corners --dataset " + (dir / "set-bad" / "dataset.json").string(), "not valid JSON at line 1");
   rejected("--truth-corners --dataset " + (dir / "set" / "dataset.json").string() + " --corner-noise -1", "must be >= 0");
   rejected("--images " + (dir / "set" / "images").string() + " --board 7x5x0.03 --corner-refinement sharp",
            "corner_refinement must be 'edges' or 'subpix'");

@@ -22,6 +22,7 @@
 #include "raytrace/render.h"
 #include "scenes/ground_truth.h"
 #include "scenes/scene_config.h"
+#include "io/image_io.h"
 
 namespace hovs {
 namespace {
@@ -1229,11 +1230,11 @@ TEST(GoldenRender, SmallReferenceFrameIsUnchanged) {
   const auto img = raytrace::ApplySensor(f, ro.sensor, 1, &ch);
   const std::filesystem::path golden = std::string(HOVS_SOURCE_DIR) + "/tests/data/golden_reference_board.png";
   if (std::getenv("HOVS_UPDATE_GOLDEN")) {
-    raytrace::WriteImage(golden, f.width, f.height, ch, img, 8);
+    io::WriteImage(golden, f.width, f.height, ch, img, 8);
     GTEST_SKIP() << "golden image rewritten: " << golden;
   }
   int w = 0, h = 0, gc = 0;
-  const auto ref = raytrace::ReadImage(golden, &w, &h, &gc);
+  const auto ref = io::ReadImage(golden, &w, &h, &gc);
   ASSERT_EQ(w, f.width);
   ASSERT_EQ(h, f.height);
   ASSERT_EQ(gc, ch);

@@ -18,6 +18,7 @@
 #include "scenes/ground_truth.h"
 #include "scenes/scene_config.h"
 #include "unwrap/remap.h"
+#include "io/image_io.h"
 
 namespace hovs::unwrap {
 namespace {
@@ -89,9 +90,9 @@ Comparison CompareWithPinhole(const SceneConfig& cfg, const AnyModel& model, con
   remapper.Run({cata8.data(), cata.width, cata.height, size_t(cata.width) * 3, PixelFormat::kRgb8}, interp, &out);
   const Image8& u = out[0];
   if (std::getenv("HOVS_DUMP_UNWRAP")) {
-    raytrace::WriteImage(std::string(std::getenv("HOVS_DUMP_UNWRAP")) + "_unwrap.png", u.width, u.height, 3,
+    io::WriteImage(std::string(std::getenv("HOVS_DUMP_UNWRAP")) + "_unwrap.png", u.width, u.height, 3,
                          [&] { std::vector<float> f(u.data.size()); for (size_t k = 0; k < f.size(); ++k) f[k] = u.data[k] / 255.f; return f; }(), 8);
-    raytrace::WriteImage(std::string(std::getenv("HOVS_DUMP_UNWRAP")) + "_pinhole.png", pin.width, pin.height, 3,
+    io::WriteImage(std::string(std::getenv("HOVS_DUMP_UNWRAP")) + "_pinhole.png", pin.width, pin.height, 3,
                          std::vector<float>(pin.rgb.begin(), pin.rgb.end()), 8);
   }
 

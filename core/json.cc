@@ -1,0 +1,49 @@
+#include "core/json.h"
+
+#include <set>
+#include <vector>
+
+#include "core/error.h"
+#include "core/io.h"
+
+namespace hovs {
+
+nlohmann::json ParseJson(const std::string& text, const std::string& where) {
+  constexpr int kMaxDepth = 256;
+  std::vector<std::set<std::string>> keys;   // one set per open object
+  std::string duplicate;
+  int too_deep = 0;
+  const nlohmann::json::parser_callback_t check = [&](int depth, nlohmann::json::parse_event_t event,
+                                                      nlohmann::json& parsed) {
+    using E = nlohmann::json::parse_event_t;
+    if (depth > kMaxDepth) too_deep = depth;
+    if (event == E::object_start) keys.emplace_back();
+    if (event == E::object_end && !keys.empty()) keys.pop_back();
+    if (event == E::key && !keys.empty() && !keys.back().insert(parsed.get<std::string>()).second && duplicate.empty())
+      duplicate = parsed.get<std::string>();
+    return true;
+  };
+  nlohmann::json j;
+  try {
+    j = nlohmann::json::parse(text, check);
+  } catch (const nlohmann::json::parse_error& e) {
+    // The line and column of the byte the parser stopped at.
+    size_t line = 1, column = 1;
+    for (size_t i = 0; i + 1 < e.byte && i < text.size(); ++i) {
+      if (text[i] == '\n') ++line, column = 1;
+      else ++column;
+    }
+    std::string what = e.what();
+    const size_t colon = what.rfind(": ");
+    if (colon != std::string::npos) what = what.substr(colon + 2);
+    throw Error(where, "not valid JSON at line " + std::to_string(line) + ", column " + std::to_string(column) +
+                           ": " + what);
+  }
+  HOVS_REQUIRE(duplicate.empty(), where, "the key '", duplicate, "' appears twice in one object");
+  HOVS_REQUIRE(too_deep == 0, where, "nested deeper than ", kMaxDepth, " levels");
+  return j;
+}
+
+nlohmann::json ReadJsonFile(const std::filesystem::path& path) { return ParseJson(ReadFile(path), path.string()); }
+
+}  // namespace hovs
