@@ -123,6 +123,7 @@ Input FromDataset(const std::filesystem::path& manifest, const std::string& unit
     } catch (const nlohmann::json::exception& e) {
       throw Error(manifest.string() + " (boards[0])", std::string("a checker board needs inner_corners and square: ") + e.what());
     }
+    dopt.board.Check(manifest.string() + " (boards[0])");
   } else {
     HOVS_REQUIRE(dopt.board.square > 0 && !truth_corners, manifest.string(),
                  "the manifest describes no checkerboard; give --board");
@@ -328,17 +329,17 @@ Runner SetupCalibrate(CLI::App* sub, const GlobalOptions* global) {
                   "edges: corners where the board lines measured along their length cross (default); subpix: "
                   "cv::cornerSubPix alone")
       ->capture_default_str();
-  sub->add_option("--subpix-window", o->subpix, "cornerSubPix half window, px (0: 0.35 x the local square)")
+  sub->add_option("--subpix-window", o->subpix, "cornerSubPix half window, px (0: 0.35 x the local square)")->check(Bounded(0, 100))
       ->capture_default_str();
   sub->add_option("--unit", o->unit, "unit name in the manifest (default: the first)");
-  sub->add_option("--corner-noise", o->noise, "Gaussian noise added to ground-truth corners, px")->capture_default_str();
-  sub->add_option("--seed", o->seed, "seed of the corner noise")->capture_default_str();
-  sub->add_option("--degree", o->degree, "polynomial degree of the reported model")->capture_default_str();
+  sub->add_option("--corner-noise", o->noise, "Gaussian noise added to ground-truth corners, px")->check(Bounded(0, 100))->capture_default_str();
+  sub->add_option("--seed", o->seed, "seed of the corner noise")->check(Bounded(0, 9007199254740992.0))->capture_default_str();
+  sub->add_option("--degree", o->degree, "polynomial degree of the reported model")->check(Bounded(2, 8))->capture_default_str();
   sub->add_option("--loss", o->loss, "none | huber | cauchy")->capture_default_str();
-  sub->add_option("--loss-scale", o->loss_scale, "robust loss scale, px")->capture_default_str();
+  sub->add_option("--loss-scale", o->loss_scale, "robust loss scale, px")->check(Bounded(0, 1000, true))->capture_default_str();
   sub->add_flag("--compare-omnidir", o->omnidir, "also run OpenCV omnidir on the same corners");
   sub->add_option("--outlier-sigmas", o->outlier_sigmas,
-                  "reject corners above this many robust sigmas (at least 0.5 px) after the first solve; 0: keep all")
+                  "reject corners above this many robust sigmas (at least 0.5 px) after the first solve; 0: keep all")->check(Bounded(0, 1000))
       ->capture_default_str();
   sub->add_option("-o,--out", o->out, "report folder (replaced atomically)")->capture_default_str();
   return [o, global]() {
@@ -379,10 +380,11 @@ Runner SetupCalibrate(CLI::App* sub, const GlobalOptions* global) {
     if (!in.detection.empty()) {
       std::string failed;
       for (const auto& d : in.detection)
-        if (!d["found"].get<bool>()) failed += "\n  " + d["image"].get<std::string>() + ": " + d["status"].get<std::string>();
-      if (!global->quiet && !failed.empty()) std::fprintf(stderr, "hovs calibrate: no board in%s\n", failed.c_str());
+        if (!d["found"].get<bool>()) failed += "; " + d["image"].get<std::string>() + ": " + d["status"].get<std::string>();
       HOVS_REQUIRE(in.obs.size() >= 3, o->dataset.empty() ? o->images : o->dataset, "only ", in.obs.size(),
-                   " of ", in.detection.size(), " images have a usable board (at least 3 needed):", failed);
+                   " of ", in.detection.size(), " images have a usable board (at least 3 needed)", failed);
+      if (!global->quiet && !failed.empty())
+        std::fprintf(stderr, "hovs calibrate: no board in %s\n", failed.substr(2).c_str());
     }
     calib::PolynomialCalibrationOptions po;
     po.loss = o->loss, po.loss_scale = o->loss_scale, po.outlier_sigmas = o->outlier_sigmas;
@@ -429,9 +431,9 @@ Runner SetupCalibrate(CLI::App* sub, const GlobalOptions* global) {
           const cv::Mat g = GreyImage(path);
           calib::RimEdge edge;
           try {
-            calib::LocateMirror(g.data, g.cols, g.rows, nominal.rig, {}, &edge);
+            calib::LocateMirror(g.data, g.cols, g.rows, nominal.rig, {}, &edge, path.string());
           } catch (const Error& e) {
-            if (!global->quiet) std::fprintf(stderr, "hovs calibrate: no rim in %s: %s\n", path.string().c_str(), e.what());
+            if (!global->quiet) std::fprintf(stderr, "hovs calibrate: %s (the image is left out of the rim fit)\n", e.what());
             continue;
           }
           popt.rim_points.insert(popt.rim_points.end(), edge.points.begin(), edge.points.end());

@@ -28,12 +28,12 @@ Runner SetupCapture(CLI::App* sub, const GlobalOptions* global) {
   };
   auto o = std::make_shared<Options>();
   AddSourceOptions(sub, &o->source);
-  sub->add_option("-n,--frames", o->frames, "frames (pairs) to write")->capture_default_str();
-  sub->add_option("--seconds", o->seconds, "stop after this long (0: no limit)")->capture_default_str();
-  sub->add_option("--timeout", o->timeout, "seconds to wait for a frame")->capture_default_str();
-  sub->add_option("--pair-tolerance-ms", o->pair_ms, "two cameras: timestamps of a pair differ by at most this")
+  sub->add_option("-n,--frames", o->frames, "frames (pairs) to write")->check(Bounded(1, 1e9))->capture_default_str();
+  sub->add_option("--seconds", o->seconds, "stop after this long (0: no limit)")->check(Bounded(0, 1e7))->capture_default_str();
+  sub->add_option("--timeout", o->timeout, "seconds to wait for a frame")->check(Bounded(0, 3600, true))->capture_default_str();
+  sub->add_option("--pair-tolerance-ms", o->pair_ms, "two cameras: timestamps of a pair differ by at most this")->check(Bounded(0, 10000, true))
       ->capture_default_str();
-  sub->add_option("--write-queue", o->write_queue, "frames (pairs) grabbed but not yet written, at most")
+  sub->add_option("--write-queue", o->write_queue, "frames (pairs) grabbed but not yet written, at most")->check(Bounded(1, 4096))
       ->capture_default_str();
   sub->add_option("--image-format", o->image_format,
                   "png (compressed) | pgm (uncompressed, written at disk speed for full frame rates)")

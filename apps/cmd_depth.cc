@@ -50,23 +50,33 @@ Runner SetupDepth(CLI::App* sub, const GlobalOptions* global) {
       ->capture_default_str();
   sub->add_option("--right-model", o->right_model, "calibrated model of the right unit");
   sub->add_option("--stereo", o->stereo, "relative pose from hovs stereo-calibrate (stereo.json) instead of the manifest's");
-  sub->add_option("--frame", o->frame, "frame index in the manifest")->capture_default_str();
-  sub->add_option("--width", o->width, "rectified width (angle from the baseline)")->capture_default_str();
-  sub->add_option("--height", o->height, "rectified height (angle around the baseline)")->capture_default_str();
-  sub->add_option("--num-disparities", o->disparities, "SGBM disparity range, multiple of 16")->capture_default_str();
-  sub->add_option("--block-size", o->block, "SGBM block size (odd)")->capture_default_str();
+  sub->add_option("--frame", o->frame, "frame index in the manifest")->check(Bounded(0, 1e9))->capture_default_str();
+  sub->add_option("--width", o->width, "rectified width (angle from the baseline)")->check(Bounded(16, 16384))->capture_default_str();
+  sub->add_option("--height", o->height, "rectified height (angle around the baseline)")->check(Bounded(16, 16384))->capture_default_str();
+  sub->add_option("--num-disparities", o->disparities, "SGBM disparity range, multiple of 16")->check(Bounded(16, 4096))->capture_default_str();
+  sub->add_option("--block-size", o->block, "SGBM block size (odd)")->check(Bounded(1, 21))->capture_default_str();
   sub->add_option("--matcher", o->matcher,
                   "coarse-to-fine (SGBM at half resolution + block search at full; about 4x faster) | sgbm (full resolution)")
       ->capture_default_str()
       ->check(CLI::IsMember({"coarse-to-fine", "sgbm"}));
-  sub->add_option("--refine-radius", o->refine_radius, "coarse-to-fine: block search radius, columns")->capture_default_str();
-  sub->add_option("--sigma-disparity", o->sigma_px, "matching noise for sigma, px")->capture_default_str();
-  sub->add_option("--max-relative-sigma", o->max_rel_sigma, "mask where sigma / range exceeds this")->capture_default_str();
+  sub->add_option("--refine-radius", o->refine_radius, "coarse-to-fine: block search radius, columns")->check(Bounded(2, 16))->capture_default_str();
+  sub->add_option("--sigma-disparity", o->sigma_px, "matching noise for sigma, px")->check(Bounded(0, 100, true))->capture_default_str();
+  sub->add_option("--max-relative-sigma", o->max_rel_sigma, "mask where sigma / range exceeds this")->check(Bounded(0, 10, true))->capture_default_str();
   sub->add_option("--max-points", o->max_points, "points written to PLY / VTP (evenly subsampled)")
-      ->check(CLI::Range(1, 1000000000))
+      ->check(Bounded(1, 1e9))
       ->capture_default_str();
   sub->add_option("-o,--out", o->out, "output folder (replaced atomically)")->capture_default_str();
   return [o, global]() {
+    depth::RectifyOptions ro;
+    ro.width = o->width, ro.height = o->height;
+    ro.Check("--width/--height");
+    depth::DenseOptions dop;
+    dop.num_disparities = o->disparities, dop.block_size = o->block;
+    dop.coarse_to_fine = o->matcher == "coarse-to-fine", dop.refine_radius = o->refine_radius;
+    dop.sigma_disparity_px = o->sigma_px, dop.max_relative_sigma = o->max_rel_sigma;
+    dop.Check("--num-disparities/--block-size/--refine-radius/--sigma-disparity/--max-relative-sigma");
+    HOVS_REQUIRE(dop.num_disparities < ro.width, "--num-disparities", "must be smaller than --width (",
+                 dop.num_disparities, " >= ", ro.width, ")");
     const fs::path manifest(o->dataset);
     const auto m = LoadDatasetManifest(manifest);
     const auto& units = m.at("units");
@@ -119,8 +129,6 @@ Runner SetupDepth(CLI::App* sub, const GlobalOptions* global) {
                  rig.left.height());
     HOVS_REQUIRE(il8.channels == ir8.channels, o->dataset, "the two images differ in channels");
 
-    depth::RectifyOptions ro;
-    ro.width = o->width, ro.height = o->height;
     const auto t0 = std::chrono::steady_clock::now();
     const depth::Rectification rect = depth::Rectify(rig, ro);
     const double rectify_build_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
@@ -131,10 +139,6 @@ Runner SetupDepth(CLI::App* sub, const GlobalOptions* global) {
     ml.Run(il8.View(fmt), unwrap::Interpolation::kBilinear, &left);
     mr.Run(ir8.View(fmt), unwrap::Interpolation::kBilinear, &right);
     const double rectify_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t1).count();
-    depth::DenseOptions dop;
-    dop.num_disparities = o->disparities, dop.block_size = o->block;
-    dop.coarse_to_fine = o->matcher == "coarse-to-fine", dop.refine_radius = o->refine_radius;
-    dop.sigma_disparity_px = o->sigma_px, dop.max_relative_sigma = o->max_rel_sigma;
     const depth::DenseDepth d = depth::ComputeDenseDepth(rect, left[0], right[0], dop);
 
     StagedDirectory staged(o->out, "depth");
@@ -190,6 +194,8 @@ Runner SetupDepth(CLI::App* sub, const GlobalOptions* global) {
     if (!vl.exr.empty()) {
       // Ground truth: the left unit's range channel at each rectified pixel's source pixel.
       const auto exr = io::ReadExr(vl.exr);
+      HOVS_REQUIRE(exr.width == wl && exr.height == hl, vl.exr.string(), "the ground truth is ", exr.width, " x ",
+                   exr.height, " but its image is ", wl, " x ", hl);
       const auto& Z = exr.at("Z");
       std::vector<float> mx, my;
       rect.left.DecodeView(0, &mx, &my);

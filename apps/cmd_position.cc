@@ -28,9 +28,9 @@ Runner SetupPosition(CLI::App* sub, const GlobalOptions* global) {
   sub->add_option("--design", o->scene, "the unit's design: scene YAML or dataset.json (its misalignment is ignored)")
       ->required();
   sub->add_option("--unit", o->unit, "unit name (default: the first)");
-  sub->add_option("--rays", o->edge.rays, "rim search rays")->capture_default_str();
-  sub->add_option("--search", o->edge.search_px, "rim search half width around the design's rim, px")->capture_default_str();
-  sub->add_option("--min-step", o->edge.min_step, "grey levels across the rim edge, at least")->capture_default_str();
+  sub->add_option("--rays", o->edge.rays, "rim search rays")->check(Bounded(16, 100000))->capture_default_str();
+  sub->add_option("--search", o->edge.search_px, "rim search half width around the design's rim, px")->check(Bounded(1, 2000, true))->capture_default_str();
+  sub->add_option("--min-step", o->edge.min_step, "grey levels across the rim edge, at least")->check(Bounded(0, 255, true))->capture_default_str();
   sub->add_option("-o,--out", o->out, "report folder (replaced atomically)")->capture_default_str();
   return [o, global]() {
     o->edge.Check("--rays/--search/--min-step");
@@ -67,7 +67,7 @@ Runner SetupPosition(CLI::App* sub, const GlobalOptions* global) {
       grey[k] = static_cast<uint8_t>(s / img.channels);
     }
     calib::RimEdge edge;
-    const calib::MirrorPosition p = calib::LocateMirror(grey.data(), img.width, img.height, design, o->edge, &edge);
+    const calib::MirrorPosition p = calib::LocateMirror(grey.data(), img.width, img.height, design, o->edge, &edge, o->image);
     const Vec3d mm = 1e3 * p.offset;
     nlohmann::json j = {{"tool", "hovs position"}, {"versions", Versions()}, {"image", o->image},
                         {"design", o->scene}, {"unit", unit_name},
@@ -78,7 +78,8 @@ Runner SetupPosition(CLI::App* sub, const GlobalOptions* global) {
                         {"rim", {{"centre_px", {p.rim_centre_px.x(), p.rim_centre_px.y()}}, {"radius_px", p.rim_radius_px},
                                  {"design_centre_px", {p.nominal_rim_centre_px.x(), p.nominal_rim_centre_px.y()}},
                                  {"design_radius_px", p.nominal_rim_radius_px}}},
-                        {"edge_points", p.points}, {"rays", edge.rays}, {"rms_px", p.rms_px}, {"converged", p.converged}};
+                        {"edge_points", p.points}, {"rays", edge.rays}, {"rms_px", p.rms_px}, {"converged", p.converged},
+                        {"rim_inliers", p.inliers}, {"rim_inlier_fraction", p.inlier_fraction}};
     char buf[512];
     std::snprintf(buf, sizeof buf,
                   "hovs position: rim found on %d of %d rays (fit RMS %.3f px)\n"

@@ -9,6 +9,7 @@
 // pose, the mapping header, timings).
 #include <algorithm>
 #include <cmath>
+#include <map>
 #include <optional>
 #include <chrono>
 #include <cstdio>
@@ -45,7 +46,16 @@ std::vector<Frame> ListInputs(const std::string& input, const std::string& unit)
   HOVS_REQUIRE(fs::exists(p), "--input " + input, "not found");
   std::vector<Frame> frames;
   if (fs::is_directory(p)) {
-    for (const auto& f : ListImageFiles(p)) frames.push_back({f.stem().string(), f});
+    // Each image's views go to a folder named after it: two images of one name (a.png, a.jpg) would write the
+    // same files.
+    std::map<std::string, fs::path> seen;
+    for (const auto& f : ListImageFiles(p)) {
+      const auto [it, fresh] = seen.emplace(f.stem().string(), f);
+      HOVS_REQUIRE(fresh, "--input " + input, "two images named '", f.stem().string(), "' (",
+                   it->second.filename().string(), " and ", f.filename().string(),
+                   "): their views would be written to the same folder");
+      frames.push_back({f.stem().string(), f});
+    }
     return frames;
   }
   if (EndsWith(input, ".json")) {
@@ -104,14 +114,14 @@ Runner SetupUnwrap(CLI::App* sub, const GlobalOptions* global) {
   sub->add_option("-o,--out", o->out, "output folder (replaced atomically)")->capture_default_str();
   sub->add_option("--interp", o->interp, "bilinear | bicubic | nearest")->capture_default_str();
   sub->add_option("--format", o->format, "auto | rgb | gray | bayer_rggb (input pixel format)")->capture_default_str();
-  sub->add_option("--scene-distance", o->scene_distance, "m; depth at which a non-single-viewpoint rig is unwrapped")
+  sub->add_option("--scene-distance", o->scene_distance, "m; depth at which a non-single-viewpoint rig is unwrapped")->check(Bounded(0, 1e6, true))
       ->capture_default_str();
   sub->add_option("--tile", o->tile, "tile size of the mapping (8, 16, 32, 64; 0: per view, 64 where every tile of the view is "
-                  "interpolated at that size without minifying, else 32)")->capture_default_str();
+                  "interpolated at that size without minifying, else 32)")->check(Bounded(0, 64))->capture_default_str();
   sub->add_option("--truth-scene", o->truth_scene,
                   "scene YAML the input was rendered from: render each perspective view with a pinhole camera at the "
                   "unit's viewpoint and report PSNR against it");
-  sub->add_option("--truth-samples", o->truth_samples, "samples per pixel of the truth renders")->capture_default_str();
+  sub->add_option("--truth-samples", o->truth_samples, "samples per pixel of the truth renders")->check(Bounded(1, 4096))->capture_default_str();
   sub->add_flag("--interactive", o->interactive,
                 "control panel: adjust each view live on the first input frame (needs a display; s saves the layout)");
   sub->add_option("--layout-out", o->layout_out, "where --interactive saves the adjusted layout")->capture_default_str();
@@ -131,6 +141,7 @@ Runner SetupUnwrap(CLI::App* sub, const GlobalOptions* global) {
     HOVS_REQUIRE(o->save_map.empty() || o->map.empty(), "--save-map", "saves the mapping built from --model, not one "
                  "loaded with --map");
     const unwrap::Interpolation interp = unwrap::ParseInterpolation(o->interp);
+    if (!o->save_map.empty()) CheckOutputFile(o->save_map, "HOVSMAP", "a hovs mapping file");
     const auto t0 = std::chrono::steady_clock::now();
     unwrap::RemapTable table;
     std::string source;

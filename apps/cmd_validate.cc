@@ -340,16 +340,16 @@ Runner SetupValidate(CLI::App* sub, const GlobalOptions* global) {
   sub->add_option("--preset", o->preset, "full (the report's run, about 10 min) | reduced (half resolution, CI)")
       ->capture_default_str();
   sub->add_option("-o,--out", o->out, "run folder (default results/validate-<preset>)");
-  sub->add_option("--seed", o->seed, "seed of board poses and renders")->capture_default_str();
+  sub->add_option("--seed", o->seed, "seed of board poses and renders")->check(Bounded(0, 9007199254740992.0))->capture_default_str();
   // Each override, when given, must be valid (0 does not mean "the preset").
   sub->add_option("--downscale", o->downscale, "override the preset: render at 1/N resolution (1, 2, 5, 10)")
-      ->check(CLI::Range(1, 16));
+      ->check(Bounded(1, 16));
   sub->add_option("--mono-frames", o->mono_frames, "override the preset: calibration images per unit")
-      ->check(CLI::Range(1, 10000));
+      ->check(Bounded(1, 10000));
   sub->add_option("--stereo-pairs", o->stereo_pairs, "override the preset: ArUco stereo pairs")
-      ->check(CLI::Range(1, 10000));
+      ->check(Bounded(1, 10000));
   sub->add_option("--samples", o->samples, "override the preset: samples per pixel of every render")
-      ->check(CLI::Range(1, 4096));
+      ->check(Bounded(1, 4096));
   sub->add_option("--source", o->source, "hovs source tree (scenes/, design/)")->capture_default_str();
   sub->add_option("--real", o->real, "folder of real calibration images (7x6 corners, 30 mm); empty: skip")
       ->capture_default_str();

@@ -1,5 +1,8 @@
 #include "apps/commands.h"
 
+#include <cerrno>
+#include <cmath>
+#include <cstdlib>
 #include <filesystem>
 #include <iostream>
 
@@ -60,6 +63,23 @@ std::map<std::string, std::string> Versions() {
   auto v = design::DesignVersions();
   for (const auto& more : {raytrace::RaytraceVersions(), calib::CalibVersions(), hw::HwVersions()})
     v.insert(more.begin(), more.end());
+  return v;
+}
+
+CLI::Validator Bounded(double lo, double hi, bool low_open) {
+  const std::string range = std::string(low_open ? "(" : "[") + CLI::detail::to_string(lo) + ", " +
+                            CLI::detail::to_string(hi) + "]";
+  CLI::Validator v(
+      [lo, hi, low_open, range](std::string& text) -> std::string {
+        char* end = nullptr;
+        errno = 0;
+        const double x = std::strtod(text.c_str(), &end);
+        if (end == text.c_str() || *end != '\0' || errno == ERANGE || !std::isfinite(x))
+          return "'" + text + "' is not a finite number";
+        if (x > hi || x < lo || (low_open && x == lo)) return "'" + text + "' is outside " + range;
+        return std::string();
+      },
+      "in " + range, "bounded");
   return v;
 }
 

@@ -25,6 +25,11 @@ struct Command {
 
 const std::vector<Command>& Commands();
 
+// The bounds of a numeric option: its value must be finite and in [lo, hi] (with low_open, in (lo, hi]). CLI11's
+// Range lets NaN through, and an unbounded option once reached OpenCV as 1024000 disparities. Every numeric
+// option of every command carries one of these (its validator is named "bounded"; a test walks the table).
+CLI::Validator Bounded(double lo, double hi, bool low_open = false);
+
 // Every library version a hovs output may depend on, recorded in each output's "versions": hovs itself, the
 // compiler, Eigen, Ceres, VTK, NLopt, TBB (design), Embree, OpenImageIO, OpenEXR (raytrace), OpenCV (calib) and
 // Aravis (hw).

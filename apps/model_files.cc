@@ -43,7 +43,7 @@ AnyModel LoadCalibratedModel(const std::filesystem::path& path, const std::strin
     HOVS_REQUIRE(prefer == "auto" || prefer == "unified", path.string(),
                  "an OpenCV omnidir YAML file holds the unified model only (--model-kind ", prefer, ")");
     const auto f = calib::LoadOmnidirYaml(path);
-    return AnyModel::Unified(f.model, f.annulus_min, f.annulus_max);
+    return AnyModel::Unified(f.model, f.annulus_min, f.annulus_max, path.string());
   }
   if (prefer == "unified") {
     // calibration.json names its OpenCV YAML file, written beside it.
@@ -57,10 +57,10 @@ AnyModel LoadCalibratedModel(const std::filesystem::path& path, const std::strin
     const auto j = ReadJsonFile(path);
         if (j.contains("physical") && j["physical"].contains("unit"))
       return AnyModel::Exact(scenes::UnitFromJson(j["physical"]["unit"], path.string() + " (physical.unit)").rig,
-                             scene_distance);
+                             scene_distance, path.string() + " (physical.unit)");
     HOVS_REQUIRE(prefer != "physical", path.string(), "has no physical model (calibrate with --physical)");
   }
-  return AnyModel::Polynomial(LoadPolynomialModelFile(path));
+  return AnyModel::Polynomial(LoadPolynomialModelFile(path), path.string());
 }
 
 namespace {
@@ -72,6 +72,8 @@ namespace fs = std::filesystem;
 
 // The model named on the command line; `unit` selects a unit of a scene or manifest.
 AnyModel LoadModelSpec(const std::string& spec, const std::string& unit, double scene_distance) {
+  HOVS_REQUIRE(std::isfinite(scene_distance) && scene_distance > 0 && scene_distance <= 1e6, "--scene-distance",
+               "must be in (0, 1e6] m (got ", scene_distance, ")");
   const fs::path path(spec);
   HOVS_REQUIRE(fs::exists(path), "--model " + spec, "file not found");
   const auto pick = [&](size_t n, const auto& name_of) {
@@ -85,16 +87,17 @@ AnyModel LoadModelSpec(const std::string& spec, const std::string& unit, double 
     const auto cfg = scenes::LoadSceneConfig(path);
     const auto& units = cfg.description.units;
     const size_t i = pick(units.size(), [&](size_t k) { return units[k].name; });
-    return AnyModel::Exact(units[i].rig, scene_distance);
+    return AnyModel::Exact(units[i].rig, scene_distance, spec + " (unit " + units[i].name + ")");
   }
-  if (EndsWith(spec, ".txt")) return AnyModel::Polynomial(LoadPolynomialModelFile(path));
+  if (EndsWith(spec, ".txt")) return AnyModel::Polynomial(LoadPolynomialModelFile(path), spec);
   const auto j = ReadJsonFile(path);
   if (j.is_object() && j.value("format", "") == "hovs-dataset") {
     CheckDatasetManifest(j, path.string());   // units are objects with string names from here on
     const auto& units = j["units"];
     HOVS_REQUIRE(!units.empty(), path.string(), "the manifest lists no units");
     const size_t i = pick(units.size(), [&](size_t k) { return units[k]["name"].get<std::string>(); });
-    return AnyModel::Exact(scenes::UnitFromJson(units[i], spec + " (units)").rig, scene_distance);
+    return AnyModel::Exact(scenes::UnitFromJson(units[i], spec + " (units)").rig, scene_distance,
+                           spec + " (units[" + std::to_string(i) + "])");
   }
   return LoadCalibratedModel(path, "auto", scene_distance);
 }

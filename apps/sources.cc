@@ -2,6 +2,7 @@
 
 #include <cstdio>
 
+#include "apps/commands.h"
 #include "apps/model_files.h"
 #include "core/error.h"
 
@@ -46,19 +47,19 @@ void AddSourceOptions(CLI::App* sub, SourceOptions* o) {
   sub->add_option("--simulate", o->simulate,
                   "serve a rendered dataset through Aravis' GigE Vision simulator (127.0.0.1, and 127.0.0.2 for a "
                   "second unit) and take the frames over the protocol");
-  sub->add_option("--simulate-loss", o->loss, "simulator: GVSP packets dropped on purpose (0.01 = 1 %)")
+  sub->add_option("--simulate-loss", o->loss, "simulator: GVSP packets dropped on purpose (0.01 = 1 %)")->check(Bounded(0, 0.99))
       ->capture_default_str();
   sub->add_option("--units", o->units, "unit names, one per camera (default: unit0, unit1; --simulate: the dataset's)");
   sub->add_option("--pixel-format", o->pixel_format, "Mono8 | BayerRG8 | Mono16")->capture_default_str();
-  sub->add_option("--exposure-us", o->exposure, "exposure time, microseconds (default: the camera's)");
-  sub->add_option("--gain", o->gain, "gain (default: the camera's)");
-  sub->add_option("--frame-rate", o->frame_rate, "free-running frame rate, Hz (default: the camera's)");
+  sub->add_option("--exposure-us", o->exposure, "exposure time, microseconds (default: the camera's)")->check(Bounded(0, 1e8, true));
+  sub->add_option("--gain", o->gain, "gain (default: the camera's)")->check(Bounded(0, 1000));
+  sub->add_option("--frame-rate", o->frame_rate, "free-running frame rate, Hz (default: the camera's)")->check(Bounded(0, 10000, true));
   sub->add_option("--region", o->region, "WxH+X+Y (default: the full sensor)");
-  sub->add_option("--packet-size", o->packet_size, "GigE Vision packet size, bytes (default: the camera's)");
-  sub->add_option("--packet-delay-ns", o->packet_delay, "inter-packet delay, ns (default: the camera's)");
-  sub->add_option("--socket-buffer", o->socket_buffer, "receive socket buffer, bytes (0: automatic)")
+  sub->add_option("--packet-size", o->packet_size, "GigE Vision packet size, bytes (default: the camera's)")->check(Bounded(64, 65535));
+  sub->add_option("--packet-delay-ns", o->packet_delay, "inter-packet delay, ns (default: the camera's)")->check(Bounded(0, 1e9));
+  sub->add_option("--socket-buffer", o->socket_buffer, "receive socket buffer, bytes (0: automatic)")->check(Bounded(0, 1073741824))
       ->capture_default_str();
-  sub->add_option("--buffers", o->buffers, "stream buffer pool")->capture_default_str();
+  sub->add_option("--buffers", o->buffers, "stream buffer pool")->check(Bounded(1, 1024))->capture_default_str();
   sub->add_option("--trigger", o->trigger, "free | software | Line0 ...")->capture_default_str();
   sub->add_option("--feature", o->features, "generic GenICam feature NAME=VALUE (repeatable, e.g. PtpEnable=true)");
   sub->add_flag("--packet-socket", o->packet_socket, "use Aravis' packet socket (needs privileges; off in containers)");
@@ -78,6 +79,9 @@ OpenedSources OpenSources(const SourceOptions& o) {
                              &s.offset_y, &end) == 7 && x == 'x' && p1 == '+' && p2 == '+' &&
                      end == static_cast<int>(o.region.size()),
                  "--region", "expected WxH+X+Y (got '", o.region, "')");
+    HOVS_REQUIRE(s.width >= 1 && s.height >= 1 && s.width <= 65535 && s.height <= 65535 && s.offset_x >= 0 &&
+                     s.offset_y >= 0 && s.offset_x <= 65535 && s.offset_y <= 65535,
+                 "--region", "needs a size of at least 1 x 1 and offsets >= 0 (got '", o.region, "')");
   }
   for (const auto& f : o.features) {
     const auto eq = f.find('=');

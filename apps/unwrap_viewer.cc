@@ -120,6 +120,7 @@ void RunUnwrapViewer(const AnyModel& model, unwrap::Layout layout, const unwrap:
     const int key = cv::waitKey(30);
     if (key == 'q' || key == 27) break;
     if (key == 's') {
+      CheckOutputFile(layout_out, "# hovs layout", "a hovs layout");
       WriteFileAtomic(layout_out, LayoutYaml(p.layout));
       std::printf("\nlayout saved to %s\n", layout_out.string().c_str());
     }

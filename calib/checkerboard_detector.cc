@@ -11,8 +11,10 @@
 namespace hovs::calib {
 
 void CheckerboardSpec::Check(const std::string& where) const {
-  HOVS_REQUIRE(cols >= 2 && rows >= 2, where, "a board needs at least 2 x 2 inner corners (got ", cols, " x ", rows, ")");
-  HOVS_REQUIRE(std::isfinite(square) && square > 0, where, "square size must be positive (got ", square, ")");
+  HOVS_REQUIRE(cols >= 2 && rows >= 2 && cols <= 1000 && rows <= 1000, where,
+               "a board has 2 x 2 to 1000 x 1000 inner corners (got ", cols, " x ", rows, ")");
+  HOVS_REQUIRE(std::isfinite(square) && square > 0 && square <= 10, where, "square size must be in (0, 10] m (got ",
+               square, ")");
 }
 
 void CheckerboardDetectOptions::Check(const std::string& where) const {
@@ -213,6 +215,66 @@ class GridGrower {
   int max_long_, max_short_;
 };
 
+// The checker test of a grid of candidates: the squares between four corners must be flat and alternate dark
+// and bright. Each square is sampled at its centre and 0.3 of the way to each corner (bilinear on the 8-bit
+// image): its level is their mean, its spread their range; the squares of each parity ((i + j) even or odd) form
+// one class. A grid passes when
+//   - the class means differ by at least min_contrast (grey, in [0, 1]) and by at least three times the spread
+//     of the squares' levels within the classes,
+//   - each square lies on its class's side of the midway level (every square of a grid of fewer than 10, 90 %
+//     of a larger one), and
+//   - the squares are flat: their median spread is at most half the contrast.
+// Saddle points in noise or texture form grids that fail it: their squares are neither flat nor alternating.
+struct CheckerTest {
+  bool pass = false;
+  double consistent = 0;   // fraction of squares on their class's side
+  double contrast = 0;     // difference of the class means, grey in [0, 1]
+};
+CheckerTest TestChecker(const cv::Mat& grey, const std::vector<Candidate>& c, const std::vector<std::vector<int>>& g,
+                        double min_contrast) {
+  const auto sample = [&](const Vec2d& p) {
+    const int x0 = static_cast<int>(std::floor(p.x())), y0 = static_cast<int>(std::floor(p.y()));
+    if (x0 < 0 || y0 < 0 || x0 + 1 >= grey.cols || y0 + 1 >= grey.rows) return std::nan("");
+    const double ax = p.x() - x0, ay = p.y() - y0;
+    const uint8_t* r0 = grey.ptr<uint8_t>(y0);
+    const uint8_t* r1 = grey.ptr<uint8_t>(y0 + 1);
+    return ((1 - ay) * ((1 - ax) * r0[x0] + ax * r0[x0 + 1]) + ay * ((1 - ax) * r1[x0] + ax * r1[x0 + 1])) / 255.0;
+  };
+  std::vector<std::pair<int, double>> squares;   // parity, level
+  std::vector<double> spreads;
+  for (size_t j = 0; j + 1 < g.size(); ++j)
+    for (size_t i = 0; i + 1 < g[j].size(); ++i) {
+      const Vec2d corners[4] = {c[g[j][i]].p, c[g[j][i + 1]].p, c[g[j + 1][i]].p, c[g[j + 1][i + 1]].p};
+      const Vec2d centre = 0.25 * (corners[0] + corners[1] + corners[2] + corners[3]);
+      double s[5] = {sample(centre), 0, 0, 0, 0};
+      for (int k = 0; k < 4; ++k) s[k + 1] = sample(centre + 0.3 * (corners[k] - centre));
+      const double sum = s[0] + s[1] + s[2] + s[3] + s[4];
+      if (!std::isfinite(sum)) continue;
+      squares.emplace_back(static_cast<int>((i + j) % 2), sum / 5);
+      spreads.push_back(*std::max_element(s, s + 5) - *std::min_element(s, s + 5));
+    }
+  CheckerTest t;
+  double mean[2] = {0, 0};
+  int n[2] = {0, 0};
+  for (const auto& [parity, level] : squares) mean[parity] += level, ++n[parity];
+  if (n[0] == 0 || n[1] == 0) return t;
+  mean[0] /= n[0], mean[1] /= n[1];
+  t.contrast = std::abs(mean[0] - mean[1]);
+  double within = 0;
+  for (const auto& [parity, level] : squares) within += (level - mean[parity]) * (level - mean[parity]);
+  within = std::sqrt(within / squares.size());
+  const double mid = 0.5 * (mean[0] + mean[1]);
+  const int bright = mean[0] > mean[1] ? 0 : 1;
+  int on_side = 0;
+  for (const auto& [parity, level] : squares) on_side += (parity == bright) == (level > mid);
+  t.consistent = double(on_side) / squares.size();
+  std::nth_element(spreads.begin(), spreads.begin() + spreads.size() / 2, spreads.end());
+  const double median_spread = spreads[spreads.size() / 2];
+  t.pass = t.contrast >= min_contrast && t.contrast >= 3 * within && median_spread <= 0.5 * t.contrast &&
+           (squares.size() < 10 ? on_side == static_cast<int>(squares.size()) : t.consistent >= 0.9);
+  return t;
+}
+
 std::vector<Candidate> Candidates(const cv::Mat& grey, const CheckerboardDetectOptions& o) {
   cv::Mat f;
   grey.convertTo(f, CV_32F, 1.0 / 255);
@@ -288,13 +350,17 @@ CheckerboardDetection DetectCheckerboard(const cv::Mat& image, const Checkerboar
   std::vector<std::vector<int>> best;
   std::vector<char> in_best(cand.size(), 0);
   const int total = o.board.cols * o.board.rows;
-  int tried = 0;
+  int tried = 0, not_checker = 0;
   for (size_t s = 0; s < cand.size() && tried < o.max_seeds; ++s) {
     if (in_best[s]) continue;
     auto g = grower.Seed(static_cast<int>(s));
     if (g.empty()) continue;
     ++tried;
     grower.Grow(&g);
+    if (!TestChecker(image, cand, g, o.min_contrast).pass) {
+      ++not_checker;
+      continue;
+    }
     const size_t n = g.size() * g[0].size();
     if (best.empty() || n > best.size() * best[0].size()) {
       best = g;
@@ -305,7 +371,10 @@ CheckerboardDetection DetectCheckerboard(const cv::Mat& image, const Checkerboar
     }
   }
   if (best.empty()) {
-    det.status = "no grid: " + std::to_string(det.candidates) + " saddle candidates, none with four grid neighbours";
+    det.status = not_checker > 0 ? "no board: " + std::to_string(not_checker) +
+                                       " grids of saddle points whose squares do not alternate dark and bright"
+                                 : "no grid: " + std::to_string(det.candidates) +
+                                       " saddle candidates, none with four grid neighbours";
     return det;
   }
   // Grid [row][col] -> board axes: the longer grid side along the longer board side when the whole board is seen.

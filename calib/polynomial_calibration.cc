@@ -11,11 +11,14 @@
 #include <fstream>
 #include <algorithm>
 #include <map>
+#include <set>
+#include <tuple>
 #include <memory>
 #include <sstream>
 
 #include "calib/solver_util.h"
 #include "core/error.h"
+#include "core/io.h"
 
 namespace hovs::calib {
 namespace {
@@ -375,38 +378,52 @@ PolynomialCalibration CalibratePolynomial(const std::vector<BoardObservation>& o
 }
 
 std::vector<BoardObservation> LoadCornerCsv(const std::filesystem::path& path) {
-  std::ifstream in(path);
-  HOVS_REQUIRE(in.good(), path.string(), "cannot open the corner table");
+  const std::string text = ReadFile(path, size_t(1) << 30);
+  std::stringstream in(text);
   std::string line;
   std::getline(in, line);
-  HOVS_REQUIRE(line.rfind("image,corner,board_x_mm,board_y_mm,u_px,v_px", 0) == 0, path.string() + ":1",
+  if (!line.empty() && line.back() == '\r') line.pop_back();
+  HOVS_REQUIRE(line == "image,corner,board_x_mm,board_y_mm,u_px,v_px", path.string() + ":1",
                "expected the header image,corner,board_x_mm,board_y_mm,u_px,v_px");
   std::vector<BoardObservation> out;
   std::map<std::string, size_t> index;
+  std::set<std::pair<std::string, long>> ids;   // (image, corner): a row given twice would count twice
+  std::set<std::tuple<std::string, double, double>> points;   // (image, board x, board y)
   int lineno = 1;
   while (std::getline(in, line)) {
     ++lineno;
+    if (!line.empty() && line.back() == '\r') line.pop_back();
     if (line.empty()) continue;
+    const std::string where = path.string() + ":" + std::to_string(lineno);
     std::stringstream ss(line);
     std::string image, field;
     std::vector<double> v;
     std::getline(ss, image, ',');
+    HOVS_REQUIRE(!image.empty(), where, "the image name is empty");
     while (std::getline(ss, field, ',')) {
-      try {
-        v.push_back(std::stod(field));
-      } catch (const std::exception&) {
-        throw Error(path.string() + ":" + std::to_string(lineno), "not a number: '" + field + "'");
-      }
+      char* end = nullptr;
+      const double x = std::strtod(field.c_str(), &end);
+      HOVS_REQUIRE(end != field.c_str() && *end == '\0' && std::isfinite(x), where, "not a finite number: '", field, "'");
+      v.push_back(x);
     }
-    HOVS_REQUIRE(v.size() == 5, path.string() + ":" + std::to_string(lineno), "expected 6 fields");
+    HOVS_REQUIRE(v.size() == 5, where, "expected 6 fields (got ", v.size() + 1, ")");
+    HOVS_REQUIRE(v[0] >= 0 && v[0] == std::floor(v[0]) && v[0] < 1e7, where, "the corner index must be a whole number >= 0");
+    for (int k = 1; k < 3; ++k)
+      HOVS_REQUIRE(std::abs(v[k]) <= 1e5, where, "board coordinates must be within +-100 m (given in mm)");
+    for (int k = 3; k < 5; ++k) HOVS_REQUIRE(std::abs(v[k]) <= 1e6, where, "pixel coordinates must be within +-1e6");
+    HOVS_REQUIRE(ids.emplace(image, static_cast<long>(v[0])).second, where, "corner ", static_cast<long>(v[0]), " of ",
+                 image, " is given twice");
     auto it = index.find(image);
     if (it == index.end()) {
       it = index.emplace(image, out.size()).first;
       out.push_back({image, {}, {}});
     }
+    HOVS_REQUIRE(points.emplace(image, v[1], v[2]).second, where, "board point (", v[1], ", ", v[2], ") mm of ", image,
+                 " is given twice");
     out[it->second].board_points.emplace_back(v[1] * 1e-3, v[2] * 1e-3, 0.0);
     out[it->second].pixels.emplace_back(v[3], v[4]);
   }
+  HOVS_REQUIRE(!out.empty(), path.string(), "the corner table has no rows");
   return out;
 }
 

@@ -64,8 +64,11 @@ struct RimResidual {
 }  // namespace
 
 void RimEdgeOptions::Check(const std::string& where) const {
-  HOVS_REQUIRE(rays >= 16 && rays <= 100000, where + ".rays", "must be in 16..100000");
-  HOVS_REQUIRE(search_px > 1 && min_step > 0, where, "search_px must exceed 1 and min_step be positive");
+  HOVS_REQUIRE(rays >= 16 && rays <= 100000, where, "rays must be in 16..100000 (got ", rays, ")");
+  HOVS_REQUIRE(std::isfinite(search_px) && search_px > 1 && search_px <= 2000, where,
+               "search_px (the search half width) must be in (1, 2000] px (got ", search_px, ")");
+  HOVS_REQUIRE(std::isfinite(min_step) && min_step > 0 && min_step <= 255, where,
+               "min_step (the edge's grey step) must be in (0, 255] (got ", min_step, ")");
 }
 
 RimEdge DetectRimEdge(const uint8_t* grey, int width, int height, const CatadioptricCamera<double>& rig,
@@ -133,6 +136,14 @@ MirrorPosition EstimateMirrorPosition(const RimEdge& edge, const CatadioptricCam
   out.offset = Vec3d(offset[0], offset[1], offset[2]);
   out.points = static_cast<int>(problem.NumResidualBlocks());
   out.rms_px = std::sqrt(2 * summary.final_cost / std::max(1, out.points));
+  for (const Vec2d& p : edge.points) {
+    Vec3d ray;
+    double r = 0;
+    if (rig.camera.CamFromImg(p, &ray) && RimResidual{ray, mirror_from_cam, R, z, f}(offset, &r) &&
+        std::abs(r) <= kRimInlierPx)
+      ++out.inliers;
+  }
+  out.inlier_fraction = edge.points.empty() ? 0.0 : double(out.inliers) / edge.points.size();
   const double dz = z - (mirror_from_cam.translation.z() + offset[2]);
   out.equivalent_tilt_rad = Vec2d(std::atan2(offset[0], dz), std::atan2(offset[1], dz));
   FitCircle(edge.points, &out.rim_centre_px, &out.rim_radius_px);
@@ -149,13 +160,24 @@ CatadioptricCamera<double> WithCameraOffset(const CatadioptricCamera<double>& no
 }
 
 MirrorPosition LocateMirror(const uint8_t* grey, int width, int height, const CatadioptricCamera<double>& nominal,
-                            const RimEdgeOptions& o, RimEdge* edge) {
-  const MirrorPosition first = EstimateMirrorPosition(DetectRimEdge(grey, width, height, nominal, o), nominal);
+                            const RimEdgeOptions& o, RimEdge* edge, const std::string& where) {
+  const auto estimate = [&](const RimEdge& e) {
+    HOVS_REQUIRE(e.points.size() >= 20, where, "no rim: only ", e.points.size(), " of ", e.rays,
+                 " rays show an edge near the design's rim (at least 20 needed): is the rim in the image?");
+    return EstimateMirrorPosition(e, nominal);
+  };
+  const MirrorPosition first = estimate(DetectRimEdge(grey, width, height, nominal, o));
   RimEdgeOptions fine = o;
   fine.search_px = std::max(3.0, o.search_px / 4);
   const RimEdge second = DetectRimEdge(grey, width, height, WithCameraOffset(nominal, first.offset), fine);
   if (edge) *edge = second;
-  return EstimateMirrorPosition(second, nominal);
+  const MirrorPosition p = estimate(second);
+  HOVS_REQUIRE(p.inlier_fraction >= kRimMinInlierFraction && p.inliers >= kRimMinRayFraction * second.rays, where,
+               "no rim: of ", second.rays, " rays, ", p.inliers, " show an edge within ", kRimInlierPx,
+               " px of one rim (", static_cast<int>(std::lround(100 * p.inlier_fraction)),
+               " % of the edges found); a rim needs ", static_cast<int>(100 * kRimMinInlierFraction), " % and ",
+               static_cast<int>(std::ceil(kRimMinRayFraction * second.rays)), " rays");
+  return p;
 }
 
 }  // namespace hovs::calib

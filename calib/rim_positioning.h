@@ -46,7 +46,17 @@ struct MirrorPosition {
   Vec2d rim_centre_px = Vec2d::Zero(), nominal_rim_centre_px = Vec2d::Zero();
   double rim_radius_px = 0, nominal_rim_radius_px = 0;   // circle fits to the detected and the nominal rim
   bool converged = false;
+  // Confidence: the edge points within kRimInlierPx of the fitted rim, as a count and a fraction of the points.
+  int inliers = 0;
+  double inlier_fraction = 0;
 };
+
+// A rim is accepted when at least kRimMinInlierFraction of its edge points, and of the rays searched at least
+// kRimMinRayFraction, lie within kRimInlierPx of the fitted rim: a real rim is one sharp edge on one curve (0.1 px
+// RMS on renders), noise or clutter gives steps scattered over the whole search band.
+inline constexpr double kRimInlierPx = 1.0;
+inline constexpr double kRimMinInlierFraction = 0.6;
+inline constexpr double kRimMinRayFraction = 0.25;
 
 // Throws hovs::Error with fewer than 20 edge points.
 MirrorPosition EstimateMirrorPosition(const RimEdge& edge, const CatadioptricCamera<double>& nominal);
@@ -56,8 +66,10 @@ CatadioptricCamera<double> WithCameraOffset(const CatadioptricCamera<double>& no
 
 // Detection and estimation, twice: the second pass searches +-search_px / 4 around the rim predicted from the
 // first estimate (rays then cross the true edge near its normal, and a far-off nominal cannot pull in another
-// edge). `edge` (optional) receives the second pass's points.
+// edge). `edge` (optional) receives the second pass's points. Throws hovs::Error(where) when the rim fails the
+// confidence test above (an image of noise, a rim out of view).
 MirrorPosition LocateMirror(const uint8_t* grey, int width, int height, const CatadioptricCamera<double>& nominal,
-                            const RimEdgeOptions& options, RimEdge* edge = nullptr);
+                            const RimEdgeOptions& options, RimEdge* edge = nullptr,
+                            const std::string& where = "mirror positioning");
 
 }  // namespace hovs::calib

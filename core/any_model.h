@@ -28,11 +28,13 @@ class AnyModel {
  public:
   enum class Kind { kExact, kPolynomial, kUnified };
 
-  static AnyModel Exact(const CatadioptricCamera<double>& rig, double scene_distance = 10.0) {
-    rig.Check("exact model");
-    HOVS_REQUIRE(rig.camera.width > 0 && rig.camera.height > 0, "exact model", "the camera needs an image size");
-    HOVS_REQUIRE(scene_distance > 0 && std::isfinite(scene_distance), "exact model",
-                 "scene distance must be positive");
+  // where: the model's source (a file) in errors.
+  static AnyModel Exact(const CatadioptricCamera<double>& rig, double scene_distance = 10.0,
+                        const std::string& where = "exact model") {
+    rig.Check(where);
+    HOVS_REQUIRE(rig.camera.width > 0 && rig.camera.height > 0, where, "the camera needs an image size");
+    HOVS_REQUIRE(scene_distance > 0 && scene_distance <= 1e6, where + " (scene distance)",
+                 "must be in (0, 1e6] m (got ", scene_distance, ")");
     AnyModel m;
     m.kind_ = Kind::kExact;
     m.exact_ = rig;
@@ -42,10 +44,10 @@ class AnyModel {
     m.width_ = rig.camera.width, m.height_ = rig.camera.height;
     return m;
   }
-  static AnyModel Polynomial(const PolynomialModel<double>& model) {
-    model.Check("polynomial model");
-    HOVS_REQUIRE(model.width > 0 && model.height > 0, "polynomial model", "needs the image size");
-    HOVS_REQUIRE(model.rho_max > model.rho_min, "polynomial model", "needs a valid annulus (rho_min < rho_max)");
+  static AnyModel Polynomial(const PolynomialModel<double>& model, const std::string& where = "polynomial model") {
+    model.Check(where);
+    HOVS_REQUIRE(model.width > 0 && model.height > 0, where, "needs the image size");
+    HOVS_REQUIRE(model.rho_max > model.rho_min, where, "needs a valid annulus (rho_min < rho_max)");
     AnyModel m;
     m.kind_ = Kind::kPolynomial;
     m.poly_ = model;
@@ -53,9 +55,13 @@ class AnyModel {
     return m;
   }
   // annulus_max <= 0: no annulus (the whole image is valid where the model is).
-  static AnyModel Unified(const UnifiedModel<double>& model, double annulus_min = 0, double annulus_max = 0) {
-    model.Check("unified model");
-    HOVS_REQUIRE(model.width > 0 && model.height > 0, "unified model", "needs the image size");
+  static AnyModel Unified(const UnifiedModel<double>& model, double annulus_min = 0, double annulus_max = 0,
+                          const std::string& where = "unified model") {
+    model.Check(where);
+    HOVS_REQUIRE(model.width > 0 && model.height > 0, where, "needs the image size");
+    HOVS_REQUIRE(std::isfinite(annulus_min) && std::isfinite(annulus_max) && annulus_min >= 0 &&
+                     annulus_max <= 2.0 * (model.width + model.height),
+                 where, "the annulus [", annulus_min, ", ", annulus_max, "] px does not fit the image");
     AnyModel m;
     m.kind_ = Kind::kUnified;
     m.unified_ = model;

@@ -230,8 +230,14 @@ struct CatadioptricCamera {
   void Check(const std::string& where = "catadioptric camera") const {
     mirror.Check(where + ".mirror");
     camera.Check(where + ".camera");
-    HOVS_REQUIRE(std::isfinite(ScalarPart(occluder_radius)) && ScalarPart(occluder_radius) >= 0, where,
-                 "occluder radius must be a non-negative number");
+    HOVS_REQUIRE(std::isfinite(ScalarPart(occluder_radius)) && ScalarPart(occluder_radius) >= 0 &&
+                     ScalarPart(occluder_radius) <= 10,
+                 where, "occluder radius must be a number in [0, 10] m");
+    const Eigen::Quaterniond q = cam_from_mirror.rotation.template cast<double>();
+    const Vec3d t = ConvertMatrix<double>(cam_from_mirror.translation);
+    HOVS_REQUIRE(q.coeffs().allFinite() && std::abs(q.norm() - 1) < 1e-6, where,
+                 "cam_from_mirror's rotation must be a unit quaternion");
+    HOVS_REQUIRE(t.allFinite() && t.norm() <= 100, where, "cam_from_mirror's translation must be finite, within 100 m");
     const Vec3d C = ConvertMatrix<double>(Vec3<T>(CameraCentre()));
     const HyperboloidMirror<double> md = mirror.template Cast<double>();
     // The pinhole must be outside the mirror body (on the reflective side of the sheet), below the sheet.

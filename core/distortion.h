@@ -8,6 +8,7 @@
 // point; Undistort returns false when Newton's method does not converge there.
 #pragma once
 
+#include "core/error.h"
 #include "core/newton.h"
 #include "core/types.h"
 
@@ -19,6 +20,14 @@ struct RadTanDistortion {
 
   bool IsZero() const {
     return ScalarPart(k1) == 0 && ScalarPart(k2) == 0 && ScalarPart(p1) == 0 && ScalarPart(p2) == 0;
+  }
+
+  // Finite coefficients of a plausible size (|k| <= 100: a lens whose distortion moves a point at the edge of
+  // the field by more than that many times its distance is not a radial-tangential lens).
+  void Check(const std::string& where) const {
+    for (const T& v : {k1, k2, p1, p2})
+      HOVS_REQUIRE(std::isfinite(ScalarPart(v)) && std::abs(ScalarPart(v)) <= 100, where,
+                   "distortion coefficients must be finite and within +-100 (got ", ScalarPart(v), ")");
   }
 
   template <class S>

@@ -131,9 +131,9 @@ struct HyperboloidMirror {
     const double va = ScalarPart(a), vb = ScalarPart(b), vd = ScalarPart(rim_diameter);
     HOVS_REQUIRE(std::isfinite(va) && std::isfinite(vb) && std::isfinite(vd), where,
                  "a, b and the rim diameter must be finite numbers");
-    HOVS_REQUIRE(va > 0, where, "a must be positive (got ", va, ")");
-    HOVS_REQUIRE(vb > 0, where, "b must be positive (got ", vb, ")");
-    HOVS_REQUIRE(vd > 0, where, "the rim diameter must be positive (got ", vd, ")");
+    HOVS_REQUIRE(va > 0 && va <= 10, where, "a must be in (0, 10] m (got ", va, ")");
+    HOVS_REQUIRE(vb > 0 && vb <= 10, where, "b must be in (0, 10] m (got ", vb, ")");
+    HOVS_REQUIRE(vd > 0 && vd <= 10, where, "the rim diameter must be in (0, 10] m (got ", vd, ")");
   }
 
   template <class U>

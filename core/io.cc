@@ -236,6 +236,27 @@ void CheckOutputFolder(const fs::path& target, const std::string& command, const
                "'; choose another --out");
 }
 
+void CheckOutputFile(const fs::path& path, const std::string& signature, const std::string& kind) {
+  const std::string where = path.string();
+  HOVS_REQUIRE(!path.empty() && !path.filename().empty(), where, "name the output file itself");
+  const fs::path resolved = Resolved(path);
+  for (const auto& in : NotedInputs())
+    HOVS_REQUIRE(Resolved(in) != resolved, where, "is an input of this run; hovs never writes its output over an input");
+  std::error_code ec;
+  const auto st = fs::symlink_status(path, ec);
+  if (!fs::exists(st)) return;
+  HOVS_REQUIRE(!fs::is_symlink(st), where, "is a symbolic link; give the file itself");
+  HOVS_REQUIRE(fs::is_regular_file(st), where, "exists and is not a file");
+  std::string head(signature.size(), '\0');
+  {
+    std::ifstream in(path, std::ios::binary);
+    in.read(head.data(), static_cast<std::streamsize>(head.size()));
+    head.resize(static_cast<size_t>(std::max<std::streamsize>(0, in.gcount())));
+  }
+  HOVS_REQUIRE(head == signature, where, "exists and is not ", kind,
+               ": hovs only replaces its own earlier file; choose another name or remove it yourself");
+}
+
 StagedDirectory::StagedDirectory(fs::path target, std::string command, std::vector<fs::path> inputs,
                                  bool keep_interrupted)
     : target_(std::move(target)), command_(std::move(command)), inputs_(std::move(inputs)) {

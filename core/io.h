@@ -44,6 +44,11 @@ void WriteOutputMarker(const std::filesystem::path& folder, const std::string& c
 void CheckOutputFolder(const std::filesystem::path& target, const std::string& command,
                        const std::vector<std::filesystem::path>& inputs = {});
 
+// Throws hovs::Error naming `path` unless it may become an output file of the kind whose files begin with
+// `signature` (a mapping file's magic, a layout's first line): it does not exist, or it is a regular file that
+// begins so. Never a folder, a link or another file (a config given by mistake), never an input of this run.
+void CheckOutputFile(const std::filesystem::path& path, const std::string& signature, const std::string& kind);
+
 // A report folder under construction. The constructor checks the target (CheckOutputFolder) before any work
 // is done and writes the marker into the staging folder; files go into staging(); Commit() checks again and
 // replaces `target` with the staged folder in one rename (an earlier output is moved aside first and removed

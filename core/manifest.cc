@@ -38,6 +38,26 @@ void CheckRelativePath(const nlohmann::json& j, const char* key, const std::stri
   ContainedPath(".", j[key].get<std::string>(), where.substr(0, where.size() - 1) + "." + key + ")");
 }
 
+// A board's counts and lengths within what a printed target can be (a 1e9-corner board was accepted once).
+void CheckBoardFields(const nlohmann::json& b, const std::string& where) {
+  HOVS_REQUIRE(b.is_object(), where, "a board must be an object");
+  for (const char* key : {"inner_corners", "squares", "markers"}) {
+    if (!b.contains(key)) continue;
+    const auto& v = b[key];
+    HOVS_REQUIRE(v.is_array() && v.size() == 2 && v[0].is_number_integer() && v[1].is_number_integer() &&
+                     v[0].get<int64_t>() >= 1 && v[1].get<int64_t>() >= 1 && v[0].get<int64_t>() <= 1000 &&
+                     v[1].get<int64_t>() <= 1000,
+                 where + "." + key, "must be two integers in 1..1000");
+  }
+  for (const char* key : {"square", "marker_length", "width", "height"})
+    if (b.contains(key))
+      HOVS_REQUIRE(b[key].is_number() && b[key].get<double>() > 0 && b[key].get<double>() <= 100, where + "." + key,
+                   "must be a length in (0, 100] m");
+  if (b.contains("separation"))
+    HOVS_REQUIRE(b["separation"].is_number() && b["separation"].get<double>() >= 0 && b["separation"].get<double>() <= 100,
+                 where + ".separation", "must be a length in [0, 100] m");
+}
+
 }  // namespace
 
 void CheckDatasetManifest(const nlohmann::json& m, const std::string& source) {
@@ -60,6 +80,10 @@ void CheckDatasetManifest(const nlohmann::json& m, const std::string& source) {
   const auto is_text = [](const nlohmann::json& j, const char* key) {
     return j.contains(key) && j[key].is_string() && !j[key].get<std::string>().empty();
   };
+  if (m.contains("boards")) {
+    HOVS_REQUIRE(m["boards"].is_array() && m["boards"].size() <= 64, source + " (boards)", "must be a list of boards");
+    for (size_t b = 0; b < m["boards"].size(); ++b) CheckBoardFields(m["boards"][b], source + " (boards[" + std::to_string(b) + "])");
+  }
   std::set<int64_t> ids;
   for (size_t f = 0; f < m["frames"].size(); ++f) {
     const auto& fr = m["frames"][f];

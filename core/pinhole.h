@@ -13,6 +13,7 @@
 
 #include "core/distortion.h"
 #include "core/error.h"
+#include "core/model_check.h"
 #include "core/types.h"
 
 namespace hovs {
@@ -43,9 +44,12 @@ struct PinholeCamera {
   void Check(const std::string& where = "pinhole camera") const {
     const double vals[] = {ScalarPart(fx), ScalarPart(fy), ScalarPart(cx), ScalarPart(cy)};
     for (double v : vals) HOVS_REQUIRE(std::isfinite(v), where, "parameters must be finite");
-    HOVS_REQUIRE(ScalarPart(fx) > 0 && ScalarPart(fy) > 0, where, "focal lengths must be positive (fx = ",
-                 ScalarPart(fx), ", fy = ", ScalarPart(fy), ")");
-    HOVS_REQUIRE(width >= 0 && height >= 0, where, "image size must not be negative");
+    HOVS_REQUIRE(ScalarPart(fx) > 0 && ScalarPart(fy) > 0 && ScalarPart(fx) <= kMaxFocalPx &&
+                     ScalarPart(fy) <= kMaxFocalPx,
+                 where, "focal lengths must be in (0, ", kMaxFocalPx, "] px (fx = ", ScalarPart(fx),
+                 ", fy = ", ScalarPart(fy), ")");
+    CheckImageAndCentre(width, height, ScalarPart(cx), ScalarPart(cy), where);
+    distortion.Check(where);
   }
 
   bool InImage(const Vec2<T>& uv) const {

@@ -23,6 +23,7 @@
 #include <vector>
 
 #include "core/error.h"
+#include "core/model_check.h"
 #include "core/newton.h"
 #include "core/types.h"
 
@@ -147,11 +148,29 @@ struct PolynomialModel {
                                         " px up to degree " + std::to_string(max_degree));
   }
 
+  // Throws hovs::Error(where) for a model that cannot be a camera: non-finite or absurd numbers, a centre far
+  // outside the image, a0 = 0 (every pixel would look sideways), an annulus where f is not finite.
   void Check(const std::string& where = "polynomial model") const {
-    HOVS_REQUIRE(poly.size() >= 2, where, "needs at least a0 and a1");
-    HOVS_REQUIRE(ScalarPart(poly[1]) == 0, where, "a1 must be 0 (got ", ScalarPart(poly[1]), ")");
-    HOVS_REQUIRE(std::abs(ScalarPart(c - d * e)) > 1e-12, where, "the affine matrix is singular");
+    HOVS_REQUIRE(poly.size() >= 2 && poly.size() <= 21, where, "needs a0, a1 and at most degree 20 (got ",
+                 poly.size(), " coefficients)");
     for (const auto& a : poly) HOVS_REQUIRE(std::isfinite(ScalarPart(a)), where, "coefficients must be finite");
+    HOVS_REQUIRE(ScalarPart(poly[1]) == 0, where, "a1 must be 0 (got ", ScalarPart(poly[1]), ")");
+    HOVS_REQUIRE(ScalarPart(poly[0]) != 0 && std::abs(ScalarPart(poly[0])) <= kMaxFocalPx, where,
+                 "a0 must be non-zero and at most ", kMaxFocalPx, " px in size (got ", ScalarPart(poly[0]), ")");
+    for (const T& v : {c, d, e})
+      HOVS_REQUIRE(std::isfinite(ScalarPart(v)) && std::abs(ScalarPart(v)) <= 10, where,
+                   "the affine terms c, d, e must be finite and within +-10 (c is about 1; got ", ScalarPart(v), ")");
+    HOVS_REQUIRE(std::abs(ScalarPart(c - d * e)) >= 0.1, where, "the affine matrix is (nearly) singular");
+    CheckImageAndCentre(width, height, ScalarPart(cx), ScalarPart(cy), where);
+    HOVS_REQUIRE(inv_poly.size() <= 64, where, "the inverse polynomial has ", inv_poly.size(), " coefficients (at most 64)");
+    for (double a : inv_poly) HOVS_REQUIRE(std::isfinite(a), where, "inverse polynomial coefficients must be finite");
+    HOVS_REQUIRE(std::isfinite(rho_min) && std::isfinite(rho_max) && rho_min >= 0 && rho_max >= rho_min &&
+                     (width == 0 || rho_max <= 2.0 * (width + height)),
+                 where, "the annulus [", rho_min, ", ", rho_max, "] px does not fit the image");
+    for (int k = 0; k <= 16 && rho_max > 0; ++k) {
+      const double rho = rho_max * k / 16;
+      HOVS_REQUIRE(std::isfinite(ScalarPart(F(T(rho)))), where, "f(rho) is not finite at rho = ", rho, " px");
+    }
   }
 
   template <class U>

@@ -23,6 +23,7 @@
 #include "core/catadioptric.h"
 #include "core/distortion.h"
 #include "core/error.h"
+#include "core/model_check.h"
 #include "core/types.h"
 
 namespace hovs {
@@ -62,8 +63,16 @@ struct UnifiedModel {
   }
 
   void Check(const std::string& where = "unified model") const {
-    HOVS_REQUIRE(std::isfinite(ScalarPart(xi)) && ScalarPart(xi) >= 0, where, "xi must be a non-negative number");
-    HOVS_REQUIRE(ScalarPart(fx) > 0 && ScalarPart(fy) > 0, where, "focal lengths must be positive");
+    HOVS_REQUIRE(std::isfinite(ScalarPart(xi)) && ScalarPart(xi) >= 0 && ScalarPart(xi) <= 100, where,
+                 "xi must be a number in [0, 100] (got ", ScalarPart(xi), ")");
+    HOVS_REQUIRE(ScalarPart(fx) > 0 && ScalarPart(fy) > 0 && ScalarPart(fx) <= kMaxFocalPx &&
+                     ScalarPart(fy) <= kMaxFocalPx,
+                 where, "focal lengths must be in (0, ", kMaxFocalPx, "] px (fx = ", ScalarPart(fx), ", fy = ",
+                 ScalarPart(fy), ")");
+    HOVS_REQUIRE(std::isfinite(ScalarPart(skew)) && std::abs(ScalarPart(skew)) <= kMaxFocalPx, where,
+                 "skew must be finite (got ", ScalarPart(skew), ")");
+    CheckImageAndCentre(width, height, ScalarPart(cx), ScalarPart(cy), where);
+    distortion.Check(where);
   }
 
   template <class U>

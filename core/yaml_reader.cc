@@ -1,5 +1,7 @@
 #include "core/yaml_reader.h"
 
+#include <algorithm>
+#include <cctype>
 #include <cmath>
 
 #include "core/error.h"
@@ -64,6 +66,24 @@ int YamlReader::Integer(const YAML::Node& n, const std::string& key) const {
   const double v = Number(n, key);
   HOVS_REQUIRE(v == std::floor(v) && std::abs(v) < 1e9, Where(n, key), "expected an integer, got ", n.Scalar());
   return static_cast<int>(v);
+}
+
+uint64_t YamlReader::Seed(const YAML::Node& n, const std::string& key) const {
+  const double v = Number(n, key);
+  HOVS_REQUIRE(v == std::floor(v) && v >= 0 && v <= 9007199254740992.0, Where(n, key),
+               "a seed must be an integer in [0, 2^53] (got ", n.Scalar(), ")");
+  return static_cast<uint64_t>(v);
+}
+
+std::string YamlReader::Name(const YAML::Node& n, const std::string& key) const {
+  const std::string s = String(n, key);
+  const bool chars = std::all_of(s.begin(), s.end(), [](unsigned char c) {
+    return std::isalnum(c) || c == '_' || c == '-' || c == '.';
+  });
+  HOVS_REQUIRE(!s.empty() && s.size() <= 64 && chars && s[0] != '.', Where(n, key), "'", s,
+               "' is not a usable name (1 to 64 letters, digits, '_', '-' or '.', not starting with '.': it becomes "
+               "part of file names)");
+  return s;
 }
 
 bool YamlReader::Bool(const YAML::Node& n, const std::string& key) const {

@@ -5,6 +5,7 @@
 #include <yaml-cpp/yaml.h>
 
 #include <array>
+#include <cstdint>
 #include <set>
 #include <string>
 
@@ -28,6 +29,10 @@ class YamlReader {
   double Number(const YAML::Node& n, const std::string& key) const;
   double Positive(const YAML::Node& n, const std::string& key) const;
   int Integer(const YAML::Node& n, const std::string& key) const;
+  // A seed: an integer in [0, 2^53] (negative values would wrap to 2^64 - 1).
+  uint64_t Seed(const YAML::Node& n, const std::string& key) const;
+  // A name that becomes part of file names: letters, digits, '_', '-' and '.', not starting with '.', 1 to 64.
+  std::string Name(const YAML::Node& n, const std::string& key) const;
   bool Bool(const YAML::Node& n, const std::string& key) const;
   std::string String(const YAML::Node& n, const std::string& key) const;
   Vec3d Vector3(const YAML::Node& n, const std::string& key) const;

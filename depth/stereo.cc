@@ -138,11 +138,15 @@ Rectification Rectify(const StereoRig& rig, const RectifyOptions& o) {
 }
 
 void DenseOptions::Check(const std::string& where) const {
-  HOVS_REQUIRE(num_disparities >= 16 && num_disparities % 16 == 0, where,
-               "num_disparities must be a positive multiple of 16 (got ", num_disparities, ")");
+  HOVS_REQUIRE(num_disparities >= 16 && num_disparities <= 4096 && num_disparities % 16 == 0, where,
+               "num_disparities must be a multiple of 16 in 16..4096 (got ", num_disparities, ")");
   HOVS_REQUIRE(block_size >= 1 && block_size % 2 == 1 && block_size <= 21, where, "block_size must be odd, 1..21");
-  HOVS_REQUIRE(sigma_disparity_px > 0 && max_relative_sigma > 0 && min_theta_deg >= 0 && min_theta_deg < 90, where,
-               "bad sigma or theta limits");
+  HOVS_REQUIRE(std::isfinite(sigma_disparity_px) && sigma_disparity_px > 0 && sigma_disparity_px <= 100, where,
+               "sigma_disparity_px must be in (0, 100] (got ", sigma_disparity_px, ")");
+  HOVS_REQUIRE(std::isfinite(max_relative_sigma) && max_relative_sigma > 0 && max_relative_sigma <= 10, where,
+               "max_relative_sigma must be in (0, 10] (got ", max_relative_sigma, ")");
+  HOVS_REQUIRE(std::isfinite(min_theta_deg) && min_theta_deg >= 0 && min_theta_deg < 90, where,
+               "min_theta_deg must be in [0, 90) (got ", min_theta_deg, ")");
   HOVS_REQUIRE(refine_radius >= 2 && refine_radius <= 16, where, "refine_radius must be in 2..16 (got ", refine_radius, ")");
 }
 
@@ -273,6 +277,8 @@ DenseDepth ComputeDenseDepth(const Rectification& r, const unwrap::Image8& left_
                "dense depth", "rectified images must both be ", W, " x ", H, " (got ", left_rect.width, " x ",
                left_rect.height, " and ", right_rect.width, " x ", right_rect.height, ")");
   HOVS_REQUIRE(left_rect.channels == right_rect.channels, "dense depth", "rectified images differ in channels");
+  HOVS_REQUIRE(o.num_disparities < W, "dense depth options", "num_disparities (", o.num_disparities,
+               ") must be smaller than the rectified width (", W, ")");
   const auto start = std::chrono::steady_clock::now();
   const auto to_grey = [](const unwrap::Image8& im) {
     cv::Mat m(im.height, im.width, im.channels == 3 ? CV_8UC3 : CV_8UC1, const_cast<uint8_t*>(im.data.data()));

@@ -1,5 +1,7 @@
 #include "scenes/ground_truth.h"
 
+#include <set>
+
 #include "core/error.h"
 #include "core/io.h"
 #include "core/json.h"
@@ -71,6 +73,12 @@ nlohmann::json UnitToJson(const raytrace::CatadioptricUnit& u) {
 }
 
 raytrace::CatadioptricUnit UnitFromJson(const nlohmann::json& j, const std::string& where) {
+  static const std::set<std::string> kKeys = {"name",          "model",           "mirror",         "camera",
+                                              "cam_from_mirror", "world_from_mirror", "occluder_radius",
+                                              "single_viewpoint"};
+  HOVS_REQUIRE(j.is_object(), where, "a unit must be an object");
+  for (const auto& [key, value] : j.items())
+    HOVS_REQUIRE(kKeys.count(key), where, "unknown key '", key, "' in a unit description");
   try {
     raytrace::CatadioptricUnit u;
     u.name = j.at("name").get<std::string>();
@@ -87,6 +95,8 @@ raytrace::CatadioptricUnit UnitFromJson(const nlohmann::json& j, const std::stri
     u.world_from_mirror = PoseFromJson(j.at("world_from_mirror"), where + ".world_from_mirror");
     u.rig.occluder_radius = j.at("occluder_radius").get<double>();
     u.rig.Check(where);
+    HOVS_REQUIRE(cam.width >= 1 && cam.height >= 1, where + ".camera", "the image size must be at least 1 x 1 (got ",
+                 cam.width, " x ", cam.height, ")");
     return u;
   } catch (const nlohmann::json::exception& e) {
     throw Error(where, std::string("bad unit description: ") + e.what());

@@ -183,7 +183,11 @@ Texture ReadTexture(const YamlReader& r, const YAML::Node& n, const std::string&
     if (c["scale"]) t.scale = r.Positive(c["scale"], k + ".scale");
     if (c["octaves"]) t.octaves = r.Integer(c["octaves"], k + ".octaves");
     HOVS_REQUIRE(t.octaves >= 1 && t.octaves <= 12, r.Where(c, k + ".octaves"), "must be in 1..12");
-    if (c["seed"]) t.seed = static_cast<uint32_t>(r.Integer(c["seed"], k + ".seed"));
+    if (c["seed"]) {
+      const uint64_t seed = r.Seed(c["seed"], k + ".seed");
+      HOVS_REQUIRE(seed <= 0xFFFFFFFFu, r.Where(c["seed"], k + ".seed"), "a texture seed is at most 2^32 - 1");
+      t.seed = static_cast<uint32_t>(seed);
+    }
     if (c["low"]) t.colour_a = r.Colour(c["low"], k + ".low");
     if (c["high"]) t.colour_b = r.Colour(c["high"], k + ".high");
   } else {
@@ -224,7 +228,10 @@ SceneConfig ParseSceneConfig(const std::string& text, const std::string& source,
     r.OnlyKeys(u, k, {"name", "mirror", "camera", "pose", "misalignment", "body_length", "velocity",
                       "angular_velocity_deg"});
     raytrace::CatadioptricUnit unit;
-    unit.name = u["name"] ? r.String(u["name"], k + ".name") : "unit" + std::to_string(i);
+    unit.name = u["name"] ? r.Name(u["name"], k + ".name") : "unit" + std::to_string(i);
+    for (const auto& earlier : desc.units)
+      HOVS_REQUIRE(earlier.name != unit.name, r.Where(u, k + ".name"), "a second unit named '", unit.name,
+                   "' (unit names name the dataset's images)");
     YAML::Node m, c, pose;
     r.Require(u, k, "mirror", &m);
     r.OnlyKeys(m, k + ".mirror", {"a", "b", "rim_diameter"});
@@ -375,7 +382,7 @@ SceneConfig ParseSceneConfig(const std::string& text, const std::string& source,
     if (rn["focus_distance"]) cfg.render.focus_distance = r.Number(rn["focus_distance"], "render.focus_distance");
     if (rn["exposure_time"]) cfg.render.exposure_time = r.Number(rn["exposure_time"], "render.exposure_time");
     if (rn["samples"]) cfg.render.samples = r.Integer(rn["samples"], "render.samples");
-    if (rn["seed"]) cfg.render.seed = static_cast<uint64_t>(r.Integer(rn["seed"], "render.seed"));
+    if (rn["seed"]) cfg.render.seed = r.Seed(rn["seed"], "render.seed");
     if (rn["ground_truth"]) cfg.render.ground_truth = r.Bool(rn["ground_truth"], "render.ground_truth");
     if (rn["sensor"]) {
       const YAML::Node s = rn["sensor"];

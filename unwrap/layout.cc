@@ -39,7 +39,7 @@ VirtualView<double> ViewSpec::View() const {
 }
 
 void Layout::Check(const std::string& where) const {
-  HOVS_REQUIRE(!views.empty(), where, "the layout has no views");
+  HOVS_REQUIRE(!views.empty() && views.size() <= 256, where, "a layout has 1 to 256 views (got ", views.size(), ")");
   std::set<std::string> names;
   for (const auto& v : views) {
     v.Check(where);

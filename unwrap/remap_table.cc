@@ -375,6 +375,7 @@ RemapTable BuildRemapTable(const AnyModel& model, const Layout& layout, const Re
 }
 
 void SaveRemapTable(const std::filesystem::path& path, const RemapTable& table) {
+  CheckOutputFile(path, std::string(kMagic, sizeof kMagic), "a hovs mapping file");
   std::string s(kMagic, sizeof kMagic);
   Put(&s, kFormatVersion);
   Put(&s, static_cast<uint32_t>(table.header.size()));

@@ -48,7 +48,7 @@ TEST(StereoCli, CalibratesRenderedPairsAndComputesDepth) {
     const auto bad = Hovs("stereo-calibrate --dataset " + (dir / "stereo/dataset.json").string() + " " + opt + " -o " +
                           (dir / "badopt").string());
     EXPECT_EQ(bad.exit_code, 2) << bad.output;
-    EXPECT_NE(bad.output.find(opt.substr(0, opt.find(' ')) + ": must be"), std::string::npos) << bad.output;
+    EXPECT_NE(bad.output.find(opt.substr(0, opt.find(' ')) + ": '"), std::string::npos) << bad.output;
     EXPECT_FALSE(fs::exists(dir / "badopt"));
   }
 

@@ -326,10 +326,10 @@ TEST(CalibrateCli, CalibratesASyntheticSetAgainstGroundTruthAndRejectsBadInput) 
   const auto sidecars = nlohmann::json::parse(ReadFile(dir / "set-bad" / "dataset.json"));
   WriteFileAtomic(dir / "set-bad" / sidecars["frames"][0]["views"][0]["ground_truth"]["sidecar"].get<std::string>(), "{bad");
   rejected("--truth-corners --dataset " + (dir / "set-bad" / "dataset.json").string(), "not valid JSON at line 1");
-  rejected("--truth-corners --dataset " + (dir / "set" / "dataset.json").string() + " --corner-noise -1", "must be >= 0");
+  rejected("--truth-corners --dataset " + (dir / "set" / "dataset.json").string() + " --corner-noise -1", "--corner-noise");
   rejected("--images " + (dir / "set" / "images").string() + " --board 7x5x0.03 --corner-refinement sharp",
            "corner_refinement must be 'edges' or 'subpix'");
-  rejected("--corners /nonexistent.csv --size 1024x768", "cannot open the corner table");
+  rejected("--corners /nonexistent.csv --size 1024x768", "/nonexistent.csv: file not found");
   std::ofstream(dir / "two.csv") << "image,corner,board_x_mm,board_y_mm,u_px,v_px\n"
                                  << "a.png,0,0,0,100,100\na.png,1,30,0,110,100\nb.png,0,0,0,200,200\n";
   rejected("--corners " + (dir / "two.csv").string() + " --size 1024x768", "needs at least three images");

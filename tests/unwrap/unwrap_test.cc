@@ -6,6 +6,7 @@
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <functional>
 #include <random>
 
 #include "core/error.h"
@@ -264,6 +265,86 @@ TEST(MappingFile, RoundTripAndDetectsCorruptionAndVersion) {
   std::memcpy(&bad_tile[16 + header_length + 4 + 8], &seventeen, 4);
   expect_error(write("tile.hmap", WithChecksum(bad_tile)), "tile size 17");
   expect_error(write("garbage.hmap", "hello world, not a mapping file"), "not a hovs mapping file");
+  std::filesystem::remove_all(dir);
+}
+
+// A mapping file edited and given a valid checksum again (FNV-1a guards against damage, not edits) must not make
+// the remap read outside its frame: every edit is refused on load or, where the file stays consistent, remapped
+// through the clamped kernels. Run under AddressSanitizer by the test script, where any stray read would stop it.
+TEST(MappingFile, EditedTilesWithAValidChecksumCannotReadOutsideTheFrame) {
+  const Layout layout = ArticleAndRimPanorama(1, 400, 100);
+  const RemapTable t = BuildRemapTable(AnyModel::Exact(Rig()), layout, {});
+  const auto dir = TempDir();
+  const auto path = dir / "m.hmap";
+  SaveRemapTable(path, t);
+  std::string body;
+  {
+    std::ifstream in(path, std::ios::binary);
+    body.assign(std::istreambuf_iterator<char>(in), {});
+    body.resize(body.size() - 8);
+  }
+  uint32_t header_length = 0;
+  std::memcpy(&header_length, body.data() + 12, 4);
+  const size_t tiles0 = 16 + header_length + 4 + 16;   // view 0's tiles follow its four counts
+  // View 0's first interp tile marked inside (the article view lies well inside the image).
+  size_t at = 0;
+  for (size_t k = 0; k < t.views[0].tiles.size(); ++k)
+    if (t.views[0].tiles[k].kind == TileKind::kInterp && t.views[0].tiles[k].inside) {
+      at = tiles0 + k * sizeof(Tile);
+      break;
+    }
+  ASSERT_GT(at, 0u);
+  const auto load = [&](const std::string& edited) {
+    const std::string file = WithChecksum(edited);
+    std::ofstream(dir / "e.hmap", std::ios::binary).write(file.data(), std::streamsize(file.size()));
+    return LoadRemapTable(dir / "e.hmap");
+  };
+  const auto refused = [&](const std::function<void(Tile*)>& edit, const std::string& needle) {
+    std::string e = body;
+    Tile tile;
+    std::memcpy(&tile, &e[at], sizeof tile);
+    edit(&tile);
+    std::memcpy(&e[at], &tile, sizeof tile);
+    try {
+      load(e);
+      ADD_FAILURE() << "accepted an edit expected to be refused (" << needle << ")";
+    } catch (const Error& err) {
+      EXPECT_NE(std::string(err.what()).find(needle), std::string::npos) << err.what();
+      EXPECT_NE(std::string(err.what()).find("tile ("), std::string::npos) << err.what();
+    }
+  };
+  refused([](Tile* x) { x->x[4] += 5000; }, "samples outside its source image");
+  refused([](Tile* x) { x->y[0] = -40; }, "samples outside its source image");
+  refused([](Tile* x) { x->x[8] = NAN; }, "not finite");
+  refused([](Tile* x) { x->inside = 0, x->x[0] = 3e9f; }, "fixed-point range");
+  refused([](Tile* x) { x->kind = static_cast<TileKind>(7); }, "bad tile kind");
+  refused([](Tile* x) { x->level = 9; }, "bad pyramid level");
+  refused([](Tile* x) { x->kind = TileKind::kDense, x->dense_index = 1u << 30; }, "dense tile index");
+
+  // Random edits of the tile and dense records (checksum made valid again): refused, or remapped without a read
+  // outside the frame (the clamped kernels take whatever a consistent file holds).
+  const size_t tiles_end = body.size();
+  std::mt19937 rng(7);
+  std::uniform_int_distribution<size_t> pos(tiles0, tiles_end - 1);
+  std::uniform_int_distribution<int> byte(0, 255);
+  Image8 frame;
+  frame.width = t.source_width, frame.height = t.source_height, frame.channels = 3;
+  frame.data.assign(size_t(frame.width) * frame.height * 3, 90);
+  int loaded = 0;
+  for (int trial = 0; trial < 300; ++trial) {
+    std::string e = body;
+    for (int k = 0; k < 1 + trial % 4; ++k) e[pos(rng)] = static_cast<char>(byte(rng));
+    try {
+      const RemapTable edited = load(e);
+      Remapper r(edited);
+      std::vector<Image8> views;
+      r.Run(frame.View(PixelFormat::kRgb8), Interpolation::kBilinear, &views);
+      r.Run(frame.View(PixelFormat::kBayerRggb8), Interpolation::kBilinear, &views);
+      ++loaded;
+    } catch (const Error&) {
+    }
+  }
+  EXPECT_GT(loaded, 0) << "some edits (pixel values of dense tiles) leave a consistent file";
   std::filesystem::remove_all(dir);
 }
 
