@@ -386,6 +386,7 @@ Runner SetupCalibrate(CLI::App* sub, const GlobalOptions* global) {
       if (!global->quiet && !failed.empty())
         std::fprintf(stderr, "hovs calibrate: no board in %s\n", failed.substr(2).c_str());
     }
+    const std::string input_name = !o->corners.empty() ? o->corners : !o->dataset.empty() ? o->dataset : o->images;
     calib::PolynomialCalibrationOptions po;
     po.loss = o->loss, po.loss_scale = o->loss_scale, po.outlier_sigmas = o->outlier_sigmas;
     // Order selection table (the article's Tables 1-2), then the reported degree.
@@ -393,7 +394,7 @@ Runner SetupCalibrate(CLI::App* sub, const GlobalOptions* global) {
     std::optional<calib::PolynomialCalibration> chosen;
     for (int d : o->degrees) {
       po.degree = d;
-      const auto r = calib::CalibratePolynomial(in.obs, in.width, in.height, po);
+      const auto r = OnInput(input_name, [&] { return calib::CalibratePolynomial(in.obs, in.width, in.height, po); });
       nlohmann::json row = {{"degree", d}, {"rms_px", r.rms}, {"mean_px", r.mean}, {"converged", r.converged},
                             {"per_image_mean_px", r.per_image_mean}};
       orders.push_back(row);
@@ -401,11 +402,13 @@ Runner SetupCalibrate(CLI::App* sub, const GlobalOptions* global) {
     }
     if (!chosen) {
       po.degree = o->degree;
-      chosen = calib::CalibratePolynomial(in.obs, in.width, in.height, po);
+      chosen = OnInput(input_name, [&] { return calib::CalibratePolynomial(in.obs, in.width, in.height, po); });
     }
     // The unified and physical models and OpenCV omnidir see the corners the polynomial solve kept.
     const std::vector<calib::BoardObservation> inliers = calib::InlierObservations(in.obs, *chosen);
-    const calib::UnifiedCalibration uni = calib::CalibrateUnified(inliers, in.width, in.height, *chosen, o->loss, o->loss_scale);
+    const calib::UnifiedCalibration uni = OnInput(input_name, [&] {
+      return calib::CalibrateUnified(inliers, in.width, in.height, *chosen, o->loss, o->loss_scale);
+    });
     std::optional<calib::PhysicalCalibration> phys;
     std::optional<raytrace::CatadioptricUnit> phys_unit;
     size_t phys_rim_points = 0;
@@ -441,7 +444,7 @@ Runner SetupCalibrate(CLI::App* sub, const GlobalOptions* global) {
         HOVS_REQUIRE(popt.rim_points.size() >= 20, "--physical", "the rim of the mirror image was not found in the "
                      "images (--no-rim calibrates without it)");
       }
-      phys = calib::CalibratePhysical(inliers, nominal.rig, *chosen, popt);
+      phys = OnInput(input_name, [&] { return calib::CalibratePhysical(inliers, nominal.rig, *chosen, popt); });
       phys_rim_points = popt.rim_points.size();
       phys_unit = nominal;
       phys_unit->rig = phys->rig;
@@ -556,13 +559,17 @@ Runner SetupCalibrate(CLI::App* sub, const GlobalOptions* global) {
         const Eigen::Quaterniond dq = rig.cam_from_mirror.rotation * phys->rig.cam_from_mirror.rotation.conjugate();
         const double tilt_err = 2 * std::asin(std::min(1.0, dq.vec().norm())) * 180 / M_PI;
         const double centre_err = (rig.CameraCentre() - phys->rig.CameraCentre()).norm();
-        j["physical"]["ground_truth"] = {{"mean_ray_angle_deg", pn ? ps / pn : 0.0}, {"max_ray_angle_deg", pw},
+        j["physical"]["ground_truth"] = {{"mean_ray_angle_deg", pn ? nlohmann::json(ps / pn) : nlohmann::json()},
+                                         {"max_ray_angle_deg", pn ? nlohmann::json(pw) : nlohmann::json()},
                                          {"tilt_error_deg", tilt_err}, {"camera_centre_error_m", centre_err},
                                          {"pixels", pn}, {"true_a", rig.mirror.a}, {"true_b", rig.mirror.b},
                                          {"note", "over the whole mirror image, points at 2 m, mirror frame"}};
       }
-      j["ground_truth"] = {{"mean_ray_angle_deg", n ? sum / n : 0.0}, {"max_ray_angle_deg", worst}, {"pixels", n},
-                           {"mean_ray_angle_aligned_deg", n ? sum_al / n : 0.0}, {"max_ray_angle_aligned_deg", worst_al},
+      // No pixel to compare (the model's annulus misses the true mirror image): no figure, not a zero.
+      const auto figure = [&](double v) { return n ? nlohmann::json(v) : nlohmann::json(); };
+      j["ground_truth"] = {{"mean_ray_angle_deg", figure(sum / std::max(n, 1))}, {"max_ray_angle_deg", figure(worst)},
+                           {"pixels", n}, {"mean_ray_angle_aligned_deg", figure(sum_al / std::max(n, 1))},
+                           {"max_ray_angle_aligned_deg", figure(worst_al)},
                            {"frame_rotation_deg", frame_rot}, {"true_centre", {rig.camera.cx, rig.camera.cy}}};
     }
     StagedDirectory stage(o->out, "calibrate");
@@ -594,7 +601,9 @@ Runner SetupCalibrate(CLI::App* sub, const GlobalOptions* global) {
     summary += "  unified + radtan:         RMS " + F("%.4f", uni.rms) + " px\n";
     if (j.contains("opencv_omnidir") && j["opencv_omnidir"].contains("rms_px"))
       summary += "  OpenCV omnidir (same corners): RMS " + F("%.4f", j["opencv_omnidir"]["rms_px"].get<double>()) + " px\n";
-    if (j.contains("ground_truth"))
+    if (j.contains("ground_truth") && j["ground_truth"]["pixels"].get<int>() == 0)
+      summary += "  vs ground truth: no pixel of the model's annulus sees the true mirror; nothing to compare\n";
+    else if (j.contains("ground_truth"))
       summary += "  vs ground truth: mean ray angle " + F("%.5f", j["ground_truth"]["mean_ray_angle_deg"].get<double>()) +
                  " deg; " + F("%.5f", j["ground_truth"]["mean_ray_angle_aligned_deg"].get<double>()) +
                  " deg after removing a frame rotation of " + F("%.4f", j["ground_truth"]["frame_rotation_deg"].get<double>()) +
@@ -605,7 +614,8 @@ Runner SetupCalibrate(CLI::App* sub, const GlobalOptions* global) {
                  F("%.3f", phys->tilt.y() * 180 / M_PI) + ") deg, offset (" + F("%.2f", phys->offset.x() * 1e3) + ", " +
                  F("%.2f", phys->offset.y() * 1e3) + ", " + F("%.2f", phys->offset.z() * 1e3) + ") mm" +
                  (phys_rim_points ? ", rim " + std::to_string(phys_rim_points) + " points (RMS " + F("%.3f", phys->rim_rms) + " px)" : "") + "\n";
-      if (j.contains("physical") && j["physical"].contains("ground_truth"))
+      if (j.contains("physical") && j["physical"].contains("ground_truth") &&
+          !j["physical"]["ground_truth"]["mean_ray_angle_deg"].is_null())
         summary += "  physical model vs ground truth: mean ray angle " +
                    F("%.5f", j["physical"]["ground_truth"]["mean_ray_angle_deg"].get<double>()) + " deg\n";
     }

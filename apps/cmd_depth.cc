@@ -130,7 +130,7 @@ Runner SetupDepth(CLI::App* sub, const GlobalOptions* global) {
     HOVS_REQUIRE(il8.channels == ir8.channels, o->dataset, "the two images differ in channels");
 
     const auto t0 = std::chrono::steady_clock::now();
-    const depth::Rectification rect = depth::Rectify(rig, ro);
+    const depth::Rectification rect = OnInput(o->dataset, [&] { return depth::Rectify(rig, ro); });
     const double rectify_build_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
     const auto fmt = il8.channels == 3 ? unwrap::PixelFormat::kRgb8 : unwrap::PixelFormat::kGray8;
     unwrap::Remapper ml(rect.left), mr(rect.right);
@@ -139,7 +139,7 @@ Runner SetupDepth(CLI::App* sub, const GlobalOptions* global) {
     ml.Run(il8.View(fmt), unwrap::Interpolation::kBilinear, &left);
     mr.Run(ir8.View(fmt), unwrap::Interpolation::kBilinear, &right);
     const double rectify_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t1).count();
-    const depth::DenseDepth d = depth::ComputeDenseDepth(rect, left[0], right[0], dop);
+    const depth::DenseDepth d = OnInput(o->dataset, [&] { return depth::ComputeDenseDepth(rect, left[0], right[0], dop); });
 
     StagedDirectory staged(o->out, "depth");
     const auto write8 = [&](const std::string& name, const unwrap::Image8& im) {

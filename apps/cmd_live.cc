@@ -122,6 +122,12 @@ Runner SetupLive(CLI::App* sub, const GlobalOptions* global) {
           ++incomplete;
           continue;
         }
+        HOVS_REQUIRE(f->width == table.source_width && f->height == table.source_height,
+                     !o->source.simulate.empty() ? "--simulate " + o->source.simulate
+                     : !o->source.replay.empty() ? "--replay " + o->source.replay
+                                                 : "--camera " + o->source.cameras.front(),
+                     "the frames are ", f->width, " x ", f->height, " but the mapping (", o->map.empty() ? o->model : o->map,
+                     ") is for ", table.source_width, " x ", table.source_height);
         remapper.Run({f->data.data(), f->width, f->height, size_t(f->width), fmt}, interp, &views);
         const auto t2 = Clock::now();
         if (o->write_every > 0 && processed % o->write_every == 0) {

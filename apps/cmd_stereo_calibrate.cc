@@ -120,7 +120,7 @@ Runner SetupStereoCalibrate(CLI::App* sub, const GlobalOptions* global) {
     }
     depth::StereoCalibrationOptions so;
     so.huber_px = o->huber;
-    const depth::StereoCalibration c = depth::CalibrateStereo(left, right, pairs, board, so);
+    const depth::StereoCalibration c = OnInput(o->dataset, [&] { return depth::CalibrateStereo(left, right, pairs, board, so); });
     // The article's method on the same detections, for comparison: each unit's board pose on its own, then the
     // relative pose from the 3-D residual alone.
     std::optional<depth::StereoCalibration> c3;
@@ -128,7 +128,7 @@ Runner SetupStereoCalibrate(CLI::App* sub, const GlobalOptions* global) {
     try {
       depth::StereoCalibrationOptions s3 = so;
       s3.residual = "3d";
-      c3 = depth::CalibrateStereo(left, right, pairs, board, s3);
+      c3 = OnInput(o->dataset, [&] { return depth::CalibrateStereo(left, right, pairs, board, s3); });
     } catch (const Error& e) {
       c3_error = e.what();
     }

@@ -142,17 +142,28 @@ Runner SetupUnwrap(CLI::App* sub, const GlobalOptions* global) {
                  "loaded with --map");
     const unwrap::Interpolation interp = unwrap::ParseInterpolation(o->interp);
     if (!o->save_map.empty()) CheckOutputFile(o->save_map, "HOVSMAP", "a hovs mapping file");
+    // The inputs and their headers first: a bad image is named before any mapping is built.
+    const auto frames = o->input.empty() ? std::vector<Frame>() : ListInputs(o->input, o->unit);
+    std::vector<io::ImageHeader> headers;
+    for (const auto& f : frames) headers.push_back(io::ReadImageHeader(f.image));
+    const auto sizes_match = [&](int width, int height) {
+      for (size_t f = 0; f < frames.size(); ++f)
+        HOVS_REQUIRE(headers[f].width == width && headers[f].height == height, frames[f].image.string(), "the image is ",
+                     headers[f].width, " x ", headers[f].height, " but the model is for ", width, " x ", height);
+    };
     const auto t0 = std::chrono::steady_clock::now();
     unwrap::RemapTable table;
     std::string source;
     if (!o->map.empty()) {
       table = unwrap::LoadRemapTable(o->map);
+      sizes_match(table.source_width, table.source_height);
       source = "loaded " + o->map;
       std::vector<unwrap::ViewSpec> specs;
       for (const auto& v : table.views) specs.push_back(v.spec);
       unwrap::CheckViewsMemory("--map " + o->map, specs, AvailableMemoryBytes());
     } else {
       const AnyModel model = LoadModelSpec(o->model, o->unit, o->scene_distance);
+      sizes_match(model.width(), model.height());
       unwrap::RemapOptions ro;
       ro.tile = o->tile;
       const nlohmann::json versions = Versions();
@@ -172,7 +183,6 @@ Runner SetupUnwrap(CLI::App* sub, const GlobalOptions* global) {
       return 0;
     }
 
-    const auto frames = ListInputs(o->input, o->unit);
     // Ground-truth views: pinhole renders of the scene (without the units' hardware) at the unit's viewpoint.
     std::vector<std::optional<std::vector<uint8_t>>> truth(table.views.size());
     if (!o->truth_scene.empty()) {

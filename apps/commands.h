@@ -8,6 +8,8 @@
 #include <string>
 #include <vector>
 
+#include "core/error.h"
+
 namespace hovs::apps {
 
 struct GlobalOptions {
@@ -29,6 +31,19 @@ const std::vector<Command>& Commands();
 // Range lets NaN through, and an unbounded option once reached OpenCV as 1024000 disparities. Every numeric
 // option of every command carries one of these (its validator is named "bounded"; a test walks the table).
 CLI::Validator Bounded(double lo, double hi, bool low_open = false);
+
+// Runs a library stage on an input the user named (a dataset, a folder of images, a camera): an error of the
+// stage that does not name that input is given its name, so that the one error line says which input failed
+// ("<input> (<stage>): <problem>").
+template <class F>
+auto OnInput(const std::string& input, F&& stage) -> decltype(stage()) {
+  try {
+    return stage();
+  } catch (const Error& e) {
+    if (input.empty() || e.where().find(input) != std::string::npos) throw;
+    throw Error(input + (e.where().empty() ? "" : " (" + e.where() + ")"), e.message());
+  }
+}
 
 // Every library version a hovs output may depend on, recorded in each output's "versions": hovs itself, the
 // compiler, Eigen, Ceres, VTK, NLopt, TBB (design), Embree, OpenImageIO, OpenEXR (raytrace), OpenCV (calib) and

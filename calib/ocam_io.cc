@@ -68,8 +68,9 @@ PolynomialModel<double> ParseOcamCalibResults(const std::string& text, const std
   HOVS_REQUIRE(aff.size() == 3, source + ":" + std::to_string(lineno), "the affine parameters need c, d, e");
   m.c = aff[0], m.d = aff[1], m.e = aff[2];
   const auto size = data("the image size");
-  HOVS_REQUIRE(size.size() == 2 && size[0] > 0 && size[1] > 0, source + ":" + std::to_string(lineno),
-               "the image size needs height and width");
+  HOVS_REQUIRE(size.size() == 2 && size[0] >= 1 && size[1] >= 1 && size[0] <= 65535 && size[1] <= 65535 &&
+                   size[0] == std::floor(size[0]) && size[1] == std::floor(size[1]),
+               source + ":" + std::to_string(lineno), "the image size needs height and width, whole numbers in 1..65535");
   m.height = static_cast<int>(size[0]), m.width = static_cast<int>(size[1]);
   m.rho_min = 0, m.rho_max = 0.5 * std::hypot(m.width, m.height);
   m.Check(source);

@@ -3,9 +3,12 @@
 #include <opencv2/core.hpp>
 
 #include <cmath>
+#include <set>
+#include <vector>
 
 #include "core/error.h"
 #include "core/io.h"
+#include "core/yaml_reader.h"
 
 namespace hovs::calib {
 
@@ -33,63 +36,79 @@ bool LooksLikeOmnidirYaml(const std::string& text) {
 }
 
 namespace {
-cv::Mat ReadMat(const cv::FileStorage& fs, const std::string& key, int rows, int cols, const std::string& source) {
-  const cv::FileNode n = fs[key];
-  HOVS_REQUIRE(!n.empty(), source + ": " + key, "missing");
-  cv::Mat m;
-  if (n.isReal() || n.isInt()) {
-    m = cv::Mat(1, 1, CV_64F, cv::Scalar(static_cast<double>(n)));
-  } else {
-    try {
-      n >> m;
-    } catch (const cv::Exception&) {
-      throw Error(source + ": " + key, "not a matrix");
-    }
+
+// The reader: yaml-cpp on the text after the "%YAML:1.0" directive (OpenCV's own spelling, which YAML 1.2
+// parsers refuse), not cv::FileStorage, whose parser loops and takes gigabytes on some malformed files (a
+// matrix whose "cols:" holds another key). The format is a mapping of scalars and !!opencv-matrix mappings
+// (rows, cols, dt, data).
+std::vector<double> ReadMatrix(const YamlReader& r, const YAML::Node& root, const std::string& key, int rows, int cols) {
+  const YAML::Node n = root[key];
+  HOVS_REQUIRE(n.IsDefined() && !n.IsNull(), r.Where(root, key), "missing");
+  if (n.IsScalar()) {
+    HOVS_REQUIRE(rows * cols == 1, r.Where(n, key), "expected a ", rows, " x ", cols, " matrix");
+    return {r.Number(n, key)};
   }
-  HOVS_REQUIRE(!m.empty() && static_cast<int>(m.total()) == rows * cols, source + ": " + key, "expected a ", rows,
-               " x ", cols, " matrix (got ", m.rows, " x ", m.cols, ")");
-  m.convertTo(m, CV_64F);
-  m = m.reshape(1, rows);
-  for (int r = 0; r < rows; ++r)
-    for (int c = 0; c < cols; ++c) HOVS_REQUIRE(std::isfinite(m.at<double>(r, c)), source + ": " + key, "not finite");
-  return m;
+  r.OnlyKeys(n, key, {"rows", "cols", "dt", "data"});
+  YAML::Node nr, nc, data;
+  const int got_rows = r.Integer(r.Require(n, key, "rows", &nr), key + ".rows");
+  const int got_cols = r.Integer(r.Require(n, key, "cols", &nc), key + ".cols");
+  HOVS_REQUIRE(got_rows * got_cols == rows * cols && got_rows > 0, r.Where(n, key), "expected a ", rows, " x ", cols,
+               " matrix (got ", got_rows, " x ", got_cols, ")");
+  r.Require(n, key, "data", &data);
+  HOVS_REQUIRE(data.IsSequence() && static_cast<int>(data.size()) == rows * cols, r.Where(data, key + ".data"),
+               "expected ", rows * cols, " numbers");
+  std::vector<double> v;
+  for (size_t k = 0; k < data.size(); ++k) v.push_back(r.Number(data[k], key + ".data"));
+  return v;
 }
+
+OmnidirFile ParseOmnidirYamlUnguarded(const std::string& text, const std::string& source) {
+  HOVS_REQUIRE(LooksLikeOmnidirYaml(text), source, "not an OpenCV FileStorage YAML file with a camera_matrix");
+  const YamlReader r(source);
+  const size_t first_line = text.find('\n');
+  // Line numbers in errors count from the file's first line: the directive line is kept as a blank one.
+  const YAML::Node root = r.Load(first_line == std::string::npos ? std::string() : "\n" + text.substr(first_line + 1));
+  HOVS_REQUIRE(root.IsMap(), source, "expected a mapping of the model's parameters");
+  std::set<std::string> known = {"image_width", "image_height", "camera_matrix", "distortion_coefficients", "xi",
+                                 "rms_px", "annulus_px"};
+  for (const char* name : {"xi", "fx", "fy", "cx", "cy", "k1", "k2", "p1", "p2"}) known.insert(std::string("stddev_") + name);
+  r.OnlyKeys(root, "", known);
+  OmnidirFile f;
+  auto& m = f.model;
+  YAML::Node w, h;
+  m.width = r.Integer(r.Require(root, "", "image_width", &w), "image_width");
+  m.height = r.Integer(r.Require(root, "", "image_height", &h), "image_height");
+  HOVS_REQUIRE(m.width > 0 && m.height > 0 && m.width <= 65535 && m.height <= 65535, r.Where(root, "image_width"),
+               "the image size must be 1..65535 pixels a side");
+  const auto K = ReadMatrix(r, root, "camera_matrix", 3, 3);
+  HOVS_REQUIRE(K[3] == 0 && K[6] == 0 && K[7] == 0 && K[8] == 1, r.Where(root["camera_matrix"], "camera_matrix"),
+               "must be [fx s cx; 0 fy cy; 0 0 1]");
+  m.fx = K[0], m.skew = K[1], m.cx = K[2], m.fy = K[4], m.cy = K[5];
+  const auto D = ReadMatrix(r, root, "distortion_coefficients", 1, 4);
+  m.distortion = {D[0], D[1], D[2], D[3]};
+  m.xi = ReadMatrix(r, root, "xi", 1, 1)[0];
+  if (root["rms_px"]) f.rms_px = r.Number(root["rms_px"], "rms_px");
+  if (root["annulus_px"]) {
+    const auto a = ReadMatrix(r, root, "annulus_px", 1, 2);
+    f.annulus_min = a[0], f.annulus_max = a[1];
+    HOVS_REQUIRE(f.annulus_min >= 0 && f.annulus_max > f.annulus_min, r.Where(root["annulus_px"], "annulus_px"),
+                 "must be 0 <= min < max");
+  }
+  for (const char* name : {"xi", "fx", "fy", "cx", "cy", "k1", "k2", "p1", "p2"})
+    if (root[std::string("stddev_") + name])
+      f.stddev[name] = r.Number(root[std::string("stddev_") + name], std::string("stddev_") + name);
+  m.Check(source);
+  return f;
+}
+
 }  // namespace
 
 OmnidirFile ParseOmnidirYaml(const std::string& text, const std::string& source) {
-  HOVS_REQUIRE(LooksLikeOmnidirYaml(text), source, "not an OpenCV FileStorage YAML file with a camera_matrix");
-  cv::FileStorage fs;
   try {
-    fs.open(text, cv::FileStorage::READ | cv::FileStorage::MEMORY);
-  } catch (const cv::Exception& e) {
-    throw Error(source, std::string("unreadable FileStorage YAML: ") + e.what());
+    return ParseOmnidirYamlUnguarded(text, source);
+  } catch (const YAML::Exception& e) {
+    throw Error(source, std::string("malformed YAML: ") + e.what());
   }
-  HOVS_REQUIRE(fs.isOpened(), source, "unreadable FileStorage YAML");
-  OmnidirFile f;
-  auto& m = f.model;
-  for (const char* key : {"image_width", "image_height"})
-    HOVS_REQUIRE(fs[key].isInt(), source + ": " + key, "missing or not an integer");
-  m.width = static_cast<int>(fs["image_width"]), m.height = static_cast<int>(fs["image_height"]);
-  HOVS_REQUIRE(m.width > 0 && m.height > 0, source + ": image_width/image_height", "must be positive");
-  const cv::Mat K = ReadMat(fs, "camera_matrix", 3, 3, source);
-  HOVS_REQUIRE(K.at<double>(1, 0) == 0 && K.at<double>(2, 0) == 0 && K.at<double>(2, 1) == 0 && K.at<double>(2, 2) == 1,
-               source + ": camera_matrix", "must be [fx s cx; 0 fy cy; 0 0 1]");
-  m.fx = K.at<double>(0, 0), m.skew = K.at<double>(0, 1), m.cx = K.at<double>(0, 2);
-  m.fy = K.at<double>(1, 1), m.cy = K.at<double>(1, 2);
-  HOVS_REQUIRE(m.fx > 0 && m.fy > 0, source + ": camera_matrix", "focal lengths must be positive");
-  const cv::Mat D = ReadMat(fs, "distortion_coefficients", 1, 4, source);
-  m.distortion = {D.at<double>(0), D.at<double>(1), D.at<double>(2), D.at<double>(3)};
-  m.xi = ReadMat(fs, "xi", 1, 1, source).at<double>(0);
-  HOVS_REQUIRE(m.xi >= 0, source + ": xi", "must be non-negative (got ", m.xi, ")");
-  if (!fs["rms_px"].empty()) f.rms_px = static_cast<double>(fs["rms_px"]);
-  if (!fs["annulus_px"].empty()) {
-    const cv::Mat a = ReadMat(fs, "annulus_px", 1, 2, source);
-    f.annulus_min = a.at<double>(0), f.annulus_max = a.at<double>(1);
-    HOVS_REQUIRE(f.annulus_min >= 0 && f.annulus_max > f.annulus_min, source + ": annulus_px", "must be 0 <= min < max");
-  }
-  for (const char* name : {"xi", "fx", "fy", "cx", "cy", "k1", "k2", "p1", "p2"})
-    if (!fs[std::string("stddev_") + name].empty()) f.stddev[name] = static_cast<double>(fs[std::string("stddev_") + name]);
-  return f;
 }
 
 OmnidirFile LoadOmnidirYaml(const std::filesystem::path& path) {

@@ -378,7 +378,11 @@ PolynomialCalibration CalibratePolynomial(const std::vector<BoardObservation>& o
 }
 
 std::vector<BoardObservation> LoadCornerCsv(const std::filesystem::path& path) {
-  const std::string text = ReadFile(path, size_t(1) << 30);
+  return ParseCornerCsv(ReadFile(path), path.string());
+}
+
+std::vector<BoardObservation> ParseCornerCsv(const std::string& text, const std::string& source) {
+  const std::filesystem::path path(source);   // names the table in errors
   std::stringstream in(text);
   std::string line;
   std::getline(in, line);

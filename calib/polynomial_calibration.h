@@ -71,6 +71,7 @@ std::vector<BoardObservation> InlierObservations(const std::vector<BoardObservat
 
 // Reads a corner table: image,corner,board_x_mm,board_y_mm,u_px,v_px (the format of shared/data/vmr).
 std::vector<BoardObservation> LoadCornerCsv(const std::filesystem::path& path);
+std::vector<BoardObservation> ParseCornerCsv(const std::string& text, const std::string& where);
 
 }  // namespace hovs::calib
 

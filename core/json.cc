@@ -38,6 +38,10 @@ nlohmann::json ParseJson(const std::string& text, const std::string& where) {
     if (colon != std::string::npos) what = what.substr(colon + 2);
     throw Error(where, "not valid JSON at line " + std::to_string(line) + ", column " + std::to_string(column) +
                            ": " + what);
+  } catch (const nlohmann::json::exception& e) {   // a number out of range (1e999), ...
+    std::string what = e.what();
+    const size_t bracket = what.find("] ");
+    throw Error(where, "not valid JSON: " + (bracket == std::string::npos ? what : what.substr(bracket + 2)));
   }
   HOVS_REQUIRE(duplicate.empty(), where, "the key '", duplicate, "' appears twice in one object");
   HOVS_REQUIRE(too_deep == 0, where, "nested deeper than ", kMaxDepth, " levels");

@@ -187,7 +187,7 @@ void RequireMemory(const std::string& where, const std::string& what, std::size_
 
 bool KeepFreedMemoryForReuse() {
   KeepFreedLargePages(kKeptFreedBytes);
-#if defined(__GLIBC__) && !defined(__SANITIZE_ADDRESS__)
+#if defined(__GLIBC__) && !defined(HOVS_ADDRESS_SANITIZER)
   // 32 MiB is the largest mmap threshold glibc accepts on 64-bit (it bounds the per-thread heaps' blocks).
   return mallopt(M_MMAP_THRESHOLD, 32 << 20) == 1 && mallopt(M_TRIM_THRESHOLD, 1 << 30) == 1;
 #else

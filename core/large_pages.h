@@ -12,6 +12,15 @@
 #include <optional>
 #include <string>
 
+// Defined when AddressSanitizer instruments this build (GCC names it __SANITIZE_ADDRESS__, clang a feature).
+#if defined(__SANITIZE_ADDRESS__)
+#define HOVS_ADDRESS_SANITIZER 1
+#elif defined(__has_feature)
+#if __has_feature(address_sanitizer)
+#define HOVS_ADDRESS_SANITIZER 1
+#endif
+#endif
+
 namespace hovs {
 
 inline constexpr std::size_t kHugePageBytes = std::size_t(2) << 20;

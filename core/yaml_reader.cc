@@ -38,6 +38,7 @@ void YamlReader::OnlyKeys(const YAML::Node& map, const std::string& path, const 
 
 const YAML::Node& YamlReader::Require(const YAML::Node& map, const std::string& path, const std::string& key,
                                       YAML::Node* out) const {
+  HOVS_REQUIRE(map.IsMap(), Where(map, path), "expected a mapping with '", key, "'");
   *out = map[key];
   HOVS_REQUIRE(out->IsDefined() && !out->IsNull(), Where(map, path), "missing '",
                path.empty() ? key : path + "." + key, "'");

@@ -20,7 +20,8 @@ Range RangeOf(const YamlReader& r, const YAML::Node& n, const std::string& key) 
 }
 }  // namespace
 
-DesignConfig ParseDesignConfig(const std::string& text, const std::string& source) {
+namespace {
+DesignConfig ParseDesignConfigUnguarded(const std::string& text, const std::string& source) {
   const YamlReader r(source);
   const YAML::Node root = r.Load(text);
   HOVS_REQUIRE(root.IsMap(), source, "expected a YAML mapping at the top level");
@@ -107,6 +108,15 @@ DesignConfig ParseDesignConfig(const std::string& text, const std::string& sourc
   p.Check(source);
   cfg.sweep.Check(source + " (search.grid)");
   return cfg;
+}
+}  // namespace
+
+DesignConfig ParseDesignConfig(const std::string& text, const std::string& source) {
+  try {
+    return ParseDesignConfigUnguarded(text, source);
+  } catch (const YAML::Exception& e) {
+    throw Error(source, std::string("malformed YAML: ") + e.what());
+  }
 }
 
 DesignConfig LoadDesignConfig(const std::filesystem::path& path) {

@@ -6,6 +6,7 @@
 #include <jpeglib.h>
 #include <jerror.h>
 
+#include <algorithm>
 #include <cstring>
 
 #include "core/error.h"
@@ -15,7 +16,7 @@ namespace {
 
 // ------------------------------------------------------------------------------------------------- PNG
 // libpng reports errors through a callback that must not return: it records the message and longjmps back to
-// the setjmp of the function that called libpng (PngHeader, PngPixels; they hold no C++ objects). Warnings are
+// the setjmp of the function that called libpng (PngInfo, PngTransforms, PngPixels; they hold no C++ objects). Warnings are
 // ignored: libpng raises errors for what damages the pixels (a short or corrupt IDAT stream, a bad checksum).
 
 struct PngSource {
@@ -38,10 +39,16 @@ void PngRead(png_structp png, png_bytep out, png_size_t n) {
   src->pos += n;
 }
 
-// The header and the transforms to 8/16-bit grey, grey + alpha, RGB or RGBA. Returns false on an error.
-bool PngHeader(png_structp png, png_infop info, int* width, int* height, int* channels, int* bits) {
+// The header (IHDR and the chunks before the pixels); nothing the size of the image is allocated yet.
+bool PngInfo(png_structp png, png_infop info) {
   if (setjmp(png_jmpbuf(png))) return false;
   png_read_info(png, info);
+  return true;
+}
+
+// The transforms to 8/16-bit grey, grey + alpha, RGB or RGBA (libpng allocates its row buffers here).
+bool PngTransforms(png_structp png, png_infop info) {
+  if (setjmp(png_jmpbuf(png))) return false;
   const int type = png_get_color_type(png, info), depth = png_get_bit_depth(png, info);
   if (type == PNG_COLOR_TYPE_PALETTE) png_set_palette_to_rgb(png);
   if (type == PNG_COLOR_TYPE_GRAY && depth < 8) png_set_expand_gray_1_2_4_to_8(png);
@@ -49,11 +56,18 @@ bool PngHeader(png_structp png, png_infop info, int* width, int* height, int* ch
   if (depth == 16) png_set_swap(png);   // native (little-endian) 16-bit samples
   png_set_interlace_handling(png);
   png_read_update_info(png, info);
-  *width = static_cast<int>(png_get_image_width(png, info));
-  *height = static_cast<int>(png_get_image_height(png, info));
-  *channels = png_get_channels(png, info);
-  *bits = png_get_bit_depth(png, info);
   return true;
+}
+
+// The channels and bits per channel that PngTransforms gives, from the header.
+void PngOutputFormat(png_structp png, png_infop info, int* channels, int* bits) {
+  const int type = png_get_color_type(png, info);
+  const bool trns = png_get_valid(png, info, PNG_INFO_tRNS) != 0;
+  *channels = type == PNG_COLOR_TYPE_GRAY         ? 1 + trns
+              : type == PNG_COLOR_TYPE_GRAY_ALPHA ? 2
+              : type == PNG_COLOR_TYPE_RGB_ALPHA  ? 4
+                                                  : 3 + trns;   // RGB, palette
+  *bits = png_get_bit_depth(png, info) == 16 ? 16 : 8;
 }
 
 bool PngPixels(png_structp png, png_infop info, png_bytep* rows) {
@@ -61,6 +75,22 @@ bool PngPixels(png_structp png, png_infop info, png_bytep* rows) {
   png_read_image(png, rows);
   png_read_end(png, info);
   return true;
+}
+
+// The chunk structure, walked before libpng sees the file: every chunk's declared length must lie within the
+// file (libpng allocates a chunk's declared length before it reads it: 2 GB for a damaged tEXt length field).
+void CheckPngChunks(const std::string& b, const std::string& where) {
+  size_t pos = 8;
+  while (pos < b.size()) {
+    HOVS_REQUIRE(b.size() - pos >= 12, where, "truncated PNG (a chunk header is cut off at byte ", pos, ")");
+    const auto* p = reinterpret_cast<const unsigned char*>(b.data() + pos);
+    const uint64_t length = (uint64_t(p[0]) << 24) | (uint64_t(p[1]) << 16) | (uint64_t(p[2]) << 8) | p[3];
+    HOVS_REQUIRE(length <= b.size() - pos - 12, where, "corrupt or truncated PNG: a chunk at byte ", pos, " declares ",
+                 length, " bytes, past the end of the file");
+    if (std::memcmp(p + 4, "IEND", 4) == 0) return;
+    pos += 12 + length;
+  }
+  throw Error(where, "truncated PNG (no IEND chunk)");
 }
 
 // ------------------------------------------------------------------------------------------------- JPEG
@@ -119,6 +149,7 @@ bool IsJpeg(const std::string& b) {
 }
 
 Decoded DecodePng(const std::string& bytes, const std::string& where, bool pixels, SizeCheck check) {
+  CheckPngChunks(bytes, where);
   PngSource src{&bytes, 0, {0}};
   png_structp png = png_create_read_struct(PNG_LIBPNG_VER_STRING, &src, PngError, PngWarning);
   HOVS_REQUIRE(png != nullptr, where, "cannot start the PNG decoder");
@@ -130,12 +161,20 @@ Decoded DecodePng(const std::string& bytes, const std::string& where, bool pixel
   } cleanup{&png, &info};
   HOVS_REQUIRE(info != nullptr, where, "cannot start the PNG decoder");
   png_set_read_fn(png, &src, PngRead);
-  // Refuse absurd declared sizes inside libpng too (its own limit is 1e6 a side).
-  png_set_user_limits(png, 0x7fffffff, 0x7fffffff);
+  // libpng's own limits on the declared size: hovs' (CheckSize refuses less; these keep libpng from allocating
+  // for more than that before it).
+  png_set_user_limits(png, 65535, 65535);
+  // No chunk (or decompressed text or profile) larger than the file itself or 8 MB: a header may declare 2 GB.
+  png_set_chunk_malloc_max(png, std::max<png_alloc_size_t>(bytes.size(), 8 << 20));
   Decoded d;
-  HOVS_REQUIRE(PngHeader(png, info, &d.width, &d.height, &d.channels, &d.bits), where, "not a readable PNG: ",
-               src.message);
+  HOVS_REQUIRE(PngInfo(png, info), where, "not a readable PNG: ", src.message);
+  d.width = static_cast<int>(png_get_image_width(png, info));
+  d.height = static_cast<int>(png_get_image_height(png, info));
+  PngOutputFormat(png, info, &d.channels, &d.bits);
   check(where, d.width, d.height, d.channels, d.bits);
+  HOVS_REQUIRE(PngTransforms(png, info), where, "not a readable PNG: ", src.message);
+  HOVS_REQUIRE(png_get_channels(png, info) == d.channels && png_get_bit_depth(png, info) == d.bits, where,
+               "unsupported PNG colour format");
   if (!pixels) return d;
   const size_t row = size_t(d.width) * d.channels * (d.bits / 8);
   d.samples.resize(row * d.height);

@@ -167,20 +167,28 @@ nlohmann::json FrameSidecar(const SceneConfig& cfg, const raytrace::RayScene& sc
 }
 
 std::vector<CornerTruth> VisibleSidecarCorners(const std::filesystem::path& sidecar) {
+  return VisibleSidecarCorners(ReadJsonFile(sidecar), sidecar.string());
+}
+
+std::vector<CornerTruth> VisibleSidecarCorners(const nlohmann::json& side, const std::string& where) {
   try {
-    const auto side = ReadJsonFile(sidecar);
     std::vector<CornerTruth> out;
+    std::set<int> ids;
     for (const auto& c : side.at("boards").at(0).at("corners")) {
       if (c.at("status") != "visible") continue;
       CornerTruth t;
       t.id = c.at("id").get<int>(), t.status = "visible";
       t.board_xy = Vec2d(c.at("board").at(0).get<double>(), c.at("board").at(1).get<double>());
       t.pixel = Vec2d(c.at("pixel").at(0).get<double>(), c.at("pixel").at(1).get<double>());
+      HOVS_REQUIRE(t.board_xy.allFinite() && t.pixel.allFinite() && t.board_xy.cwiseAbs().maxCoeff() <= 100 &&
+                       t.pixel.cwiseAbs().maxCoeff() <= 1e6,
+                   where, "corner ", t.id, " has non-finite or absurd coordinates");
+      HOVS_REQUIRE(ids.insert(t.id).second, where, "corner ", t.id, " appears twice");
       out.push_back(t);
     }
     return out;
   } catch (const nlohmann::json::exception& e) {
-    throw Error(sidecar.string(), std::string("not a hovs ground-truth sidecar with board corners: ") + e.what());
+    throw Error(where, std::string("not a hovs ground-truth sidecar with board corners: ") + e.what());
   }
 }
 

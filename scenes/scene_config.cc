@@ -209,7 +209,8 @@ Texture ReadTexture(const YamlReader& r, const YAML::Node& n, const std::string&
 
 }  // namespace
 
-SceneConfig ParseSceneConfig(const std::string& text, const std::string& source, const std::filesystem::path& base) {
+namespace {
+SceneConfig ParseSceneConfigUnguarded(const std::string& text, const std::string& source, const std::filesystem::path& base) {
   const YamlReader r(source);
   const YAML::Node root = r.Load(text);
   HOVS_REQUIRE(root.IsMap(), source, "expected a YAML mapping at the top level");
@@ -399,6 +400,15 @@ SceneConfig ParseSceneConfig(const std::string& text, const std::string& source,
   }
   CheckUnitsClearOfObjects(cfg.description, source);
   return cfg;
+}
+}  // namespace
+
+SceneConfig ParseSceneConfig(const std::string& text, const std::string& source, const std::filesystem::path& base) {
+  try {
+    return ParseSceneConfigUnguarded(text, source, base);
+  } catch (const YAML::Exception& e) {
+    throw Error(source, std::string("malformed YAML: ") + e.what());
+  }
 }
 
 UnitClearance::UnitClearance(const raytrace::SceneDescription& description) : objects_(description.objects) {

@@ -7,12 +7,13 @@ PACKAGES=(
   build-essential cmake ninja-build pkg-config git ca-certificates
   libeigen3-dev libnlopt-cxx-dev libceres-dev
   libembree-dev libtbb-dev
-  libopenimageio-dev openimageio-tools libopenexr-dev
+  libopenimageio-dev openimageio-tools libopenexr-dev libpng-dev libjpeg-dev
   libopencv-dev libopencv-contrib-dev
   libvtk9-dev mpi-default-dev xvfb xauth
   libaravis-dev aravis-tools libusb-1.0-0-dev iproute2 util-linux
   libcli11-dev nlohmann-json3-dev libyaml-cpp-dev libspdlog-dev libfmt-dev
   libgtest-dev libgmock-dev libbenchmark-dev
+  clang libfuzzer-14-dev libclang-rt-14-dev
 )
 
 SUDO=""

@@ -103,12 +103,17 @@ Layout PresetLayout(const std::string& name) {
 }
 
 Layout LoadLayout(const std::filesystem::path& path) {
-  const YamlReader r(path.string());
-  const YAML::Node root = r.Load(ReadFile(path));
-  HOVS_REQUIRE(root.IsMap(), path.string(), "expected a YAML mapping with 'views'");
+  return ParseLayout(ReadFile(path), path.string(), path.stem().string());
+}
+
+namespace {
+Layout ParseLayoutUnguarded(const std::string& text, const std::string& source, const std::string& name) {
+  const YamlReader r(source);
+  const YAML::Node root = r.Load(text);
+  HOVS_REQUIRE(root.IsMap(), source, "expected a YAML mapping with 'views'");
   r.OnlyKeys(root, "", {"name", "views"});
   Layout l;
-  l.name = root["name"] ? r.String(root["name"], "name") : path.stem().string();
+  l.name = root["name"] ? r.String(root["name"], "name") : name;
   YAML::Node views;
   r.Require(root, "", "views", &views);
   HOVS_REQUIRE(views.IsSequence() && views.size() > 0, r.Where(views, "views"), "expected a list of views");
@@ -152,8 +157,17 @@ Layout LoadLayout(const std::filesystem::path& path) {
     v.Check(r.Where(n, key));
     l.views.push_back(v);
   }
-  l.Check(path.string());
+  l.Check(source);
   return l;
+}
+}  // namespace
+
+Layout ParseLayout(const std::string& text, const std::string& source, const std::string& name) {
+  try {
+    return ParseLayoutUnguarded(text, source, name);
+  } catch (const YAML::Exception& e) {
+    throw Error(source, std::string("malformed YAML: ") + e.what());
+  }
 }
 
 Layout ResolveLayout(const std::string& name_or_path) {

@@ -57,6 +57,8 @@ void CheckViewsMemory(const std::string& where, const std::vector<ViewSpec>& vie
 
 Layout PresetLayout(const std::string& name);                 // throws listing the known presets
 Layout LoadLayout(const std::filesystem::path& path);         // YAML, validated (file:line)
+// The same from the file's text; `name` is the layout's name when the text gives none.
+Layout ParseLayout(const std::string& text, const std::string& source, const std::string& name);
 // A preset name or a YAML file.
 Layout ResolveLayout(const std::string& name_or_path);
 std::vector<std::string> PresetNames();

@@ -395,8 +395,7 @@ void SaveRemapTable(const std::filesystem::path& path, const RemapTable& table) 
 }
 
 namespace {
-std::string CheckedContents(const std::filesystem::path& path, const std::string& data) {
-  const std::string where = path.string();
+std::string CheckedContents(const std::string& where, const std::string& data) {
   HOVS_REQUIRE(data.size() >= sizeof kMagic + 16 && std::memcmp(data.data(), kMagic, sizeof kMagic) == 0, where,
                "not a hovs mapping file (bad magic)");
   uint32_t version = 0;
@@ -413,7 +412,7 @@ std::string CheckedContents(const std::filesystem::path& path, const std::string
 }  // namespace
 
 std::string MappingFileHeader(const std::filesystem::path& path) {
-  const std::string body = CheckedContents(path, ReadFile(path));
+  const std::string body = CheckedContents(path.string(), ReadFile(path));
   Reader r(body, path.string());
   char magic[8];
   r.Bytes(magic, 8, "magic");
@@ -461,9 +460,10 @@ void CheckViewTiles(const ViewTable& v, int source_width, int source_height, con
 
 }  // namespace
 
-RemapTable LoadRemapTable(const std::filesystem::path& path) {
-  const std::string where = path.string();
-  const std::string body = CheckedContents(path, ReadFile(path));
+RemapTable LoadRemapTable(const std::filesystem::path& path) { return ParseRemapTable(ReadFile(path), path.string()); }
+
+RemapTable ParseRemapTable(const std::string& bytes, const std::string& where) {
+  const std::string body = CheckedContents(where, bytes);
   Reader r(body, where);
   char magic[8];
   r.Bytes(magic, 8, "magic");

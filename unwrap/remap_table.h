@@ -151,6 +151,8 @@ void SaveRemapTable(const std::filesystem::path& path, const RemapTable& table);
 // Verified (magic, version, checksum) and checked field by field against its header, so that a damaged or edited
 // file, even one given a valid checksum again, cannot make the remap read outside the frame. Throws hovs::Error.
 RemapTable LoadRemapTable(const std::filesystem::path& path);
+// The same from the file's bytes (`where` names it in errors).
+RemapTable ParseRemapTable(const std::string& bytes, const std::string& where);
 
 // The header of a mapping file as JSON text (for reports) without loading the tables.
 std::string MappingFileHeader(const std::filesystem::path& path);

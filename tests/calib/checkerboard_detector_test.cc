@@ -99,6 +99,25 @@ TEST(CheckerboardDetector, FindsTheVmrCornersOfTheReferenceToolbox) {
   EXPECT_LT(from_edges.rms, 0.31);
 }
 
+TEST(CheckerboardDetector, FindsNoBoardInNoise) {
+  // Noise holds saddle points that line up into small grids; their squares neither are flat nor alternate.
+  CheckerboardDetectOptions o;
+  o.board = {7, 5, 0.030};
+  for (uint32_t seed : {1u, 2u, 3u, 4u, 5u, 6u}) {
+    cv::Mat noise(440, 550, CV_8UC1);
+    uint32_t state = seed;
+    for (int y = 0; y < noise.rows; ++y)
+      for (int x = 0; x < noise.cols; ++x) state = state * 1664525u + 1013904223u, noise.at<uint8_t>(y, x) = state >> 24;
+    const auto det = DetectCheckerboard(noise, o);
+    EXPECT_FALSE(det.found) << "seed " << seed << ": " << det.status;
+    // Blurred noise (texture at the scale of small squares) as well.
+    cv::GaussianBlur(noise, noise, cv::Size(0, 0), 2.0);
+    cv::normalize(noise, noise, 0, 255, cv::NORM_MINMAX);
+    const auto blurred = DetectCheckerboard(noise, o);
+    EXPECT_FALSE(blurred.found) << "seed " << seed << ", blurred: " << blurred.status;
+  }
+}
+
 TEST(CheckerboardDetector, ReportsWhyNothingWasFound) {
   CheckerboardDetectOptions o;
   o.board = {7, 6, 0.030};

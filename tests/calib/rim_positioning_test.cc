@@ -68,6 +68,16 @@ TEST(RimPositioning, RefusesAnImageWithoutRimAndAWrongSize) {
   EXPECT_TRUE(none.points.empty());
   EXPECT_THROW(EstimateMirrorPosition(none, rig), Error);
   EXPECT_THROW(DetectRimEdge(flat.data(), rig.camera.width - 2, rig.camera.height, rig, {}), Error);
+  // Noise has steps everywhere but no rim: the confidence test refuses it (it once gave a 2.7 mm adjustment).
+  std::vector<uint8_t> noise(flat.size());
+  uint32_t state = 7;
+  for (auto& v : noise) state = state * 1664525u + 1013904223u, v = static_cast<uint8_t>(state >> 24);
+  try {
+    LocateMirror(noise.data(), rig.camera.width, rig.camera.height, rig, {}, nullptr, "noise.png");
+    ADD_FAILURE() << "a rim was found in noise";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("noise.png: no rim"), std::string::npos) << e.what();
+  }
 }
 
 }  // namespace

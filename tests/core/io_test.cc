@@ -7,6 +7,7 @@
 
 #include "core/error.h"
 #include "core/io.h"
+#include "core/json.h"
 #include "core/manifest.h"
 
 namespace hovs {
@@ -134,6 +135,18 @@ TEST(Io, OutputFoldersReplaceOnlyTheSameCommandsEarlierOutput) {
   EXPECT_EQ(ReadFile(root / "user" / "notes.txt"), "mine");
   EXPECT_EQ(ReadFile(root / "config.yaml"), "a: 1\n");
   fs::remove_all(root);
+}
+
+TEST(Json, DuplicateKeysAndBadNumbersAreNamedErrors) {
+  EXPECT_EQ(ParseJson(R"({"a": {"b": 1, "c": [1, 2]}, "d": 2})", "x.json")["a"]["c"][1], 2);
+  EXPECT_NE(ErrorOf([] { ParseJson("{\"cx\": 1,\n \"cx\": 2}", "m.json"); }).find("m.json: the key 'cx' appears twice"),
+            std::string::npos);
+  EXPECT_NE(ErrorOf([] { ParseJson("{\"a\": {\"b\": 1, \"b\": 1}}", "m.json"); }).find("'b' appears twice"),
+            std::string::npos);
+  EXPECT_NE(ErrorOf([] { ParseJson("{\"a\":\n  [1, 2,,]}", "m.json"); }).find("line 2"), std::string::npos);
+  EXPECT_NE(ErrorOf([] { ParseJson("{\"a\": 1e999}", "m.json"); }).find("m.json: not valid JSON"), std::string::npos);
+  EXPECT_NE(ErrorOf([] { ParseJson(std::string(300, '[') + std::string(300, ']'), "m.json"); }).find("nested deeper"),
+            std::string::npos);
 }
 
 TEST(Io, PathsInFilesStayInTheirFolder) {

@@ -122,7 +122,7 @@ TEST(LargePages, FreedFrameSizedBlocksStayForReuse) {
   const std::size_t previous_limit = KeepFreedLargePages(0);
   const bool malloc_settings = KeepFreedMemoryForReuse();
   EXPECT_EQ(KeepFreedLargePages(previous_limit), kKeptFreedBytes) << "large buffers are kept in every build";
-#if defined(__GLIBC__) && !defined(__SANITIZE_ADDRESS__)
+#if defined(__GLIBC__) && !defined(HOVS_ADDRESS_SANITIZER)
   ASSERT_TRUE(malloc_settings);
   const std::size_t block = std::size_t(16) << 20;
   const auto mapped_blocks = mallinfo2().hblks;

@@ -2,6 +2,8 @@
 // polynomial fitted to the exact model.
 #include <gtest/gtest.h>
 
+#include <functional>
+
 #include "core/any_model.h"
 #include "core/model_fit.h"
 #include "core/pinhole.h"
@@ -182,6 +184,46 @@ TEST(Polynomial, CheckAndInverseRejectBadModels) {
   m.poly = {-200, 0, 0.01, -2e-5};
   m.rho_min = 1, m.rho_max = 1000;
   EXPECT_THROW(m.FitInverse(), Error);
+}
+
+TEST(Models, CheckRefusesWhatNoCameraHas) {
+  // Each of these once loaded and gave blank views with exit 0.
+  PolynomialModel<double> p;
+  p.width = 1024, p.height = 768, p.cx = 511.5, p.cy = 383.5, p.poly = {-200, 0, 1e-3}, p.rho_min = 0, p.rho_max = 400;
+  EXPECT_NO_THROW(p.Check());
+  const auto poly_refused = [&](const std::function<void(PolynomialModel<double>*)>& spoil) {
+    PolynomialModel<double> q = p;
+    spoil(&q);
+    EXPECT_THROW(q.Check("model.json"), Error);
+  };
+  poly_refused([](auto* q) { q->poly = {0, 0, 0, 0, 0}; });
+  poly_refused([](auto* q) { q->cx = 1e9; });
+  poly_refused([](auto* q) { q->cy = NAN; });
+  poly_refused([](auto* q) { q->c = 1e308; });
+  poly_refused([](auto* q) { q->poly[2] = 1e308; });   // f(rho) overflows over the annulus
+  poly_refused([](auto* q) { q->rho_max = 1e9; });
+  poly_refused([](auto* q) { q->inv_poly = {1, NAN}; });
+  poly_refused([](auto* q) { q->width = -3; });
+  UnifiedModel<double> u;
+  u.width = 1024, u.height = 768, u.xi = 0.9, u.fx = u.fy = 300, u.cx = 511.5, u.cy = 383.5;
+  EXPECT_NO_THROW(u.Check());
+  for (auto spoil : std::vector<std::function<void(UnifiedModel<double>*)>>{
+           [](auto* m) { m->xi = NAN; }, [](auto* m) { m->fx = 1e308; }, [](auto* m) { m->cx = 1e9; },
+           [](auto* m) { m->distortion.k1 = INFINITY; }, [](auto* m) { m->skew = NAN; }}) {
+    UnifiedModel<double> m = u;
+    spoil(&m);
+    EXPECT_THROW(m.Check(), Error);
+  }
+  CatadioptricCamera<double> rig = test::AlignedRig();
+  EXPECT_NO_THROW(rig.Check());
+  for (auto spoil : std::vector<std::function<void(CatadioptricCamera<double>*)>>{
+           [](auto* r) { r->mirror.a = 1e308; }, [](auto* r) { r->camera.fx = 1e308; },
+           [](auto* r) { r->camera.cx = -1e9; }, [](auto* r) { r->cam_from_mirror.translation.x() = NAN; },
+           [](auto* r) { r->cam_from_mirror.rotation.coeffs() *= 3; }}) {
+    CatadioptricCamera<double> r = rig;
+    spoil(&r);
+    EXPECT_THROW(r.Check(), Error);
+  }
 }
 
 }  // namespace

@@ -3,6 +3,8 @@
 // network namespace (tests/hw/run_in_netns.sh).
 #include <gtest/gtest.h>
 
+#include <chrono>
+
 #include <nlohmann/json.hpp>
 
 #include "core/io.h"
@@ -150,6 +152,18 @@ TEST(CaptureCli, RenderedFramesCrossTheProtocolIntoADatasetThatCalibratesAndUnwr
     for (int i = 0; i < 8; ++i) sent[i] = static_cast<uint8_t>(k >> (8 * i));
     EXPECT_TRUE(got == sent) << "a frame written under packet loss is corrupt";
   }
+
+  // Every frame incomplete (49 % of the packets dropped): the wait is bounded overall, not per frame. The capture
+  // ends after --timeout without a complete frame, with one error line and a manifest whose status says so.
+  const auto t_hang = std::chrono::steady_clock::now();
+  const auto hang = test::Run("timeout -s KILL 60 " + std::string(HOVS_BINARY) + " -q capture --simulate " +
+                              (dir / "set/dataset.json").string() + " --simulate-loss 0.49 --frames 1 --timeout 3 --out " +
+                              (dir / "hang").string());
+  EXPECT_EQ(hang.exit_code, 2) << hang.output;
+  EXPECT_LT(std::chrono::duration<double>(std::chrono::steady_clock::now() - t_hang).count(), 30);
+  EXPECT_NE(hang.output.find("no complete frame within 3 s"), std::string::npos) << hang.output;
+  const auto mh = nlohmann::json::parse(ReadFile(dir / "hang/dataset.json"));
+  EXPECT_NE(mh["status"].get<std::string>().find("stopped by an error after 0 frames"), std::string::npos) << mh["status"];
 
   // Ctrl-C ends the capture with a valid manifest.
   const auto intr = test::Run("timeout -s INT --preserve-status 4 " + std::string(HOVS_BINARY) +
