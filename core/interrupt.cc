@@ -4,6 +4,7 @@
 #include <signal.h>
 
 #include <algorithm>
+#include <chrono>
 #include <mutex>
 #include <thread>
 #include <vector>
@@ -52,14 +53,21 @@ void RemoveRegistered() {
 
 void TakeSignals() {
   const sigset_t set = InterruptSignals();
+  // When the first signal asked a command to stop, signals within the next second are the same interrupt
+  // (coreutils' timeout sends its signal to the process and again to its group; a double Ctrl-C); a later one
+  // ends the process.
+  std::chrono::steady_clock::time_point asked{};
   for (;;) {
     int sig = 0;
     if (sigwait(&set, &sig) != 0) continue;
     std::atomic<bool>* flag = g_flag.exchange(nullptr);
-    if (flag) {   // the command ends by itself; the next signal ends the process
+    if (flag) {   // the command ends by itself
       flag->store(true);
+      asked = std::chrono::steady_clock::now();
       continue;
     }
+    if (asked.time_since_epoch().count() != 0 && std::chrono::steady_clock::now() - asked < std::chrono::seconds(1))
+      continue;
     RemoveRegistered();
     EndBySignal(sig);
   }

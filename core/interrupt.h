@@ -1,7 +1,8 @@
 // What happens when a hovs process is interrupted (SIGINT, SIGTERM, SIGHUP): the staging folders and temporary
 // files it is writing are removed, then the process ends by the signal as it would have without hovs' handling.
 // A command that can end cleanly by itself (a capture, a live run) asks instead for the first signal to set a
-// flag (InterruptScope); a second signal removes and ends as above.
+// flag (InterruptScope); a signal more than a second later removes and ends as above (one within the second is
+// taken for the same interrupt: coreutils' timeout sends its signal twice).
 //
 // The signals are blocked in every thread and taken by one thread of their own (sigwait), so the removal runs as
 // ordinary code, not in a signal handler, while the other threads may still be writing: what they create after
