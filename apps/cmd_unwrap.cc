@@ -145,7 +145,18 @@ Runner SetupUnwrap(CLI::App* sub, const GlobalOptions* global) {
     // The inputs and their headers first: a bad image is named before any mapping is built.
     const auto frames = o->input.empty() ? std::vector<Frame>() : ListInputs(o->input, o->unit);
     std::vector<io::ImageHeader> headers;
-    for (const auto& f : frames) headers.push_back(io::ReadImageHeader(f.image));
+    for (const auto& f : frames) {
+      headers.push_back(io::ReadImageHeader(f.image));
+      const int c = headers.back().channels;
+      if (o->format == "auto")
+        HOVS_REQUIRE(c == 1 || c == 3 || c == 4, f.image.string(), "unsupported channel count ", c);
+      else
+        HOVS_REQUIRE((unwrap::ParsePixelFormat(o->format) == unwrap::PixelFormat::kRgb8) == (c >= 3), f.image.string(),
+                     "has ", c, " channels, which is not ", o->format);
+    }
+    // The truth scene too.
+    std::optional<scenes::SceneConfig> truth_cfg;
+    if (!o->truth_scene.empty()) truth_cfg = scenes::LoadSceneConfig(o->truth_scene);
     const auto sizes_match = [&](int width, int height) {
       for (size_t f = 0; f < frames.size(); ++f)
         HOVS_REQUIRE(headers[f].width == width && headers[f].height == height, frames[f].image.string(), "the image is ",
@@ -185,8 +196,8 @@ Runner SetupUnwrap(CLI::App* sub, const GlobalOptions* global) {
 
     // Ground-truth views: pinhole renders of the scene (without the units' hardware) at the unit's viewpoint.
     std::vector<std::optional<std::vector<uint8_t>>> truth(table.views.size());
-    if (!o->truth_scene.empty()) {
-      const auto cfg = scenes::LoadSceneConfig(o->truth_scene);
+    if (truth_cfg) {
+      const auto& cfg = *truth_cfg;
       const auto& units = cfg.description.units;
       size_t ui = 0;
       if (!o->unit.empty()) {

@@ -113,16 +113,25 @@ int RunCommandLine(int argc, const char* const* argv, bool rethrow) {
     CLI::App* sub = app.add_subcommand(cmd.name, cmd.help);
     runners.emplace_back(sub, cmd.setup(sub, &global));
   }
-  // An unknown subcommand is named as such (CLI11 would say that a subcommand is required).
-  if (argc > 1 && argv[1][0] != '-') {
-    bool known = false;
-    for (const auto& cmd : Commands()) known = known || std::string(argv[1]) == cmd.name;
-    if (!known) {
-      const std::string message = std::string("unknown command '") + argv[1] + "' (hovs --help lists them)";
-      if (rethrow) throw Error("command line", message);
-      std::cerr << "hovs: error: " << message << "\n";
-      return 2;
+  // An unknown subcommand or global option before it is named as such (CLI11 would say that a subcommand is
+  // required).
+  for (int k = 1; k < argc; ++k) {
+    const std::string arg = argv[k];
+    std::string message;
+    if (arg.empty() || arg[0] != '-') {
+      bool known = false;
+      for (const auto& cmd : Commands()) known = known || arg == cmd.name;
+      if (!known) message = "unknown command '" + arg + "' (hovs --help lists them)";
+    } else if (arg != "-q" && arg != "--quiet" && arg != "--json" && arg != "-h" && arg != "--help" &&
+               arg != "--version") {
+      message = "unknown option '" + arg + "' before the command (hovs --help lists the options)";
+    } else {
+      continue;
     }
+    if (message.empty()) break;   // the command: its own options follow
+    if (rethrow) throw Error("command line", message);
+    std::cerr << "hovs: error: " << message << "\n";
+    return 2;
   }
   try {
     app.parse(argc, argv);

@@ -295,6 +295,7 @@ TEST_F(Hardening, AbsurdModelsManifestsAndTablesAreRefusedByName) {
 TEST_F(Hardening, OptionsAndCommandsAreNamedInOneLine) {
   const fs::path w = Work("options");
   Refused("frobnicate", "unknown command 'frobnicate'");
+  Refused("--frob render", "unknown option '--frob'");
   for (const std::string v : {"nan", "inf", "-1", "1e12"})
     Refused("depth --dataset " + Street().string() + " --sigma-disparity " + v + " --out " + (w / "d").string(),
             "--sigma-disparity");
