@@ -23,6 +23,7 @@
 #include "calib/polynomial_calibration.h"
 #include "core/error.h"
 #include "core/io.h"
+#include "core/json.h"
 #include "results/html.h"
 #include "results/plot.h"
 #include "scenes/ground_truth.h"
@@ -115,7 +116,7 @@ Input FromDataset(const std::filesystem::path& manifest, const std::string& unit
     in.width = in.truth->rig.camera.width, in.height = in.truth->rig.camera.height;
   }
   calib::CheckerboardDetectOptions dopt = detect;
-  if (m.contains("boards") && !m["boards"].empty() && m["boards"][0].value("type", "") == "checker") {
+  if (m.contains("boards") && !m["boards"].empty() && JsonText(m["boards"][0], "type") == "checker") {
     const auto& b = m["boards"][0];
     try {
       dopt.board.cols = b.at("inner_corners").at(0), dopt.board.rows = b.at("inner_corners").at(1);
@@ -134,7 +135,7 @@ Input FromDataset(const std::filesystem::path& manifest, const std::string& unit
     for (const auto& v : fr["views"]) {
       if (v["unit"] != uj["name"]) continue;
       HOVS_REQUIRE(!truth_corners || v.contains("ground_truth"), manifest.string(),
-                   "--truth-corners needs ground truth, and frame ", v.value("image", "?"), " has none");
+                   "--truth-corners needs ground truth, and frame ", JsonText(v, "image"), " has none");
       if (!truth_corners) {
         std::vector<Vec2d> gt;
         if (v.contains("ground_truth"))

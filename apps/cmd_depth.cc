@@ -111,14 +111,7 @@ Runner SetupDepth(CLI::App* sub, const GlobalOptions* global) {
       const auto sj = ReadJsonFile(o->stereo);
       HOVS_REQUIRE(sj.is_object() && sj.contains("right_from_left"), o->stereo,
                    "not a hovs stereo-calibrate result (no right_from_left)");
-      try {
-        const auto& q = sj["right_from_left"].at("q");
-        const auto& t = sj["right_from_left"].at("t");
-        rig.right_from_left = Rigid3d(Eigen::Quaterniond(q.at(0), q.at(1), q.at(2), q.at(3)).normalized(),
-                                      Vec3d(t.at(0), t.at(1), t.at(2)));
-      } catch (const nlohmann::json::exception& e) {
-        throw Error(o->stereo, std::string("right_from_left is incomplete: ") + e.what());
-      }
+      rig.right_from_left = scenes::PoseFromJson(sj["right_from_left"], o->stereo + " (right_from_left)");
       pose_source = o->stereo;
     }
     const unwrap::Image8 il8 = LoadImage8(vl.image), ir8 = LoadImage8(vr.image);

@@ -18,6 +18,7 @@
 #include "apps/model_files.h"
 #include "core/error.h"
 #include "core/io.h"
+#include "core/json.h"
 #include "depth/stereo.h"
 #include "depth/stereo_calibration.h"
 #include "raytrace/render.h"
@@ -30,15 +31,17 @@ namespace fs = std::filesystem;
 
 scenes::BoardSpec BoardFromJson(const nlohmann::json& b, const std::string& where) {
   scenes::BoardSpec s;
-  try {
-    HOVS_REQUIRE(b.at("type") == "aruco", where, "the board is not an ArUco board (type ", b.at("type").dump(), ")");
-    s.kind = scenes::BoardSpec::Kind::kAruco;
-    s.markers_x = b.at("markers")[0], s.markers_y = b.at("markers")[1];
-    s.marker_length = b.at("marker_length"), s.marker_separation = b.at("separation");
-    s.dictionary = b.at("dictionary"), s.margin = b.at("margin");
-  } catch (const nlohmann::json::exception& e) {
-    throw Error(where, std::string("board description incomplete: ") + e.what());
-  }
+  HOVS_REQUIRE(JsonText(b, "type") == "aruco", where, "the board is not an ArUco board");
+  s.kind = scenes::BoardSpec::Kind::kAruco;
+  const std::vector<double> markers = JsonNumbers(b, "markers", 2, 2, where);
+  HOVS_REQUIRE(markers[0] == std::floor(markers[0]) && markers[1] == std::floor(markers[1]) && markers[0] >= 1 &&
+                   markers[1] >= 1 && markers[0] <= 1000 && markers[1] <= 1000,
+               where + ".markers", "expected two whole numbers in 1..1000");
+  s.markers_x = static_cast<int>(markers[0]), s.markers_y = static_cast<int>(markers[1]);
+  s.marker_length = JsonNumber(b, "marker_length", where), s.marker_separation = JsonNumber(b, "separation", where);
+  s.margin = JsonNumber(b, "margin", where);
+  HOVS_REQUIRE(b.contains("dictionary") && b["dictionary"].is_string(), where, "needs the string 'dictionary'");
+  s.dictionary = b["dictionary"].get<std::string>();
   scenes::CheckBoard(s, where);
   return s;
 }

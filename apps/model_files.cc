@@ -23,15 +23,15 @@ PolynomialModel<double> LoadPolynomialModelFile(const std::filesystem::path& pat
                "not calib_results.txt or a hovs calibration.json (no 'polynomial' model)");
   const auto& p = j["polynomial"];
   PolynomialModel<double> m;
-  try {
-    m.width = p.at("width"), m.height = p.at("height");
-    m.cx = p.at("cx"), m.cy = p.at("cy"), m.c = p.at("c"), m.d = p.at("d"), m.e = p.at("e");
-    m.poly = p.at("poly").get<std::vector<double>>();
-    m.inv_poly = p.at("inv_poly").get<std::vector<double>>();
-    m.rho_min = p.at("rho_range")[0], m.rho_max = p.at("rho_range")[1];
-  } catch (const nlohmann::json::exception& e) {
-    throw Error(path.string(), std::string("polynomial model is incomplete: ") + e.what());
-  }
+  const std::string where = path.string() + " (polynomial)";
+  m.width = static_cast<int>(JsonInteger(p, "width", 1, 65535, where));
+  m.height = static_cast<int>(JsonInteger(p, "height", 1, 65535, where));
+  m.cx = JsonNumber(p, "cx", where), m.cy = JsonNumber(p, "cy", where);
+  m.c = JsonNumber(p, "c", where), m.d = JsonNumber(p, "d", where), m.e = JsonNumber(p, "e", where);
+  m.poly = JsonNumbers(p, "poly", 2, 21, where);
+  m.inv_poly = JsonNumbers(p, "inv_poly", 0, 64, where);
+  const std::vector<double> rho = JsonNumbers(p, "rho_range", 2, 2, where);
+  m.rho_min = rho[0], m.rho_max = rho[1];
   m.Check(path.string());
   return m;
 }
@@ -91,7 +91,7 @@ AnyModel LoadModelSpec(const std::string& spec, const std::string& unit, double 
   }
   if (EndsWith(spec, ".txt")) return AnyModel::Polynomial(LoadPolynomialModelFile(path), spec);
   const auto j = ReadJsonFile(path);
-  if (j.is_object() && j.value("format", "") == "hovs-dataset") {
+  if (j.is_object() && JsonText(j, "format") == "hovs-dataset") {
     CheckDatasetManifest(j, path.string());   // units are objects with string names from here on
     const auto& units = j["units"];
     HOVS_REQUIRE(!units.empty(), path.string(), "the manifest lists no units");

@@ -104,11 +104,7 @@ OmnidirFile ParseOmnidirYamlUnguarded(const std::string& text, const std::string
 }  // namespace
 
 OmnidirFile ParseOmnidirYaml(const std::string& text, const std::string& source) {
-  try {
-    return ParseOmnidirYamlUnguarded(text, source);
-  } catch (const YAML::Exception& e) {
-    throw Error(source, std::string("malformed YAML: ") + e.what());
-  }
+  return WithYamlErrors(source, [&] { return ParseOmnidirYamlUnguarded(text, source); });
 }
 
 OmnidirFile LoadOmnidirYaml(const std::filesystem::path& path) {

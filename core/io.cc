@@ -16,6 +16,7 @@
 
 #include "core/error.h"
 #include "core/interrupt.h"
+#include "core/json.h"
 #include "core/version.h"
 
 namespace hovs {
@@ -193,7 +194,7 @@ std::string MarkerCommand(const fs::path& folder) {
   std::stringstream ss;
   ss << in.rdbuf();
   const auto j = nlohmann::json::parse(ss.str(), nullptr, false);
-  if (j.is_discarded() || !j.is_object() || j.value("format", "") != "hovs-output") return "";
+  if (j.is_discarded() || !j.is_object() || JsonText(j, "format") != "hovs-output") return "";
   const auto c = j.find("command");
   return c != j.end() && c->is_string() ? c->get<std::string>() : "";
 }

@@ -1,5 +1,6 @@
 #include "core/json.h"
 
+#include <cmath>
 #include <set>
 #include <vector>
 
@@ -49,5 +50,43 @@ nlohmann::json ParseJson(const std::string& text, const std::string& where) {
 }
 
 nlohmann::json ReadJsonFile(const std::filesystem::path& path) { return ParseJson(ReadFile(path), path.string()); }
+
+std::string JsonText(const nlohmann::json& j, const char* key) {
+  if (!j.is_object()) return "";
+  const auto it = j.find(key);
+  return it != j.end() && it->is_string() ? it->get<std::string>() : std::string();
+}
+
+namespace {
+double FiniteNumber(const nlohmann::json& v, const std::string& where) {
+  HOVS_REQUIRE(v.is_number(), where, "expected a number (got ", v.type_name(), ")");
+  const double x = v.get<double>();
+  HOVS_REQUIRE(std::isfinite(x), where, "expected a finite number");
+  return x;
+}
+}  // namespace
+
+double JsonNumber(const nlohmann::json& j, const char* key, const std::string& where) {
+  HOVS_REQUIRE(j.is_object() && j.contains(key), where, "missing '", key, "'");
+  return FiniteNumber(j[key], where + "." + key);
+}
+
+int64_t JsonInteger(const nlohmann::json& j, const char* key, int64_t lo, int64_t hi, const std::string& where) {
+  const double x = JsonNumber(j, key, where);
+  HOVS_REQUIRE(x == std::floor(x) && x >= double(lo) && x <= double(hi), where + "." + key, "expected a whole number in ",
+               lo, "..", hi, " (got ", j[key].dump(), ")");
+  return static_cast<int64_t>(x);
+}
+
+std::vector<double> JsonNumbers(const nlohmann::json& j, const char* key, size_t min_size, size_t max_size,
+                                const std::string& where) {
+  HOVS_REQUIRE(j.is_object() && j.contains(key), where, "missing '", key, "'");
+  const auto& a = j[key];
+  HOVS_REQUIRE(a.is_array() && a.size() >= min_size && a.size() <= max_size, where + "." + key, "expected a list of ",
+               min_size, " to ", max_size, " numbers");
+  std::vector<double> v;
+  for (size_t k = 0; k < a.size(); ++k) v.push_back(FiniteNumber(a[k], where + "." + key + "[" + std::to_string(k) + "]"));
+  return v;
+}
 
 }  // namespace hovs

@@ -61,7 +61,7 @@ void CheckBoardFields(const nlohmann::json& b, const std::string& where) {
 }  // namespace
 
 void CheckDatasetManifest(const nlohmann::json& m, const std::string& source) {
-  HOVS_REQUIRE(m.is_object() && m.value("format", "") == "hovs-dataset", source, "not a hovs dataset manifest");
+  HOVS_REQUIRE(m.is_object() && JsonText(m, "format") == "hovs-dataset", source, "not a hovs dataset manifest");
   OnlyKeys(m, kTopKeys, source);
   HOVS_REQUIRE(m.contains("version") && m["version"].is_number_integer() && m["version"].get<int64_t>() == kManifestVersion,
                source + " (version)", "this hovs reads dataset manifests of version ", kManifestVersion, " (got ",

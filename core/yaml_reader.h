@@ -9,9 +9,21 @@
 #include <set>
 #include <string>
 
+#include "core/error.h"
 #include "core/types.h"
 
 namespace hovs {
+
+// Runs a parse of YAML text read from `source`: yaml-cpp's own exceptions (a sequence indexed as a map, a
+// conversion it refuses) become hovs::Error naming the source, like every other error of the parse.
+template <class F>
+auto WithYamlErrors(const std::string& source, F&& parse) -> decltype(parse()) {
+  try {
+    return parse();
+  } catch (const YAML::Exception& e) {
+    throw Error(source, std::string("malformed YAML: ") + e.what());
+  }
+}
 
 class YamlReader {
  public:

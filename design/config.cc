@@ -112,11 +112,7 @@ DesignConfig ParseDesignConfigUnguarded(const std::string& text, const std::stri
 }  // namespace
 
 DesignConfig ParseDesignConfig(const std::string& text, const std::string& source) {
-  try {
-    return ParseDesignConfigUnguarded(text, source);
-  } catch (const YAML::Exception& e) {
-    throw Error(source, std::string("malformed YAML: ") + e.what());
-  }
+  return WithYamlErrors(source, [&] { return ParseDesignConfigUnguarded(text, source); });
 }
 
 DesignConfig LoadDesignConfig(const std::filesystem::path& path) {

@@ -82,7 +82,7 @@ std::unique_ptr<CameraSource> OpenReplay(const fs::path& src, const std::string&
     for (size_t k = 0; k < items.size(); ++k) items[k].device_ns = k * 100'000'000ull;
   } else {
     const auto m = ReadJsonFile(src);
-    HOVS_REQUIRE(m.is_object() && m.value("format", "") == "hovs-dataset", src.string(),
+    HOVS_REQUIRE(m.is_object() && JsonText(m, "format") == "hovs-dataset", src.string(),
                  "neither a folder of images nor a hovs dataset manifest");
     CheckDatasetManifest(m, src.string());
     for (const auto& fr : m["frames"])

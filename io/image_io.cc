@@ -69,51 +69,55 @@ void Publish(const fs::path& tmp, const fs::path& path) {
 
 }  // namespace
 
-ImageHeader ReadImageHeader(const fs::path& path) {
+namespace {
+
+enum class Codec { kPng, kJpeg, kOther };
+
+// Which decoder reads the file: its signature decides, not its extension. Throws naming a missing file.
+Codec CodecOf(const fs::path& path) {
   const std::string where = path.string();
-  ImageHeader h;
   std::error_code ec;
   HOVS_REQUIRE(fs::is_regular_file(path, ec), where, fs::exists(path, ec) ? "is not a file" : "file not found");
-  {
-    // The signature decides, not the extension.
-    std::string head(8, '\0');
-    FILE* f = std::fopen(path.c_str(), "rb");
-    HOVS_REQUIRE(f != nullptr, where, "cannot open for reading");
-    head.resize(std::fread(head.data(), 1, head.size(), f));
-    std::fclose(f);
-    if (internal::IsPng(head) || internal::IsJpeg(head)) {
-      const std::string bytes = ReadFile(path);
-      const internal::Decoded d = internal::IsPng(head) ? internal::DecodePng(bytes, where, false, CheckSize)
-                                                        : internal::DecodeJpeg(bytes, where, false, CheckSize);
-      h.width = d.width, h.height = d.height, h.channels = d.channels, h.bits = d.bits;
-      h.format = internal::IsPng(head) ? "png" : "jpeg";
-      return h;
-    }
+  std::string head(8, '\0');
+  FILE* f = std::fopen(path.c_str(), "rb");
+  HOVS_REQUIRE(f != nullptr, where, "cannot open for reading");
+  head.resize(std::fread(head.data(), 1, head.size(), f));
+  std::fclose(f);
+  return internal::IsPng(head) ? Codec::kPng : internal::IsJpeg(head) ? Codec::kJpeg : Codec::kOther;
+}
+
+// A PNG or JPEG file through libpng or libjpeg (pixels: false, the header only).
+internal::Decoded Decode(const fs::path& path, Codec codec, bool pixels) {
+  const std::string bytes = ReadFile(path);
+  return codec == Codec::kPng ? internal::DecodePng(bytes, path.string(), pixels, CheckSize)
+                              : internal::DecodeJpeg(bytes, path.string(), pixels, CheckSize);
+}
+
+}  // namespace
+
+ImageHeader ReadImageHeader(const fs::path& path) {
+  const Codec codec = CodecOf(path);
+  ImageHeader h;
+  if (codec != Codec::kOther) {
+    const internal::Decoded d = Decode(path, codec, false);
+    h.width = d.width, h.height = d.height, h.channels = d.channels, h.bits = d.bits;
+    h.format = codec == Codec::kPng ? "png" : "jpeg";
+    return h;
   }
   auto in = OpenWithOiio(path);
   const OIIO::ImageSpec& spec = in->spec();
   h.width = spec.width, h.height = spec.height, h.channels = spec.nchannels, h.bits = BitsOf(spec.format);
   h.format = in->format_name();
-  CheckSize(where, h.width, h.height, h.channels, h.bits);
+  CheckSize(path.string(), h.width, h.height, h.channels, h.bits);
   return h;
 }
 
 PixelBuffer ReadImage(const fs::path& path, int* width, int* height, int* channels) {
   const std::string where = path.string();
-  std::error_code ec;
-  HOVS_REQUIRE(fs::is_regular_file(path, ec), where, fs::exists(path, ec) ? "is not a file" : "file not found");
-  std::string head(8, '\0');
-  {
-    FILE* f = std::fopen(path.c_str(), "rb");
-    HOVS_REQUIRE(f != nullptr, where, "cannot open for reading");
-    head.resize(std::fread(head.data(), 1, head.size(), f));
-    std::fclose(f);
-  }
+  const Codec codec = CodecOf(path);
   PixelBuffer out;
-  if (internal::IsPng(head) || internal::IsJpeg(head)) {
-    const std::string bytes = ReadFile(path);
-    const internal::Decoded d = internal::IsPng(head) ? internal::DecodePng(bytes, where, true, CheckSize)
-                                                      : internal::DecodeJpeg(bytes, where, true, CheckSize);
+  if (codec != Codec::kOther) {
+    const internal::Decoded d = Decode(path, codec, true);
     *width = d.width, *height = d.height, *channels = d.channels;
     const size_t n = size_t(d.width) * d.height * d.channels;
     out.resize(n);

@@ -51,11 +51,12 @@ nlohmann::json PoseToJson(const Rigid3d& p) {
 }
 
 Rigid3d PoseFromJson(const nlohmann::json& j, const std::string& where) {
-  HOVS_REQUIRE(j.is_object() && j.contains("q") && j.contains("t") && j["q"].size() == 4 && j["t"].size() == 3, where,
-               "a pose needs q [w, x, y, z] and t [x, y, z]");
-  const Eigen::Quaterniond q(j["q"][0].get<double>(), j["q"][1].get<double>(), j["q"][2].get<double>(), j["q"][3].get<double>());
+  const std::vector<double> qv = JsonNumbers(j, "q", 4, 4, where), tv = JsonNumbers(j, "t", 3, 3, where);
+  const Eigen::Quaterniond q(qv[0], qv[1], qv[2], qv[3]);
   HOVS_REQUIRE(std::abs(q.norm() - 1) < 1e-6, where, "the quaternion is not unit length");
-  return Rigid3d(q.normalized(), Vec3d(j["t"][0].get<double>(), j["t"][1].get<double>(), j["t"][2].get<double>()));
+  const Vec3d t(tv[0], tv[1], tv[2]);
+  HOVS_REQUIRE(t.norm() <= 1e4, where, "the translation is beyond 10 km");
+  return Rigid3d(q.normalized(), t);
 }
 
 nlohmann::json UnitToJson(const raytrace::CatadioptricUnit& u) {
@@ -83,20 +84,21 @@ raytrace::CatadioptricUnit UnitFromJson(const nlohmann::json& j, const std::stri
     raytrace::CatadioptricUnit u;
     u.name = j.at("name").get<std::string>();
     const auto& m = j.at("mirror");
-    u.rig.mirror = {m.at("a").get<double>(), m.at("b").get<double>(), m.at("rim_diameter").get<double>()};
+    u.rig.mirror = {JsonNumber(m, "a", where + ".mirror"), JsonNumber(m, "b", where + ".mirror"),
+                    JsonNumber(m, "rim_diameter", where + ".mirror")};
     const auto& c = j.at("camera");
+    const std::string wc = where + ".camera";
     auto& cam = u.rig.camera;
-    cam.width = c.at("width").get<int>(), cam.height = c.at("height").get<int>();
-    cam.fx = c.at("fx").get<double>(), cam.fy = c.at("fy").get<double>();
-    cam.cx = c.at("cx").get<double>(), cam.cy = c.at("cy").get<double>();
-    const auto& d = c.at("distortion");
-    cam.distortion = {d.at(0).get<double>(), d.at(1).get<double>(), d.at(2).get<double>(), d.at(3).get<double>()};
+    cam.width = static_cast<int>(JsonInteger(c, "width", 1, 65535, wc));
+    cam.height = static_cast<int>(JsonInteger(c, "height", 1, 65535, wc));
+    cam.fx = JsonNumber(c, "fx", wc), cam.fy = JsonNumber(c, "fy", wc);
+    cam.cx = JsonNumber(c, "cx", wc), cam.cy = JsonNumber(c, "cy", wc);
+    const std::vector<double> d = JsonNumbers(c, "distortion", 4, 4, wc);
+    cam.distortion = {d[0], d[1], d[2], d[3]};
     u.rig.cam_from_mirror = PoseFromJson(j.at("cam_from_mirror"), where + ".cam_from_mirror");
     u.world_from_mirror = PoseFromJson(j.at("world_from_mirror"), where + ".world_from_mirror");
-    u.rig.occluder_radius = j.at("occluder_radius").get<double>();
+    u.rig.occluder_radius = JsonNumber(j, "occluder_radius", where);
     u.rig.Check(where);
-    HOVS_REQUIRE(cam.width >= 1 && cam.height >= 1, where + ".camera", "the image size must be at least 1 x 1 (got ",
-                 cam.width, " x ", cam.height, ")");
     return u;
   } catch (const nlohmann::json::exception& e) {
     throw Error(where, std::string("bad unit description: ") + e.what());
@@ -177,9 +179,10 @@ std::vector<CornerTruth> VisibleSidecarCorners(const nlohmann::json& side, const
     for (const auto& c : side.at("boards").at(0).at("corners")) {
       if (c.at("status") != "visible") continue;
       CornerTruth t;
-      t.id = c.at("id").get<int>(), t.status = "visible";
-      t.board_xy = Vec2d(c.at("board").at(0).get<double>(), c.at("board").at(1).get<double>());
-      t.pixel = Vec2d(c.at("pixel").at(0).get<double>(), c.at("pixel").at(1).get<double>());
+      t.id = static_cast<int>(JsonInteger(c, "id", 0, 1 << 30, where)), t.status = "visible";
+      const std::vector<double> b = JsonNumbers(c, "board", 2, 2, where), px = JsonNumbers(c, "pixel", 2, 2, where);
+      t.board_xy = Vec2d(b[0], b[1]);
+      t.pixel = Vec2d(px[0], px[1]);
       HOVS_REQUIRE(t.board_xy.allFinite() && t.pixel.allFinite() && t.board_xy.cwiseAbs().maxCoeff() <= 100 &&
                        t.pixel.cwiseAbs().maxCoeff() <= 1e6,
                    where, "corner ", t.id, " has non-finite or absurd coordinates");

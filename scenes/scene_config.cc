@@ -404,11 +404,7 @@ SceneConfig ParseSceneConfigUnguarded(const std::string& text, const std::string
 }  // namespace
 
 SceneConfig ParseSceneConfig(const std::string& text, const std::string& source, const std::filesystem::path& base) {
-  try {
-    return ParseSceneConfigUnguarded(text, source, base);
-  } catch (const YAML::Exception& e) {
-    throw Error(source, std::string("malformed YAML: ") + e.what());
-  }
+  return WithYamlErrors(source, [&] { return ParseSceneConfigUnguarded(text, source, base); });
 }
 
 UnitClearance::UnitClearance(const raytrace::SceneDescription& description) : objects_(description.objects) {

@@ -163,11 +163,7 @@ Layout ParseLayoutUnguarded(const std::string& text, const std::string& source, 
 }  // namespace
 
 Layout ParseLayout(const std::string& text, const std::string& source, const std::string& name) {
-  try {
-    return ParseLayoutUnguarded(text, source, name);
-  } catch (const YAML::Exception& e) {
-    throw Error(source, std::string("malformed YAML: ") + e.what());
-  }
+  return WithYamlErrors(source, [&] { return ParseLayoutUnguarded(text, source, name); });
 }
 
 Layout ResolveLayout(const std::string& name_or_path) {

@@ -474,8 +474,8 @@ RemapTable ParseRemapTable(const std::string& bytes, const std::string& where) {
   t.header.resize(hn);
   r.Bytes(t.header.data(), hn, "header");
   const auto h = ParseJson(t.header, where + " (header)");
-  HOVS_REQUIRE(h.is_object() && h.value("format", "") == "hovs-mapping", where, "the header is not a hovs mapping header");
-  HOVS_REQUIRE(h.value("byte_order", "") == "little", where, "unsupported byte order");
+  HOVS_REQUIRE(h.is_object() && JsonText(h, "format") == "hovs-mapping", where, "the header is not a hovs mapping header");
+  HOVS_REQUIRE(JsonText(h, "byte_order") == "little", where, "unsupported byte order");
   try {
     t.source_width = h.at("source").at("width");
     t.source_height = h.at("source").at("height");

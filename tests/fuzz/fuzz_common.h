@@ -7,7 +7,20 @@
 #include <cstdint>
 #include <string>
 
+#include "core/any_model.h"
 #include "core/error.h"
+
+namespace hovs::fuzz {
+
+// A model that loaded is used: n pixels along the image diagonal back-projected and projected again.
+inline void UseModel(const AnyModel& m, int n = 16) {
+  Vec3d bearing;
+  Vec2d uv;
+  for (int k = 0; k < n; ++k)
+    if (m.MirrorFromImg(Vec2d(k * m.width() / double(n), k * m.height() / double(n)), &bearing)) m.ImgFromMirror(bearing, &uv);
+}
+
+}  // namespace hovs::fuzz
 
 #define HOVS_FUZZ_TARGET(body)                                                        \
   extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {           \

@@ -22,11 +22,7 @@ void Run(const std::string& input) {
   std::ofstream(File(), std::ios::binary | std::ios::trunc).write(input.data(), std::streamsize(input.size()));
   for (const char* kind : {"auto", "polynomial"}) {
     try {
-      const hovs::AnyModel m = hovs::apps::LoadCalibratedModel(File(), kind);
-      hovs::Vec3d b;
-      hovs::Vec2d uv;
-      for (int k = 0; k < 8; ++k)
-        if (m.MirrorFromImg(hovs::Vec2d(k * m.width() / 8.0, k * m.height() / 8.0), &b)) m.ImgFromMirror(b, &uv);
+      hovs::fuzz::UseModel(hovs::apps::LoadCalibratedModel(File(), kind), 8);
     } catch (const hovs::Error&) {
     }
   }
