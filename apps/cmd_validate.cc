@@ -179,6 +179,14 @@ class Validation {
 
   const json& metrics() const { return metrics_; }
 
+  // Text as it reads in the finished report: every path in the staging folder named in the target folder.
+  std::string Displayed(std::string text) const {
+    const std::string staging = out_.string(), target = target_.string();
+    for (size_t at = text.find(staging); at != std::string::npos; at = text.find(staging, at + target.size()))
+      text.replace(at, staging.size(), target);
+    return text;
+  }
+
   std::string Summary() const {
     std::string s = "hovs validate (" + p_.name + "): " + metrics_["status"].get<std::string>() + " -> " +
                     (target_ / "report.html").string() + "\n";
@@ -197,10 +205,6 @@ class Validation {
   }
 
  private:
-  std::string Displayed(const std::string& arg) const {
-    const std::string staging = out_.string();
-    return arg.rfind(staging, 0) == 0 ? target_.string() + arg.substr(staging.size()) : arg;
-  }
 
   static double Seconds(std::chrono::steady_clock::time_point t0) {
     return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
@@ -373,7 +377,7 @@ Runner SetupValidate(CLI::App* sub, const GlobalOptions* global) {
 
     if (p.design && results::CanRender()) {
       v.Stage("design study", {{"design", "--config", v.Src("design/reference.yaml"), "--out", v.Out("design")}}, [&]() {
-        v.Figure("design", ReadFile(out / "design" / "summary.txt"));
+        v.Figure("design", v.Displayed(ReadFile(out / "design" / "summary.txt")));
       });
     } else {
       v.Skip("design study", p.design ? "no X display for the figures (run under xvfb-run -a)" : "not in this preset");
