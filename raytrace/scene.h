@@ -280,6 +280,24 @@ class RayScene {
   static constexpr int kMaxMotionSegments = RTC_MAX_TIME_STEP_COUNT - 1;
   static constexpr double kMotionSegmentAngle = 1.5707963267948966;   // rad: a quarter turn per time step at most
   unsigned AttachMovingUnit(const CatadioptricUnit& unit, RTCScene unit_scene, unsigned mask);
+  // The constructor's steps (scene.cc). The units' camera bodies as rectangles of desc_.rects, by unit its range
+  // ([first, last)); *world_rects: where the still units' end (the moving units' go into their instances).
+  std::vector<std::pair<size_t, size_t>> AddCameraBodies(const std::vector<char>& moving, size_t* world_rects);
+  void MakeRectFrames();   // rect_frames_ from desc_.rects
+  // Rectangles [first, last) as one quad mesh (primID = index - first), in the world or (frame_from_world given)
+  // in that frame; its id in target.
+  unsigned AttachQuads(RTCScene target, size_t first, size_t last, const Rigid3d* frame_from_world);
+  // An analytic shape attached to target (the world, or a moving unit's scene: instanced); its slot in user_ and
+  // its id in target.
+  std::pair<int, unsigned> AttachShape(std::unique_ptr<UserGeometry> shape, RTCScene target, bool instanced);
+  void RecordShape(int slot, unsigned id);   // registers a shape under its scene-wide id
+  // A unit's mirror, mount ring and lens face, in the world (or, moving, in an instance of their own with its
+  // camera body's rectangles body); *next_id: past every id used so far.
+  void AddUnitParts(size_t unit, bool moving, const std::pair<size_t, size_t>& body, unsigned* next_id);
+  void DescribeOwnParts(const CatadioptricUnit& unit, bool analytic, const Rigid3d& mirror_from_world,
+                        OwnPartShapes* own);
+  // Scene-wide ids for the moving units' shapes, from next_id on.
+  void NumberInstanceShapes(unsigned next_id);
   // A batch's own rays of unit U (from its mirror or its camera) meet U's parts in its mirror frame: where one does,
   // the world trace looks only nearer (lanes->tfar) and own_geom / own_prim take over if it finds nothing; all
   // skip U's instance (lanes->mask_off). Returns whether any lane met a part.
