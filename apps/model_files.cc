@@ -103,15 +103,10 @@ AnyModel LoadModelSpec(const std::string& spec, const std::string& unit, double 
 }
 
 unwrap::Image8 LoadImage8(const std::filesystem::path& path) {
-  int w = 0, h = 0, c = 0;
-  const io::PixelBuffer px = io::ReadImage(path, &w, &h, &c);
-  HOVS_REQUIRE(c == 1 || c >= 3, path.string(), "unsupported channel count ", c, " (grey or RGB expected)");
+  io::Image8Bits in = io::ReadImage8(path);
   unwrap::Image8 im;
-  im.width = w, im.height = h, im.channels = c == 1 ? 1 : 3;
-  im.data.resize(size_t(w) * h * im.channels);
-  for (size_t k = 0; k < size_t(w) * h; ++k)
-    for (int ch = 0; ch < im.channels; ++ch)
-      im.data[k * im.channels + ch] = uint8_t(std::lround(std::clamp(px[k * c + ch], 0.f, 1.f) * 255));
+  im.width = in.width, im.height = in.height, im.channels = in.channels;
+  im.data = std::move(in.data);
   return im;
 }
 

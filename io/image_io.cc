@@ -112,6 +112,19 @@ ImageHeader ReadImageHeader(const fs::path& path) {
   return h;
 }
 
+Image8Bits ReadImage8(const fs::path& path) {
+  int w = 0, h = 0, c = 0;
+  const PixelBuffer px = ReadImage(path, &w, &h, &c);
+  HOVS_REQUIRE(c == 1 || c >= 3, path.string(), "unsupported channel count ", c, " (grey or RGB expected)");
+  Image8Bits im;
+  im.width = w, im.height = h, im.channels = c == 1 ? 1 : 3;
+  im.data.resize(size_t(w) * h * im.channels);
+  for (size_t k = 0; k < size_t(w) * h; ++k)
+    for (int ch = 0; ch < im.channels; ++ch)
+      im.data[k * im.channels + ch] = uint8_t(std::lround(std::clamp(px[k * c + ch], 0.f, 1.f) * 255));
+  return im;
+}
+
 PixelBuffer ReadImage(const fs::path& path, int* width, int* height, int* channels) {
   const std::string where = path.string();
   const Codec codec = CodecOf(path);

@@ -40,6 +40,15 @@ ImageHeader ReadImageHeader(const std::filesystem::path& path);
 // beyond the limits or the memory left, a truncated or corrupt file. The path is noted as an input (core/io.h).
 PixelBuffer ReadImage(const std::filesystem::path& path, int* width, int* height, int* channels);
 
+// An 8-bit image: one channel (grey) or three (RGB; a fourth, alpha, is dropped).
+struct Image8Bits {
+  int width = 0, height = 0, channels = 0;
+  std::vector<uint8_t> data;   // interleaved, row-major
+};
+
+// ReadImage rounded to 8 bits (values clamped to [0, 1]). Throws as ReadImage, and for 2 channels.
+Image8Bits ReadImage8(const std::filesystem::path& path);
+
 // Writes a PNG (8 or 16 bits per channel; other extensions: OpenImageIO's writer for it) atomically (temporary
 // file + rename).
 void WriteImage(const std::filesystem::path& path, int width, int height, int channels, const float* values,

@@ -34,6 +34,13 @@ HtmlPage& HtmlPage::Paragraph(const std::string& text) {
   return *this;
 }
 
+HtmlPage& HtmlPage::Link(const std::string& before, const std::string& href, const std::string& text,
+                         const std::string& after) {
+  body_ += "<p>" + HtmlEscape(before) + "<a href=\"" + HtmlEscape(href) + "\">" + HtmlEscape(text) + "</a>" +
+           HtmlEscape(after) + "</p>\n";
+  return *this;
+}
+
 HtmlPage& HtmlPage::Table(const std::vector<std::string>& header, const std::vector<std::vector<std::string>>& rows) {
   body_ += "<table>\n<tr>";
   for (const auto& h : header) body_ += "<th>" + HtmlEscape(h) + "</th>";

@@ -16,6 +16,9 @@ class HtmlPage {
   HtmlPage& Heading(const std::string& text, int level = 2);
   HtmlPage& Paragraph(const std::string& text);  // escaped
   HtmlPage& Table(const std::vector<std::string>& header, const std::vector<std::vector<std::string>>& rows);
+  // A paragraph: `before`, then a link to `href` (relative to the page) reading `text`, then `after`; escaped.
+  HtmlPage& Link(const std::string& before, const std::string& href, const std::string& text,
+                 const std::string& after = "");
   HtmlPage& Figure(const std::string& src, const std::string& caption, int width_px = 0);
   HtmlPage& Preformatted(const std::string& text);
   std::string Render() const;

@@ -360,8 +360,8 @@ void WritePng(const LineFigure& f, const std::filesystem::path& path) {
   view->GetScene()->AddItem(chart);
   StyleAxes(chart, f.title, f.x_label, f.y_label);
   for (const Series& s : f.series) {
-    HOVS_REQUIRE(s.x.size() == s.y.size() && s.x.size() >= 2, path.string(), "series '", s.name,
-                 "' needs matching x and y with two or more points");
+    HOVS_REQUIRE(s.x.size() == s.y.size() && s.x.size() >= (s.points ? 1u : 2u), path.string(), "series '", s.name,
+                 "' needs matching x and y with ", s.points ? "one" : "two", " or more points");
     vtkNew<vtkTable> table;
     vtkNew<vtkDoubleArray> xs, ys;
     xs->SetName("x");
@@ -373,11 +373,16 @@ void WritePng(const LineFigure& f, const std::filesystem::path& path) {
       table->SetValue(static_cast<vtkIdType>(i), 0, s.x[i]);
       table->SetValue(static_cast<vtkIdType>(i), 1, s.y[i]);
     }
-    vtkPlot* line = chart->AddPlot(vtkChart::LINE);
+    vtkPlot* line = chart->AddPlot(s.points ? vtkChart::POINTS : vtkChart::LINE);
     line->SetInputData(table, 0, 1);
     line->SetColor(static_cast<unsigned char>(255 * s.rgb[0]), static_cast<unsigned char>(255 * s.rgb[1]),
                    static_cast<unsigned char>(255 * s.rgb[2]), 255);
     line->SetWidth(static_cast<float>(s.line_width));
+    if (s.points) {
+      auto* points = vtkPlotPoints::SafeDownCast(line);
+      points->SetMarkerStyle(vtkPlotPoints::CIRCLE);
+      points->SetMarkerSize(static_cast<float>(s.marker_size));
+    }
   }
   chart->SetShowLegend(true);
   chart->GetLegend()->SetHorizontalAlignment(vtkChartLegend::RIGHT);

@@ -57,6 +57,8 @@ struct Series {
   std::vector<double> x, y;
   std::array<double, 3> rgb = {0.1, 0.3, 0.8};
   double line_width = 2.0;
+  bool points = false;   // a scatter of markers (marker_size px) instead of a line
+  double marker_size = 4.0;
 };
 
 struct LineFigure {

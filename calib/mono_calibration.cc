@@ -1,0 +1,311 @@
+#include "calib/mono_calibration.h"
+
+#include <cmath>
+#include <cstdio>
+#include <opencv2/imgproc.hpp>
+
+#include "calib/rim_positioning.h"
+#include "core/error.h"
+#include "core/io.h"
+#include "io/image_io.h"
+
+namespace hovs::calib {
+namespace {
+
+std::string F(const char* fmt, double v) {
+  char b[64];
+  std::snprintf(b, sizeof b, fmt, v);
+  return b;
+}
+
+nlohmann::json DetectionJson(const ImageDetection& d) {
+  nlohmann::json row = {{"image", d.image}, {"status", d.status}, {"found", d.found}, {"complete", d.complete},
+                        {"corners", d.corners}, {"from_edges", d.from_edges}, {"candidates", d.candidates},
+                        {"corner_refinement", d.corner_refinement}};
+  if (d.to_truth) row["rms_to_truth_px"] = d.to_truth->rms_px, row["max_to_truth_px"] = d.to_truth->max_px;
+  return row;
+}
+
+nlohmann::json PolynomialJson(const PolynomialCalibration& r, const std::vector<BoardObservation>& obs) {
+  const auto& m = r.model;
+  nlohmann::json j = {{"model", "polynomial"},
+                      {"cx", m.cx}, {"cy", m.cy}, {"c", m.c}, {"d", m.d}, {"e", m.e},
+                      {"poly", m.poly}, {"inv_poly", m.inv_poly}, {"rho_range", {m.rho_min, m.rho_max}},
+                      {"width", m.width}, {"height", m.height},
+                      {"rms_px", r.rms}, {"mean_px", r.mean}, {"initial_rms_px", r.initial_rms},
+                      {"converged", r.converged}, {"solver", r.solver_report}, {"stddev", r.stddev}};
+  nlohmann::json per = nlohmann::json::array();
+  for (size_t i = 0; i < obs.size(); ++i)
+    per.push_back({{"image", obs[i].image}, {"corners", obs[i].pixels.size()}, {"rms_px", r.per_image_rms[i]},
+                   {"mean_px", r.per_image_mean[i]}, {"above_5px", r.per_image_mean[i] > 5.0}});
+  j["per_image"] = per;
+  nlohmann::json outl = nlohmann::json::array();
+  for (const auto& o : r.outliers)
+    outl.push_back({{"image", o.image}, {"corner", o.corner}, {"residual_px", o.residual_px},
+                    {"residual_after_px", o.residual_after_px}});
+  j["outliers"] = outl;
+  j["outlier_threshold_px"] = r.outlier_threshold_px;
+  return j;
+}
+
+// The detector's totals over the images, and the corners' RMS distance to the exact ones (weighted by corners).
+struct DetectionTotals {
+  int complete = 0, corners = 0, from_edges = 0, with_truth = 0;
+  double rms_to_truth_px = 0;
+};
+
+DetectionTotals Totals(const std::vector<ImageDetection>& detection) {
+  DetectionTotals t;
+  double ss = 0;
+  for (const auto& d : detection) {
+    t.complete += d.complete;
+    if (!d.found) continue;
+    t.corners += d.corners, t.from_edges += d.from_edges;
+    if (d.to_truth) ss += std::pow(d.to_truth->rms_px, 2) * d.corners, t.with_truth += d.corners;
+  }
+  if (t.with_truth) t.rms_to_truth_px = std::sqrt(ss / t.with_truth);
+  return t;
+}
+
+std::vector<Vec2d> PhysicalRimPoints(const CalibrationInput& input, const CatadioptricCamera<double>& nominal,
+                                     const std::function<void(const std::string&)>& warn) {
+  std::vector<Vec2d> points;
+  for (const auto& path : input.paths) {
+    const cv::Mat g = ReadGreyImage(path);
+    RimEdge edge;
+    try {
+      LocateMirror(g.data, g.cols, g.rows, nominal, {}, &edge, path.string());
+    } catch (const Error& e) {
+      if (warn) warn(std::string(e.what()) + " (the image is left out of the rim fit)");
+      continue;
+    }
+    points.insert(points.end(), edge.points.begin(), edge.points.end());
+  }
+  HOVS_REQUIRE(points.size() >= 20, "--physical", "the rim of the mirror image was not found in the "
+               "images (--no-rim calibrates without it)");
+  return points;
+}
+
+}  // namespace
+
+cv::Mat ReadGreyImage(const std::filesystem::path& path) {
+  io::Image8Bits im = io::ReadImage8(path);
+  cv::Mat m(im.height, im.width, im.channels == 3 ? CV_8UC3 : CV_8UC1, im.data.data());
+  cv::Mat grey;
+  if (im.channels == 3) cv::cvtColor(m, grey, cv::COLOR_RGB2GRAY);
+  else grey = m.clone();
+  return grey;
+}
+
+void DetectInto(const std::filesystem::path& path, const std::string& name, const CheckerboardDetectOptions& o,
+                const std::vector<Vec2d>* truth, CalibrationInput* in) {
+  const cv::Mat grey = ReadGreyImage(path);
+  if (in->width == 0) in->width = grey.cols, in->height = grey.rows;
+  HOVS_REQUIRE(grey.cols == in->width && grey.rows == in->height, path.string(), "image size ", grey.cols, "x",
+               grey.rows, " differs from the first image's ", in->width, "x", in->height);
+  const auto det = DetectCheckerboard(grey, o);
+  ImageDetection d;
+  d.image = name, d.status = det.status, d.corner_refinement = o.corner_refinement;
+  d.found = det.found, d.complete = det.complete;
+  d.corners = static_cast<int>(det.pixels.size()), d.from_edges = det.from_edges, d.candidates = det.candidates;
+  if (truth && det.found) d.to_truth = CompareWithTruth(det.pixels, *truth);
+  in->detection.push_back(d);
+  if (det.found) in->observations.push_back(ToObservation(det, name)), in->paths.push_back(path);
+}
+
+CalibrationInput CornerTableInput(const std::filesystem::path& table, int width, int height) {
+  CalibrationInput in;
+  in.observations = LoadCornerCsv(table);
+  in.width = width, in.height = height;
+  in.description = {{"corners", table.string()}, {"size", {width, height}}};
+  for (const auto& ob : in.observations)
+    for (const auto& p : ob.pixels)
+      HOVS_REQUIRE(p.x() >= -0.5 && p.y() >= -0.5 && p.x() <= width - 0.5 && p.y() <= height - 0.5, table.string(),
+                   "corner (", p.x(), ", ", p.y(), ") of ", ob.image, " lies outside the ", width, "x", height,
+                   " image");
+  return in;
+}
+
+CalibrationInput ImageFolderInput(const std::filesystem::path& folder, const CheckerboardDetectOptions& options) {
+  CalibrationInput in;
+  for (const auto& f : ListImageFiles(folder)) DetectInto(f, f.filename().string(), options, nullptr, &in);
+  in.description = {{"images", folder.string()}, {"corners", "hovs checkerboard detector"},
+                    {"board", {options.board.cols, options.board.rows, options.board.square}}};
+  return in;
+}
+
+std::string CheckDetections(const CalibrationInput& input, const std::string& where) {
+  std::string failed;
+  for (const auto& d : input.detection)
+    if (!d.found) failed += "; " + d.image + ": " + d.status;
+  HOVS_REQUIRE(input.observations.size() >= 3, where, "only ", input.observations.size(), " of ",
+               input.detection.size(), " images have a usable board (at least 3 needed)", failed);
+  return failed.empty() ? failed : failed.substr(2);
+}
+
+CheckerboardSpec ParseBoardSpec(const std::string& text, const std::string& where) {
+  CheckerboardSpec b;
+  char x1 = 0, x2 = 0;
+  int end = -1;   // where parsing stopped: nothing may follow (7x6x0.03x9 is not 7x6x0.03)
+  HOVS_REQUIRE(std::sscanf(text.c_str(), "%d%c%d%c%lf%n", &b.cols, &x1, &b.rows, &x2, &b.square, &end) == 5 &&
+                   x1 == 'x' && x2 == 'x' && end == static_cast<int>(text.size()),
+               where, "expected COLSxROWSxSQUARE (inner corners, square in metres), e.g. 7x6x0.03 (got '", text, "')");
+  b.Check(where);
+  return b;
+}
+
+MonoCalibration CalibrateMono(const CalibrationInput& in, const MonoCalibrationOptions& options,
+                              const std::function<void(const std::string&)>& warn) {
+  MonoCalibration r;
+  PolynomialCalibrationOptions po = options.polynomial;
+  std::optional<PolynomialCalibration> chosen;
+  for (int d : options.degrees) {
+    po.degree = d;
+    auto p = CalibratePolynomial(in.observations, in.width, in.height, po);
+    r.orders.push_back({d, p.rms, p.mean, p.converged, p.per_image_mean});
+    if (d == options.polynomial.degree) chosen = std::move(p);
+  }
+  r.polynomial = chosen ? *chosen : CalibratePolynomial(in.observations, in.width, in.height, options.polynomial);
+  // The unified and physical models and OpenCV omnidir see the corners the polynomial solve kept.
+  r.inliers = InlierObservations(in.observations, r.polynomial);
+  r.unified = CalibrateUnified(r.inliers, in.width, in.height, r.polynomial, po.loss, po.loss_scale);
+  if (options.physical_nominal) {
+    const auto& nominal = *options.physical_nominal;
+    HOVS_REQUIRE(nominal.camera.width == in.width && nominal.camera.height == in.height, "--physical",
+                 "the nominal camera is ", nominal.camera.width, "x", nominal.camera.height, " but the images are ",
+                 in.width, "x", in.height);
+    PhysicalCalibrationOptions popt = options.physical;
+    if (options.rim && !in.paths.empty()) popt.rim_points = PhysicalRimPoints(in, nominal, warn);
+    r.physical = CalibratePhysical(r.inliers, nominal, r.polynomial, popt);
+    r.rim_points = popt.rim_points.size();
+  }
+  if (options.omnidir) r.omnidir = RunOpenCvOmnidir(r.inliers, in.width, in.height);
+  if (in.truth) {
+    r.polynomial_vs_truth = CompareWithTruth(*in.truth, r.polynomial.model);
+    if (r.physical) r.physical_vs_truth = CompareWithTruth(*in.truth, r.physical->rig);
+  }
+  return r;
+}
+
+nlohmann::json MonoCalibrationJson(const CalibrationInput& in, const MonoCalibrationOptions& options,
+                                   const MonoCalibration& r) {
+  nlohmann::json j;
+  j["input"] = in.description;
+  j["input"]["images"] = in.observations.size();
+  if (!in.detection.empty()) {
+    nlohmann::json rows = nlohmann::json::array();
+    for (const auto& d : in.detection) rows.push_back(DetectionJson(d));
+    j["detection"] = rows;
+    const DetectionTotals t = Totals(in.detection);
+    if (t.with_truth) j["detection_rms_to_truth_px"] = t.rms_to_truth_px;
+  }
+  j["polynomial"] = PolynomialJson(r.polynomial, in.observations);
+  const auto& u = r.unified;
+  j["unified"] = {{"model", "unified_radtan"}, {"xi", u.model.xi}, {"fx", u.model.fx}, {"fy", u.model.fy},
+                  {"cx", u.model.cx}, {"cy", u.model.cy},
+                  {"distortion", {u.model.distortion.k1, u.model.distortion.k2, u.model.distortion.p1,
+                                  u.model.distortion.p2}},
+                  {"rms_px", u.rms}, {"mean_px", u.mean}, {"converged", u.converged}, {"solver", u.solver_report},
+                  {"stddev", u.stddev}, {"opencv_yaml", "unified.yaml"}};
+  nlohmann::json orders = nlohmann::json::array();
+  for (const auto& o : r.orders)
+    orders.push_back({{"degree", o.degree}, {"rms_px", o.rms_px}, {"mean_px", o.mean_px}, {"converged", o.converged},
+                      {"per_image_mean_px", o.per_image_mean_px}});
+  j["order_selection"] = orders;
+  if (r.physical) {
+    const auto& p = *r.physical;
+    const double deg = 180 / M_PI;
+    j["physical"] = {{"model", "physical (hyperboloid + camera pose, exact projection)"},
+                     {"a", p.rig.mirror.a}, {"b", p.rig.mirror.b},
+                     {"tilt_deg", {p.tilt.x() * deg, p.tilt.y() * deg, p.tilt.z() * deg}},
+                     {"offset_m", {p.offset.x(), p.offset.y(), p.offset.z()}},
+                     {"intrinsics_estimated", options.physical.estimate_intrinsics},
+                     {"mirror_estimated", options.physical.estimate_mirror},
+                     {"rms_px", p.rms}, {"converged", p.converged}, {"solver", p.solver_report},
+                     {"rim_points", static_cast<int>(r.rim_points)}, {"rim_rms_px", p.rim_rms}};
+  }
+  if (r.omnidir) {
+    const auto& cv = *r.omnidir;
+    j["opencv_omnidir"] = cv.ok ? nlohmann::json{{"rms_px", cv.rms}, {"opencv_reported_rms", cv.opencv_rms},
+                                                 {"images_used", cv.images_used}, {"xi", cv.xi}, {"fx", cv.fx},
+                                                 {"fy", cv.fy}, {"cx", cv.cx}, {"cy", cv.cy}}
+                                : nlohmann::json{{"error", cv.error}};
+  }
+  if (in.truth) {
+    const auto& rig = *in.truth;
+    if (r.physical_vs_truth) {
+      const auto& g = *r.physical_vs_truth;
+      j["physical"]["ground_truth"] = {
+          {"mean_ray_angle_deg", g.pixels ? nlohmann::json(g.mean_deg) : nlohmann::json()},
+          {"max_ray_angle_deg", g.pixels ? nlohmann::json(g.max_deg) : nlohmann::json()},
+          {"tilt_error_deg", g.tilt_error_deg}, {"camera_centre_error_m", g.centre_error_m},
+          {"pixels", g.pixels}, {"true_a", rig.mirror.a}, {"true_b", rig.mirror.b},
+          {"note", "over the whole mirror image, points at 2 m, mirror frame"}};
+    }
+    // No pixel to compare (the model's annulus misses the true mirror image): no figure, not a zero.
+    const auto& g = *r.polynomial_vs_truth;
+    const auto figure = [&](double v) { return g.pixels ? nlohmann::json(v) : nlohmann::json(); };
+    j["ground_truth"] = {{"mean_ray_angle_deg", figure(g.mean_deg)}, {"max_ray_angle_deg", figure(g.max_deg)},
+                         {"pixels", g.pixels}, {"mean_ray_angle_aligned_deg", figure(g.mean_aligned_deg)},
+                         {"max_ray_angle_aligned_deg", figure(g.max_aligned_deg)},
+                         {"frame_rotation_deg", g.frame_rotation_deg},
+                         {"true_centre", {rig.camera.cx, rig.camera.cy}}};
+  }
+  return j;
+}
+
+std::string MonoCalibrationSummary(const CalibrationInput& in, const MonoCalibration& r) {
+  std::string s = "hovs calibrate: " + std::to_string(in.observations.size()) + " images\n";
+  if (!in.detection.empty()) {
+    const DetectionTotals t = Totals(in.detection);
+    s += "  detection: board in " + std::to_string(in.observations.size()) + " of " +
+         std::to_string(in.detection.size()) + " images (" + std::to_string(t.complete) + " complete), " +
+         std::to_string(t.corners) + " corners (" + std::to_string(t.from_edges) + " from the board's edges)";
+    if (t.with_truth) s += ", RMS " + F("%.4f", t.rms_to_truth_px) + " px from the exact corners";
+    s += "\n";
+  }
+  const auto& p = r.polynomial;
+  s += "  polynomial (degree " + std::to_string(p.model.Degree()) + "): RMS " + F("%.4f", p.rms) + " px, mean " +
+       F("%.4f", p.mean) + " px (linear start " + F("%.3f", p.initial_rms) + " px)\n";
+  if (!p.outliers.empty()) {
+    s += "  rejected " + std::to_string(p.outliers.size()) + " corners above " + F("%.3f", p.outlier_threshold_px) +
+         " px:";
+    for (const auto& ol : p.outliers)
+      s += " " + ol.image + "#" + std::to_string(ol.corner) + " (" + F("%.2f", ol.residual_px) + ")";
+    s += "\n";
+  }
+  s += "  unified + radtan:         RMS " + F("%.4f", r.unified.rms) + " px\n";
+  if (r.omnidir && r.omnidir->ok) s += "  OpenCV omnidir (same corners): RMS " + F("%.4f", r.omnidir->rms) + " px\n";
+  if (r.polynomial_vs_truth && r.polynomial_vs_truth->pixels == 0)
+    s += "  vs ground truth: no pixel of the model's annulus sees the true mirror; nothing to compare\n";
+  else if (r.polynomial_vs_truth)
+    s += "  vs ground truth: mean ray angle " + F("%.5f", r.polynomial_vs_truth->mean_deg) + " deg; " +
+         F("%.5f", r.polynomial_vs_truth->mean_aligned_deg) + " deg after removing a frame rotation of " +
+         F("%.4f", r.polynomial_vs_truth->frame_rotation_deg) + " deg\n";
+  if (r.physical) {
+    const auto& ph = *r.physical;
+    s += "  physical model: RMS " + F("%.4f", ph.rms) + " px, a " + F("%.5f", ph.rig.mirror.a) + " m, b " +
+         F("%.5f", ph.rig.mirror.b) + " m, tilt (" + F("%.3f", ph.tilt.x() * 180 / M_PI) + ", " +
+         F("%.3f", ph.tilt.y() * 180 / M_PI) + ") deg, offset (" + F("%.2f", ph.offset.x() * 1e3) + ", " +
+         F("%.2f", ph.offset.y() * 1e3) + ", " + F("%.2f", ph.offset.z() * 1e3) + ") mm" +
+         (r.rim_points ? ", rim " + std::to_string(r.rim_points) + " points (RMS " + F("%.3f", ph.rim_rms) + " px)"
+                       : "") + "\n";
+    if (r.physical_vs_truth && r.physical_vs_truth->pixels)
+      s += "  physical model vs ground truth: mean ray angle " + F("%.5f", r.physical_vs_truth->mean_deg) + " deg\n";
+  }
+  for (size_t i = 0; i < in.observations.size(); ++i)
+    if (p.per_image_mean[i] > 5.0) s += "  POOR: " + in.observations[i].image + " mean error above 5 px\n";
+  return s;
+}
+
+void CornerAnnulus(const MonoCalibration& r, double* min_radius, double* max_radius) {
+  double rmin = HUGE_VAL, rmax = 0;
+  for (const auto& ob : r.inliers)
+    for (const auto& p : ob.pixels) {
+      const double rad = (p - Vec2d(r.unified.model.cx, r.unified.model.cy)).norm();
+      rmin = std::min(rmin, rad), rmax = std::max(rmax, rad);
+    }
+  *min_radius = 0.9 * rmin, *max_radius = 1.05 * rmax;
+}
+
+}  // namespace hovs::calib
