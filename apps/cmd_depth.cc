@@ -17,6 +17,7 @@
 #include "core/error.h"
 #include "core/io.h"
 #include "core/json.h"
+#include "depth/evaluation.h"
 #include "depth/stereo.h"
 #include "raytrace/render.h"
 #include "scenes/ground_truth.h"
@@ -151,22 +152,10 @@ Runner SetupDepth(CLI::App* sub, const GlobalOptions* global) {
     depth::WriteRangeExr(staged.staging() / "range.exr", d,
                          {{"hovs:what", "range from the left viewpoint (Z) and its sigma (Z.sigma), m, rectified grid"},
                           {"hovs:dataset", o->dataset}, {"hovs:versions", versions.dump()}});
-    // Point cloud (left mirror frame), evenly subsampled.
     std::vector<depth::ColouredPoint> pts;
     std::vector<float> sig;
+    depth::SubsampledCloud(rect, d, left[0], o->max_points, &pts, &sig);
     const size_t nvalid = std::count(d.valid.begin(), d.valid.end(), 1);
-    const size_t step = std::max<size_t>(1, nvalid / std::max(1, o->max_points));
-    size_t seen = 0;
-    for (int v = 0; v < d.height; ++v)
-      for (int u = 0; u < d.width; ++u) {
-        const size_t k = size_t(v) * d.width + u;
-        if (!d.valid[k] || (seen++ % step)) continue;
-        depth::ColouredPoint p;
-        p.p = rect.LeftBearing(u, v) * d.range[k];
-        for (int c = 0; c < 3; ++c) p.rgb[c] = left[0].data[k * left[0].channels + (left[0].channels == 3 ? c : 0)];
-        pts.push_back(p);
-        sig.push_back(d.sigma[k]);
-      }
     depth::WritePly(staged.staging() / "points.ply", pts);
     depth::WriteVtp(staged.staging() / "points.vtp", pts, sig);
 
@@ -189,44 +178,10 @@ Runner SetupDepth(CLI::App* sub, const GlobalOptions* global) {
       const auto exr = io::ReadExr(vl.exr);
       HOVS_REQUIRE(exr.width == wl && exr.height == hl, vl.exr.string(), "the ground truth is ", exr.width, " x ",
                    exr.height, " but its image is ", wl, " x ", hl);
-      const auto& Z = exr.at("Z");
-      std::vector<float> mx, my;
-      rect.left.DecodeView(0, &mx, &my);
-      struct Band { double lo, hi; std::vector<double> rel; int pixels = 0; };
-      std::vector<Band> bands = {{1, 2, {}}, {2, 4, {}}, {4, 8, {}}, {8, 16, {}}, {16, 64, {}}};
-      // Error map (error_map.png): |relative error| from 0 (blue) to 5 % and above (red); black where the
-      // depth is masked, grey where there is no ground truth.
-      std::vector<float> emap(size_t(d.width) * d.height * 3, 0.25f);
-      for (size_t k = 0; k < mx.size(); ++k) {
-        if (mx[k] < 0) continue;
-        const double z = Z[size_t(std::lround(my[k])) * exr.width + size_t(std::lround(mx[k]))];
-        if (!std::isfinite(z)) continue;
-        const float t = d.valid[k] ? float(std::min(1.0, std::abs(d.range[k] - z) / z / 0.05)) : -1.f;
-        emap[3 * k] = t < 0 ? 0.f : t, emap[3 * k + 1] = t < 0 ? 0.f : 1 - std::abs(2 * t - 1), emap[3 * k + 2] = t < 0 ? 0.f : 1 - t;
-        for (auto& b : bands)
-          if (z >= b.lo && z < b.hi) {
-            ++b.pixels;
-            if (d.valid[k]) b.rel.push_back(std::abs(d.range[k] - z) / z);
-          }
-      }
-      nlohmann::json rows = nlohmann::json::array();
-      table = "  band (m)    pixels   valid   median rel. error   within 5 % (of all)\n";
-      for (auto& b : bands) {
-        std::sort(b.rel.begin(), b.rel.end());
-        const double median = b.rel.empty() ? NAN : b.rel[b.rel.size() / 2];
-        const double within = double(std::count_if(b.rel.begin(), b.rel.end(), [](double e) { return e <= 0.05; })) /
-                              std::max(1, b.pixels);
-        const double valid = double(b.rel.size()) / std::max(1, b.pixels);
-        rows.push_back({{"band_m", {b.lo, b.hi}}, {"pixels", b.pixels}, {"valid_fraction", valid},
-                        {"median_relative_error", b.rel.empty() ? nlohmann::json() : nlohmann::json(median)},
-                        {"within_5_percent_fraction", within}});
-        char line[160];
-        std::snprintf(line, sizeof line, "  %5.0f-%-5.0f %8d %6.1f %%   %8.2f %%          %6.1f %%\n", b.lo, b.hi,
-                      b.pixels, 100 * valid, 100 * median, 100 * within);
-        table += line;
-      }
-      j["ground_truth"] = {{"exr", vl.exr.string()}, {"bands", rows}, {"error_map", "error_map.png"}};
-      io::WriteImage(staged.staging() / "error_map.png", d.width, d.height, 3, emap, 8);
+      const depth::DenseDepthEvaluation e = depth::EvaluateDenseDepth(rect, d, exr.at("Z"), exr.width);
+      table = depth::DenseBandsTable(e);
+      j["ground_truth"] = {{"exr", vl.exr.string()}, {"bands", depth::DenseBandsJson(e)}, {"error_map", "error_map.png"}};
+      io::WriteImage(staged.staging() / "error_map.png", d.width, d.height, 3, e.error_map, 8);
     }
     WriteFileAtomic(staged.staging() / "depth.json", j.dump(1));
     staged.Commit();

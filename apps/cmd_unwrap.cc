@@ -25,7 +25,9 @@
 #include "raytrace/render.h"
 #include "scenes/ground_truth.h"
 #include "scenes/scene_config.h"
+#include "scenes/truth_views.h"
 #include "unwrap/remap.h"
+#include "unwrap/view_report.h"
 #include "io/image_io.h"
 
 namespace hovs::apps {
@@ -69,26 +71,6 @@ std::vector<Frame> ListInputs(const std::string& input, const std::string& unit)
     return frames;
   }
   return {{p.stem().string(), p}};
-}
-
-nlohmann::json ViewJson(const unwrap::ViewTable& vt) {
-  const auto& v = vt.view;
-  const auto& q = v.mirror_from_view;
-  nlohmann::json j = {{"name", vt.spec.name}, {"type", ToString(v.projection)}, {"width", v.width},
-                      {"height", v.height},
-                      {"mirror_from_view", {{"qw", q.w()}, {"qx", q.x()}, {"qy", q.y()}, {"qz", q.z()}}},
-                      {"valid_pixels", vt.valid_pixels}, {"tile_size", vt.tile}, {"tiles", {{"interp", vt.interp_tiles}, {"dense", vt.dense_tiles},
-                                                                    {"empty", vt.empty_tiles}}},
-                      {"max_interp_error_px", vt.max_interp_error}, {"max_pyramid_level", vt.max_level}};
-  if (v.projection == ViewProjection::kPerspective) {
-    j["K"] = {{v.camera.fx, 0.0, v.camera.cx}, {0.0, v.camera.fy, v.camera.cy}, {0.0, 0.0, 1.0}};
-    j["yaw_deg"] = vt.spec.yaw_deg, j["pitch_deg"] = vt.spec.pitch_deg, j["roll_deg"] = vt.spec.roll_deg;
-    j["hfov_deg"] = vt.spec.hfov_deg;
-  } else {
-    j["elevation_deg"] = {vt.spec.elevation_min_deg, vt.spec.elevation_max_deg};
-    j["azimuth_centre_deg"] = vt.spec.azimuth_centre_deg, j["azimuth_span_deg"] = vt.spec.azimuth_span_deg;
-  }
-  return j;
 }
 
 }  // namespace
@@ -197,31 +179,9 @@ Runner SetupUnwrap(CLI::App* sub, const GlobalOptions* global) {
     // Ground-truth views: pinhole renders of the scene (without the units' hardware) at the unit's viewpoint.
     std::vector<std::optional<std::vector<uint8_t>>> truth(table.views.size());
     if (truth_cfg) {
-      const auto& cfg = *truth_cfg;
-      const auto& units = cfg.description.units;
-      size_t ui = 0;
-      if (!o->unit.empty()) {
-        ui = units.size();
-        for (size_t k = 0; k < units.size(); ++k)
-          if (units[k].name == o->unit) ui = k;
-        HOVS_REQUIRE(ui < units.size(), "--unit " + o->unit, "no such unit in ", o->truth_scene);
-      }
-      raytrace::SceneDescription bare = cfg.description;
-      bare.units.clear();
-      const raytrace::RayScene scene(bare);
-      raytrace::RenderOptions ro = cfg.render;
-      ro.samples = o->truth_samples;
-      ro.ground_truth = false;
-      ro.Check("--truth-samples");
-      for (size_t v = 0; v < table.views.size(); ++v) {
-        const auto& view = table.views[v].view;
-        if (view.projection != ViewProjection::kPerspective) continue;
-        const Rigid3d world_from_view = units[ui].world_from_mirror * Rigid3d(view.mirror_from_view, Vec3d::Zero());
-        const auto fr = raytrace::Render(scene, raytrace::ViewCamera::Pinhole(view.camera, world_from_view), ro);
-        std::vector<uint8_t> bytes(fr.rgb.size());
-        for (size_t k = 0; k < bytes.size(); ++k) bytes[k] = uint8_t(std::lround(std::clamp(fr.rgb[k], 0.f, 1.f) * 255));
-        truth[v] = std::move(bytes);
-      }
+      std::vector<VirtualView<double>> views;
+      for (const auto& v : table.views) views.push_back(v.view);
+      truth = scenes::RenderTruthViews(*truth_cfg, o->unit, views, o->truth_samples, o->truth_scene);
     }
     StagedDirectory staged(o->out, "unwrap");
     unwrap::Remapper remapper(table);
@@ -261,22 +221,13 @@ Runner SetupUnwrap(CLI::App* sub, const GlobalOptions* global) {
         io::WriteImage(staged.staging() / rel, views[v].width, views[v].height, views[v].channels, fl, 8);
         outs[table.views[v].spec.name] = rel;
         if (truth[v] && views[v].channels == 3) {
-          // PSNR over the view's valid pixels (those the mapping fills).
-          std::vector<float> mx, my;
-          table.DecodeView(static_cast<int>(v), &mx, &my);
-          double se = 0;
-          int64_t n = 0;
-          for (size_t k = 0; k < mx.size(); ++k) {
-            if (mx[k] < 0) continue;
-            for (int ch = 0; ch < 3; ++ch) se += std::pow(double(views[v].data[3 * k + ch]) - (*truth[v])[3 * k + ch], 2);
-            n += 3;
-          }
-          const double psnr = n ? 10 * std::log10(255.0 * 255.0 * n / std::max(se, 1e-9)) : 0.0;
+          const unwrap::ViewPsnr q = unwrap::CompareWithReference(table, static_cast<int>(v), views[v], *truth[v]);
+          const double psnr = q.psnr_db;
           const std::string trel = frames[f].name + "/" + table.views[v].spec.name + "_truth.png";
           for (size_t k = 0; k < fl.size(); ++k) fl[k] = (*truth[v])[k] / 255.f;
           io::WriteImage(staged.staging() / trel, views[v].width, views[v].height, 3, fl, 8);
           truth_json[frames[f].name][table.views[v].spec.name] = {{"psnr_db", psnr}, {"truth", trel},
-                                                                  {"valid_fraction", double(n / 3) / mx.size()}};
+                                                                  {"valid_fraction", q.valid_fraction}};
           if (!global->quiet)
             std::fprintf(stderr, "\r  %s %s: PSNR %.2f dB against the pinhole truth render\n", frames[f].name.c_str(),
                          table.views[v].spec.name.c_str(), psnr);
@@ -288,7 +239,7 @@ Runner SetupUnwrap(CLI::App* sub, const GlobalOptions* global) {
     }
     if (!global->quiet) std::fprintf(stderr, "\n");
     nlohmann::json views_json = nlohmann::json::array();
-    for (const auto& vt : table.views) views_json.push_back(ViewJson(vt));
+    for (const auto& vt : table.views) views_json.push_back(unwrap::ViewJson(vt));
     std::vector<double> sorted = remap_ms;
     std::sort(sorted.begin(), sorted.end());
     nlohmann::json j = {{"tool", "hovs unwrap"}, {"versions", Versions()},

@@ -149,4 +149,75 @@ std::string SparseDepthCsv(const SparseDepthEvaluation& e) {
   return s;
 }
 
+double DenseBand::Median() const { return rel.empty() ? NAN : rel[rel.size() / 2]; }
+
+double DenseBand::WithinFraction(double limit) const {
+  return double(std::count_if(rel.begin(), rel.end(), [&](double e) { return e <= limit; })) / std::max(1, pixels);
+}
+
+DenseDepthEvaluation EvaluateDenseDepth(const Rectification& rect, const DenseDepth& d,
+                                        const std::vector<float>& Z, int truth_width) {
+  DenseDepthEvaluation e;
+  std::vector<float> mx, my;
+  rect.left.DecodeView(0, &mx, &my);
+  for (const auto& [lo, hi] : std::vector<std::pair<double, double>>{{1, 2}, {2, 4}, {4, 8}, {8, 16}, {16, 64}}) {
+    DenseBand b;
+    b.lo = lo, b.hi = hi;
+    e.bands.push_back(b);
+  }
+  e.error_map.assign(size_t(d.width) * d.height * 3, 0.25f);
+  for (size_t k = 0; k < mx.size(); ++k) {
+    if (mx[k] < 0) continue;
+    const double z = Z[size_t(std::lround(my[k])) * truth_width + size_t(std::lround(mx[k]))];
+    if (!std::isfinite(z)) continue;
+    const float t = d.valid[k] ? float(std::min(1.0, std::abs(d.range[k] - z) / z / 0.05)) : -1.f;
+    float* c = &e.error_map[3 * k];
+    c[0] = t < 0 ? 0.f : t, c[1] = t < 0 ? 0.f : 1 - std::abs(2 * t - 1), c[2] = t < 0 ? 0.f : 1 - t;
+    for (auto& b : e.bands)
+      if (z >= b.lo && z < b.hi) {
+        ++b.pixels;
+        if (d.valid[k]) b.rel.push_back(std::abs(d.range[k] - z) / z);
+      }
+  }
+  for (auto& b : e.bands) std::sort(b.rel.begin(), b.rel.end());
+  return e;
+}
+
+nlohmann::json DenseBandsJson(const DenseDepthEvaluation& e) {
+  nlohmann::json rows = nlohmann::json::array();
+  for (const auto& b : e.bands)
+    rows.push_back({{"band_m", {b.lo, b.hi}}, {"pixels", b.pixels}, {"valid_fraction", b.ValidFraction()},
+                    {"median_relative_error", b.rel.empty() ? nlohmann::json() : nlohmann::json(b.Median())},
+                    {"within_5_percent_fraction", b.WithinFraction(0.05)}});
+  return rows;
+}
+
+std::string DenseBandsTable(const DenseDepthEvaluation& e) {
+  std::string table = "  band (m)    pixels   valid   median rel. error   within 5 % (of all)\n";
+  for (const auto& b : e.bands) {
+    char line[160];
+    std::snprintf(line, sizeof line, "  %5.0f-%-5.0f %8d %6.1f %%   %8.2f %%          %6.1f %%\n", b.lo, b.hi, b.pixels,
+                  100 * b.ValidFraction(), 100 * b.Median(), 100 * b.WithinFraction(0.05));
+    table += line;
+  }
+  return table;
+}
+
+void SubsampledCloud(const Rectification& rect, const DenseDepth& d, const unwrap::Image8& left, int max_points,
+                     std::vector<ColouredPoint>* points, std::vector<float>* sigmas) {
+  const size_t nvalid = std::count(d.valid.begin(), d.valid.end(), 1);
+  const size_t step = std::max<size_t>(1, nvalid / std::max(1, max_points));
+  size_t seen = 0;
+  for (int v = 0; v < d.height; ++v)
+    for (int u = 0; u < d.width; ++u) {
+      const size_t k = size_t(v) * d.width + u;
+      if (!d.valid[k] || (seen++ % step)) continue;
+      ColouredPoint p;
+      p.p = rect.LeftBearing(u, v) * d.range[k];
+      for (int c = 0; c < 3; ++c) p.rgb[c] = left.data[k * left.channels + (left.channels == 3 ? c : 0)];
+      points->push_back(p);
+      sigmas->push_back(d.sigma[k]);
+    }
+}
+
 }  // namespace hovs::depth

@@ -7,6 +7,7 @@
 #include <string>
 #include <vector>
 
+#include "depth/stereo.h"
 #include "depth/stereo_calibration.h"
 #include "depth/stereo_dataset.h"
 
@@ -54,5 +55,33 @@ nlohmann::json SparseDepthJson(const SparseDepthEvaluation& evaluation);
 
 // Every point as CSV (one header line), for plots and other tools.
 std::string SparseDepthCsv(const SparseDepthEvaluation& evaluation);
+
+// Dense depth against a range image (the renderer's Z channel of the left unit, `truth_width` pixels a row): each
+// rectified pixel's true range read at its source pixel, by distance band (1-2, 2-4, 4-8, 8-16, 16-64 m).
+struct DenseBand {
+  double lo = 0, hi = 0;
+  int pixels = 0;                    // with ground truth in the band
+  std::vector<double> rel;           // sorted |relative error| of the valid ones
+  double ValidFraction() const { return double(rel.size()) / std::max(1, pixels); }
+  double Median() const;             // NaN without valid pixels
+  double WithinFraction(double limit) const;   // of all pixels in the band
+};
+
+struct DenseDepthEvaluation {
+  std::vector<DenseBand> bands;
+  // |relative error| per rectified pixel as RGB: 0 (blue) to 5 % and above (red); black where the depth is
+  // masked, grey where there is no ground truth.
+  std::vector<float> error_map;
+};
+
+DenseDepthEvaluation EvaluateDenseDepth(const Rectification& rect, const DenseDepth& depth,
+                                        const std::vector<float>& truth_range, int truth_width);
+nlohmann::json DenseBandsJson(const DenseDepthEvaluation& evaluation);
+std::string DenseBandsTable(const DenseDepthEvaluation& evaluation);   // the text table hovs depth prints
+
+// At most max_points valid pixels, evenly spaced in raster order, as coloured points (left mirror frame) and
+// their range sigmas.
+void SubsampledCloud(const Rectification& rect, const DenseDepth& depth, const unwrap::Image8& left_rect,
+                     int max_points, std::vector<ColouredPoint>* points, std::vector<float>* sigmas);
 
 }  // namespace hovs::depth
