@@ -3,7 +3,7 @@
 //
 // Single viewpoint (camera centre at F2, any orientation): closed form
 //   s = X / |X|,  M = b^2 / (a - c s_z) * s,  uv = camera.ImgFromCam(cam_from_mirror * M)
-// General rig (camera off the focus, tilted or offset mirror, the article's R_eps / t_eps): the mirror point M
+// General rig (camera off the focus, tilted or offset against the mirror: a physical misalignment): the mirror point M
 // obeys the law of reflection between the world point X and the camera centre C. With M = (x, y, z(x, y))
 // and tangents T_x = (1, 0, z_x), T_y = (0, 1, z_y), the two equations
 //   h . T_x = 0,  h . T_y = 0,   h = (X - M) / |X - M| + (C - M) / |C - M|
@@ -69,7 +69,8 @@ Vec2<S> ReflectionResidual(const HyperboloidMirror<P>& mirror_p, const Vec3<P>& 
 
 // The camera placement of a misaligned rig: the pinhole at F2 + offset (mirror frame), the camera turned by
 // `tilt` (axis-angle, radians) about its own centre, starting from the ideal orientation (optical axis along
-// +z). Returns cam_from_mirror. (The article's R_eps, t_eps, seen from the camera.)
+// +z). Returns cam_from_mirror. (A physical misalignment; not the article's R_eps, t_eps, which are OCamCalib's
+// affine terms and image centre: PolynomialModel's c, d, e and cx, cy.)
 template <class T>
 Rigid3<T> CamFromMirrorMisaligned(const HyperboloidMirror<T>& mirror, const Vec3<T>& tilt, const Vec3<T>& offset) {
   const Rigid3<T> mirror_from_cam(QuaternionFromAngleAxis<T>(tilt), Vec3<T>(mirror.SecondFocus() + offset));

@@ -2,6 +2,7 @@
 //
 //   pixel (u, v) -> OCamCalib's (row, col) = (v, u)
 //   [row - cy; col - cx] = [[c, d], [e, 1]] * [p_r; p_c]          (affine: c, d, e; centre (cx, cy))
+// The article (section 4.1.2) calls these R_eps = (c, d, e) and t_eps = the centre.
 //   rho = sqrt(p_r^2 + p_c^2),  f(rho) = a0 + a2 rho^2 + ... + aN rho^N   (a1 = 0)
 //   bearing (mirror frame: x along columns, y along rows, z towards the mirror) = normalise(p_c, p_r, f(rho))
 // OCamCalib's cam2world returns (p_r, p_c, f(rho)): hovs swaps the first two components so that the frame is

@@ -174,7 +174,7 @@ class RayScene {
   // True if anything blocks the open segment from a to b (rtcOccluded1).
   bool Occluded(const Vec3d& a, const Vec3d& b, double eps = 1e-7) const;
 
-  // rtcIntersect16 only, no shading, each lane filled from doubles (the benchmark's raw reference until session
+  // rtcIntersect16 only, no shading, each lane filled from doubles (the benchmark's raw reference until measurement
   // 22; IntersectRaw below is the reference now).
   void IntersectOnly16(int count, const Vec3d* origins, const Vec3d* directions, unsigned* geom_ids,
                        const int* from_mirror = nullptr) const;

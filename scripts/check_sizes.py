@@ -12,6 +12,18 @@ import sys
 
 FILE_LIMIT = 700
 FUNCTION_LIMIT = 120
+# Over the limit and named in the README's layout section (one sequential procedure each, left whole until its
+# next change): (file, function name).
+ALLOWED = {
+    ("calib/polynomial_calibration.cc", "CalibratePolynomial"),
+    ("depth/stereo_calibration.cc", "CalibrateStereo"),
+    ("scenes/scene_config.cc", "ParseSceneConfigUnguarded"),
+    ("design/study.cc", "WriteDesignReport"),
+    ("hw/capture.cc", "CaptureDataset"),
+    ("apps/cmd_unwrap.cc", "SetupUnwrap"),
+    ("apps/cmd_depth.cc", "SetupDepth"),
+    ("apps/cmd_live.cc", "SetupLive"),
+}
 ROOT = pathlib.Path(__file__).resolve().parent.parent
 FOLDERS = ["core", "io", "results", "design", "raytrace", "calib", "scenes",
            "unwrap", "depth", "hw", "apps", "python"]
@@ -50,7 +62,7 @@ def main():
             if len(lines) > FILE_LIMIT:
                 bad.append(f"{rel}: {len(lines)} lines (limit {FILE_LIMIT})")
             for start, length, head in functions(lines):
-                if length > FUNCTION_LIMIT:
+                if length > FUNCTION_LIMIT and not any(str(rel) == f and n + "(" in head for f, n in ALLOWED):
                     bad.append(f"{rel}:{start}: function of {length} lines (limit {FUNCTION_LIMIT}): {head[:70]}")
     for line in bad:
         print(line)

@@ -337,7 +337,7 @@ HOVS_AVX512 void BayerRgbRow(const uint8_t* src, ptrdiff_t stride, const RowCoor
 // time), kept, with the source region the pixels' reads cover (only bytes the row kernels would read); (2) that
 // region copied into a patch, 64-byte aligned rows (it stays in L1); (3) the pixels from the patch. Reading the
 // frame directly, each 16-pixel step's loads or gathers wait on L2 and beyond (the reads follow curves across the
-// frame). Measured on the article's six views (session 12, Zen 4, against the direct kernels in interleaved
+// frame). Measured on the article's six views (the measurement of 2026-11-23 (commit a5de1f7), Zen 4, against the direct kernels in interleaved
 // runs): RGB 6.2 -> 5.1 ms, Bayer 8.5 -> 6.1 ms, grey 5.3 -> 3.6 ms; the row polynomials 16 at a time took
 // another 10-25 % off each. A region larger than the patch holds goes row by row through the direct kernels.
 namespace {
@@ -378,7 +378,7 @@ struct TilePass {
   // patch offsets offsets(j, i) of their words. The offsets of a tile row are computed and stored one row ahead
   // of their use, so the steps' scalar loads of them read L1, never a store still in flight: stored just before
   // (or taken out of the register, GCC's choice when it sees both) they waited on store-to-load forwarding from
-  // a 64-byte store, which held back every step's loads. Session 20, one core, three interleaved rounds each:
+  // a 64-byte store, which held back every step's loads. The measurement of 2026-12-02 (commit 1010873), one core, three interleaved rounds each:
   // Bayer 7.2-7.4 -> 5.5-5.9 ms, RGB 8.6-8.7 -> 7.3-8.2 ms for the six views (bit-identical).
   template <class Offsets, class Step>
   HOVS_AVX512 void PixelSteps(int nu, int nv, Offsets offsets, Step step) const {

@@ -126,7 +126,7 @@ struct RawRays {
     });
   }
   // The same rays from double-precision vectors, each lane converted while its packet is filled
-  // (RayScene::IntersectOnly16): the raw figure of sessions 1-21, which spends about half its time filling.
+  // (RayScene::IntersectOnly16): the raw figure of the measurement of 2026-12-03 (commit 28909e9), which spends about half its time filling.
   void TraceFromDouble(const hovs::raytrace::RayScene& scene) const {
     tbb::parallel_for(tbb::blocked_range<size_t>(0, packets.size(), 64), [&](const tbb::blocked_range<size_t>& r) {
       unsigned ids[16];
@@ -158,7 +158,7 @@ BENCHMARK(BM_RawIntersect16)->Arg(16)->Arg(8)->Arg(0)->Unit(benchmark::kMillisec
 // times right after, each timed on its own, so that both see the same state of this VM (whose speed drifts by tens
 // of per cent within minutes). ratio = the frame's rays per second over raw rtcIntersect16's (from single-precision
 // packets), summed over the iterations; ratio_to_raw8 the same over rtcIntersect8's; ratio_to_raw_from_double over
-// rtcIntersect16 filled lane by lane from doubles, the reference of sessions 1-21 (0.5-0.8 times as fast as the raw
+// rtcIntersect16 filled lane by lane from doubles, the reference of the measurement of 2026-12-03 (commit a2b1d88) (0.5-0.8 times as fast as the raw
 // figure: its packet filling took about as long as Embree's traversal), kept so that their figures can be compared.
 // Argument: the frame's buffers (the first frame, which maps memory new to the process, rendered before the timing):
 // 0 fresh ones, the previous frame's freed just before (inside the timing); 1 reused (RenderInto); 2 fresh ones, the

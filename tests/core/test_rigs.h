@@ -15,7 +15,7 @@ inline PinholeCamera<double> ReferenceCamera() {
 inline CatadioptricCamera<double> AlignedRig() {
   return CatadioptricCamera<double>::Aligned(ReferenceMirror(), ReferenceCamera(), 0.010);
 }
-// The article's R_eps, t_eps kind of error: 1 degree tilt, 1 mm lateral offset, 1 mm height error.
+// A physically misaligned rig: the camera turned by about 1 degree about F1 and offset by about 1 mm.
 inline CatadioptricCamera<double> MisalignedRig() {
   auto rig = AlignedRig();
   const double deg = M_PI / 180;
