@@ -22,6 +22,7 @@
 #include "core/error.h"
 #include "core/io.h"
 #include "core/large_pages.h"
+#include "core/statistics.h"
 #include "raytrace/render.h"
 #include "scenes/ground_truth.h"
 #include "scenes/scene_config.h"
@@ -34,58 +35,198 @@ namespace hovs::apps {
 namespace {
 namespace fs = std::filesystem;
 
-bool EndsWith(const std::string& s, const std::string& e) {
-  return s.size() >= e.size() && s.compare(s.size() - e.size(), e.size(), e) == 0;
-}
-
-struct Frame {
-  std::string name;
-  fs::path image;
+struct Options {
+  std::string model, unit, layout = "article", input, out = "results/unwrap", map, save_map;
+  std::string interp = "bilinear", format = "auto";
+  double scene_distance = 10.0;
+  int tile = 0;
+  std::string truth_scene;
+  int truth_samples = 4;
+  bool interactive = false;
+  std::string layout_out = "layout.yaml";
 };
 
-std::vector<Frame> ListInputs(const std::string& input, const std::string& unit) {
-  const fs::path p(input);
-  HOVS_REQUIRE(fs::exists(p), "--input " + input, "not found");
-  std::vector<Frame> frames;
-  if (fs::is_directory(p)) {
-    // Each image's views go to a folder named after it: two images of one name (a.png, a.jpg) would write the
-    // same files.
-    std::map<std::string, fs::path> seen;
-    for (const auto& f : ListImageFiles(p)) {
-      const auto [it, fresh] = seen.emplace(f.stem().string(), f);
-      HOVS_REQUIRE(fresh, "--input " + input, "two images named '", f.stem().string(), "' (",
-                   it->second.filename().string(), " and ", f.filename().string(),
-                   "): their views would be written to the same folder");
-      frames.push_back({f.stem().string(), f});
+// Every input frame's header, checked before any mapping is built: a bad image is named first.
+std::vector<io::ImageHeader> CheckFrames(const std::vector<InputFrame>& frames, const std::string& format) {
+  std::vector<io::ImageHeader> headers;
+  for (const auto& f : frames) {
+    headers.push_back(io::ReadImageHeader(f.image));
+    const int c = headers.back().channels;
+    if (format == "auto")
+      HOVS_REQUIRE(c == 1 || c == 3 || c == 4, f.image.string(), "unsupported channel count ", c);
+    else
+      HOVS_REQUIRE((unwrap::ParsePixelFormat(format) == unwrap::PixelFormat::kRgb8) == (c >= 3), f.image.string(),
+                   "has ", c, " channels, which is not ", format);
+  }
+  return headers;
+}
+
+void CheckSizes(const std::vector<InputFrame>& frames, const std::vector<io::ImageHeader>& headers, int width, int height) {
+  for (size_t f = 0; f < frames.size(); ++f)
+    HOVS_REQUIRE(headers[f].width == width && headers[f].height == height, frames[f].image.string(), "the image is ",
+                 headers[f].width, " x ", headers[f].height, " but the model is for ", width, " x ", height);
+}
+
+// The mapping: loaded from --map or built from --model and --layout; `source` says which.
+unwrap::RemapTable Mapping(const Options& o, const std::vector<InputFrame>& frames,
+                           const std::vector<io::ImageHeader>& headers, std::string* source) {
+  if (!o.map.empty()) {
+    unwrap::RemapTable table = unwrap::LoadRemapTable(o.map);
+    CheckSizes(frames, headers, table.source_width, table.source_height);
+    *source = "loaded " + o.map;
+    std::vector<unwrap::ViewSpec> specs;
+    for (const auto& v : table.views) specs.push_back(v.spec);
+    unwrap::CheckViewsMemory("--map " + o.map, specs, AvailableMemoryBytes());
+    return table;
+  }
+  const AnyModel model = LoadModelSpec(o.model, o.unit, o.scene_distance);
+  CheckSizes(frames, headers, model.width(), model.height());
+  unwrap::RemapOptions ro;
+  ro.tile = o.tile;
+  const unwrap::Layout layout = unwrap::ResolveLayout(o.layout);
+  unwrap::CheckViewsMemory("--layout " + o.layout, layout.views, AvailableMemoryBytes());
+  *source = std::string("built from the ") + model.KindName() + " model in " + o.model;
+  return unwrap::BuildRemapTable(model, layout, ro, nlohmann::json(Versions()).dump());
+}
+
+// One frame as 8-bit pixels in the format --format names (auto: grey or RGB as stored).
+std::vector<uint8_t> LoadFrame(const InputFrame& frame, const std::string& format, const unwrap::RemapTable& table,
+                               unwrap::PixelFormat* fmt) {
+  int w = 0, h = 0, c = 0;
+  const io::PixelBuffer px = io::ReadImage(frame.image, &w, &h, &c);
+  if (format == "auto") {
+    HOVS_REQUIRE(c == 1 || c == 3 || c == 4, frame.image.string(), "unsupported channel count ", c);
+    *fmt = c == 1 ? unwrap::PixelFormat::kGray8 : unwrap::PixelFormat::kRgb8;
+  } else {
+    *fmt = unwrap::ParsePixelFormat(format);
+    HOVS_REQUIRE((*fmt == unwrap::PixelFormat::kRgb8) == (c >= 3), frame.image.string(), "has ", c,
+                 " channels, which is not ", format);
+  }
+  HOVS_REQUIRE(w == table.source_width && h == table.source_height, frame.image.string(), "the image is ", w, " x ",
+               h, " but the model is for ", table.source_width, " x ", table.source_height);
+  const int oc = *fmt == unwrap::PixelFormat::kRgb8 ? 3 : 1;
+  std::vector<uint8_t> bytes(size_t(w) * h * oc);
+  for (size_t k = 0; k < size_t(w) * h; ++k)
+    for (int ch = 0; ch < oc; ++ch) bytes[k * oc + ch] = uint8_t(std::lround(std::clamp(px[k * c + ch], 0.f, 1.f) * 255));
+  return bytes;
+}
+
+void WriteRgb8(const fs::path& path, int width, int height, int channels, const std::vector<uint8_t>& data) {
+  std::vector<float> fl(data.size());
+  for (size_t k = 0; k < fl.size(); ++k) fl[k] = data[k] / 255.f;
+  io::WriteImage(path, width, height, channels, fl, 8);
+}
+
+// Unwraps every frame into `folder`: <frame>/<view>.png, and beside each perspective view with a truth render
+// <frame>/<view>_truth.png and its PSNR in `truth_json`. Returns the frames' records; remap_ms gets each
+// frame's remap time.
+nlohmann::json UnwrapFrames(const Options& o, bool quiet, const std::vector<InputFrame>& frames,
+                            const unwrap::RemapTable& table,
+                            const std::vector<std::optional<std::vector<uint8_t>>>& truth, const fs::path& folder,
+                            nlohmann::json* truth_json, std::vector<double>* remap_ms) {
+  const unwrap::Interpolation interp = unwrap::ParseInterpolation(o.interp);
+  unwrap::Remapper remapper(table);
+  nlohmann::json frames_json = nlohmann::json::array();
+  // The views' buffers are reused from frame to frame (Run keeps outputs of the right size): after the first
+  // frame the remap time is the kernels' alone, not the first touch of fresh pages.
+  std::vector<unwrap::Image8> views;
+  for (size_t f = 0; f < frames.size(); ++f) {
+    unwrap::PixelFormat fmt;
+    const std::vector<uint8_t> bytes = LoadFrame(frames[f], o.format, table, &fmt);
+    const int w = table.source_width, h = table.source_height, oc = fmt == unwrap::PixelFormat::kRgb8 ? 3 : 1;
+    const auto a = std::chrono::steady_clock::now();
+    remapper.Run({bytes.data(), w, h, size_t(w) * oc, fmt}, interp, &views);
+    remap_ms->push_back(std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - a).count());
+    nlohmann::json outs = nlohmann::json::object();
+    for (size_t v = 0; v < views.size(); ++v) {
+      const std::string& name = table.views[v].spec.name;
+      const std::string rel = frames[f].name + "/" + name + ".png";
+      WriteRgb8(folder / rel, views[v].width, views[v].height, views[v].channels, views[v].data);
+      outs[name] = rel;
+      if (!truth[v] || views[v].channels != 3) continue;
+      const unwrap::ViewPsnr q = unwrap::CompareWithReference(table, static_cast<int>(v), views[v], *truth[v]);
+      const std::string trel = frames[f].name + "/" + name + "_truth.png";
+      WriteRgb8(folder / trel, views[v].width, views[v].height, 3, *truth[v]);
+      (*truth_json)[frames[f].name][name] = {{"psnr_db", q.psnr_db}, {"truth", trel},
+                                             {"valid_fraction", q.valid_fraction}};
+      if (!quiet)
+        std::fprintf(stderr, "\r  %s %s: PSNR %.2f dB against the pinhole truth render\n", frames[f].name.c_str(),
+                     name.c_str(), q.psnr_db);
     }
-    return frames;
+    frames_json.push_back({{"frame", frames[f].name}, {"input", frames[f].image.string()}, {"views", outs},
+                           {"remap_ms", remap_ms->back()}, {"pixel_format", unwrap::ToString(fmt)}});
+    if (!quiet) std::fprintf(stderr, "\r  frame %zu / %zu", f + 1, frames.size());
   }
-  if (EndsWith(input, ".json")) {
-    const auto m = LoadDatasetManifest(p);
-    const std::string want = unit.empty() ? m.at("units")[0]["name"].get<std::string>() : unit;
-    for (const auto& fr : m.at("frames"))
-      for (const auto& v : fr.at("views"))
-        if (v.at("unit") == want)
-          frames.push_back({"frame" + std::to_string(fr.at("id").get<int>()), p.parent_path() / v.at("image").get<std::string>()});
-    HOVS_REQUIRE(!frames.empty(), input, "no frame of unit '", want, "'");
-    return frames;
+  if (!quiet) std::fprintf(stderr, "\n");
+  return frames_json;
+}
+
+int RunUnwrap(const Options& o, const GlobalOptions& global) {
+  HOVS_REQUIRE(o.model.empty() != o.map.empty(), "hovs unwrap", "give either --model or --map");
+  if (o.interactive) {
+    HOVS_REQUIRE(!o.model.empty() && !o.input.empty(), "hovs unwrap --interactive",
+                 "needs --model (views are rebuilt as you move them) and --input");
+    const AnyModel model = LoadModelSpec(o.model, o.unit, o.scene_distance);
+    const unwrap::Image8 im = LoadImage8(ListInputs(o.input, o.unit).front().image);
+    RunUnwrapViewer(model, unwrap::ResolveLayout(o.layout),
+                    im.View(im.channels == 1 ? unwrap::PixelFormat::kGray8 : unwrap::PixelFormat::kRgb8), o.layout_out);
+    return 0;
   }
-  return {{p.stem().string(), p}};
+  HOVS_REQUIRE(!o.input.empty() || !o.save_map.empty(), "hovs unwrap", "give --input (and/or --save-map)");
+  HOVS_REQUIRE(o.save_map.empty() || o.map.empty(), "--save-map", "saves the mapping built from --model, not one "
+               "loaded with --map");
+  unwrap::ParseInterpolation(o.interp);
+  if (!o.save_map.empty()) CheckOutputFile(o.save_map, "HOVSMAP", "a hovs mapping file");
+  // The inputs, their headers and the truth scene first: a bad one is named before any mapping is built.
+  const auto frames = o.input.empty() ? std::vector<InputFrame>() : ListInputs(o.input, o.unit);
+  const std::vector<io::ImageHeader> headers = CheckFrames(frames, o.format);
+  std::optional<scenes::SceneConfig> truth_cfg;
+  if (!o.truth_scene.empty()) truth_cfg = scenes::LoadSceneConfig(o.truth_scene);
+  const auto t0 = std::chrono::steady_clock::now();
+  std::string source;
+  const unwrap::RemapTable table = Mapping(o, frames, headers, &source);
+  const double table_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+  if (!global.quiet)
+    std::printf("hovs unwrap: %zu views, mapping %s in %.0f ms\n", table.views.size(), source.c_str(), table_ms);
+  // The mapping file is saved once everything else has succeeded: a failed run leaves no new file.
+  if (o.input.empty()) {
+    if (!o.save_map.empty()) unwrap::SaveRemapTable(o.save_map, table);
+    return 0;
+  }
+  // Ground-truth views: pinhole renders of the scene (without the units' hardware) at the unit's viewpoint.
+  std::vector<std::optional<std::vector<uint8_t>>> truth(table.views.size());
+  if (truth_cfg) {
+    std::vector<VirtualView<double>> views;
+    for (const auto& v : table.views) views.push_back(v.view);
+    truth = scenes::RenderTruthViews(*truth_cfg, o.unit, views, o.truth_samples, o.truth_scene);
+  }
+  StagedDirectory staged(o.out, "unwrap");
+  nlohmann::json truth_json = nlohmann::json::object();
+  std::vector<double> remap_ms;
+  const nlohmann::json frames_json =
+      UnwrapFrames(o, global.quiet, frames, table, truth, staged.staging(), &truth_json, &remap_ms);
+  nlohmann::json views_json = nlohmann::json::array();
+  for (const auto& vt : table.views) views_json.push_back(unwrap::ViewJson(vt));
+  const double median_ms = Median(remap_ms);
+  nlohmann::json j = {{"tool", "hovs unwrap"}, {"versions", Versions()},
+                      {"mapping", nlohmann::json::parse(table.header)}, {"mapping_source", source},
+                      {"interpolation", o.interp}, {"views", views_json}, {"frames", frames_json},
+                      {"timing", {{"mapping_ms", table_ms}, {"median_remap_ms", median_ms},
+                                  {"note", "remap of all views of one frame, this machine, threads: TBB default"}}}};
+  if (!truth_json.empty())
+    j["truth"] = {{"scene", o.truth_scene}, {"samples", o.truth_samples}, {"per_frame", truth_json}};
+  WriteFileAtomic(staged.staging() / "views.json", j.dump(1));
+  if (!o.save_map.empty()) unwrap::SaveRemapTable(o.save_map, table);
+  staged.Commit();
+  if (!global.quiet)
+    std::printf("hovs unwrap: %zu frames x %zu views -> %s (median remap %.2f ms per frame)\n", frames.size(),
+                table.views.size(), o.out.c_str(), median_ms);
+  return 0;
 }
 
 }  // namespace
 
 Runner SetupUnwrap(CLI::App* sub, const GlobalOptions* global) {
-  struct Options {
-    std::string model, unit, layout = "article", input, out = "results/unwrap", map, save_map;
-    std::string interp = "bilinear", format = "auto";
-    double scene_distance = 10.0;
-    int tile = 0;
-    std::string truth_scene;
-    int truth_samples = 4;
-    bool interactive = false;
-    std::string layout_out = "layout.yaml";
-  };
   auto o = std::make_shared<Options>();
   sub->add_option("--model", o->model, "scene YAML or dataset.json (exact rig), calib_results.txt or calibration.json");
   sub->add_option("--unit", o->unit, "unit name in a scene or manifest (default: the first)");
@@ -107,157 +248,7 @@ Runner SetupUnwrap(CLI::App* sub, const GlobalOptions* global) {
   sub->add_flag("--interactive", o->interactive,
                 "control panel: adjust each view live on the first input frame (needs a display; s saves the layout)");
   sub->add_option("--layout-out", o->layout_out, "where --interactive saves the adjusted layout")->capture_default_str();
-  return [o, global]() {
-    HOVS_REQUIRE(o->model.empty() != o->map.empty(), "hovs unwrap", "give either --model or --map");
-    if (o->interactive) {
-      HOVS_REQUIRE(!o->model.empty() && !o->input.empty(), "hovs unwrap --interactive",
-                   "needs --model (views are rebuilt as you move them) and --input");
-      const AnyModel model = LoadModelSpec(o->model, o->unit, o->scene_distance);
-      const auto frame = ListInputs(o->input, o->unit).front();
-      const unwrap::Image8 im = LoadImage8(frame.image);
-      RunUnwrapViewer(model, unwrap::ResolveLayout(o->layout),
-                      im.View(im.channels == 1 ? unwrap::PixelFormat::kGray8 : unwrap::PixelFormat::kRgb8), o->layout_out);
-      return 0;
-    }
-    HOVS_REQUIRE(!o->input.empty() || !o->save_map.empty(), "hovs unwrap", "give --input (and/or --save-map)");
-    HOVS_REQUIRE(o->save_map.empty() || o->map.empty(), "--save-map", "saves the mapping built from --model, not one "
-                 "loaded with --map");
-    const unwrap::Interpolation interp = unwrap::ParseInterpolation(o->interp);
-    if (!o->save_map.empty()) CheckOutputFile(o->save_map, "HOVSMAP", "a hovs mapping file");
-    // The inputs and their headers first: a bad image is named before any mapping is built.
-    const auto frames = o->input.empty() ? std::vector<Frame>() : ListInputs(o->input, o->unit);
-    std::vector<io::ImageHeader> headers;
-    for (const auto& f : frames) {
-      headers.push_back(io::ReadImageHeader(f.image));
-      const int c = headers.back().channels;
-      if (o->format == "auto")
-        HOVS_REQUIRE(c == 1 || c == 3 || c == 4, f.image.string(), "unsupported channel count ", c);
-      else
-        HOVS_REQUIRE((unwrap::ParsePixelFormat(o->format) == unwrap::PixelFormat::kRgb8) == (c >= 3), f.image.string(),
-                     "has ", c, " channels, which is not ", o->format);
-    }
-    // The truth scene too.
-    std::optional<scenes::SceneConfig> truth_cfg;
-    if (!o->truth_scene.empty()) truth_cfg = scenes::LoadSceneConfig(o->truth_scene);
-    const auto sizes_match = [&](int width, int height) {
-      for (size_t f = 0; f < frames.size(); ++f)
-        HOVS_REQUIRE(headers[f].width == width && headers[f].height == height, frames[f].image.string(), "the image is ",
-                     headers[f].width, " x ", headers[f].height, " but the model is for ", width, " x ", height);
-    };
-    const auto t0 = std::chrono::steady_clock::now();
-    unwrap::RemapTable table;
-    std::string source;
-    if (!o->map.empty()) {
-      table = unwrap::LoadRemapTable(o->map);
-      sizes_match(table.source_width, table.source_height);
-      source = "loaded " + o->map;
-      std::vector<unwrap::ViewSpec> specs;
-      for (const auto& v : table.views) specs.push_back(v.spec);
-      unwrap::CheckViewsMemory("--map " + o->map, specs, AvailableMemoryBytes());
-    } else {
-      const AnyModel model = LoadModelSpec(o->model, o->unit, o->scene_distance);
-      sizes_match(model.width(), model.height());
-      unwrap::RemapOptions ro;
-      ro.tile = o->tile;
-      const nlohmann::json versions = Versions();
-      const unwrap::Layout layout = unwrap::ResolveLayout(o->layout);
-      unwrap::CheckViewsMemory("--layout " + o->layout, layout.views, AvailableMemoryBytes());
-      table = unwrap::BuildRemapTable(model, layout, ro, versions.dump());
-      source = std::string("built from the ") + model.KindName() + " model in " + o->model;
-    }
-    // The mapping file is saved once everything else has succeeded: a failed run leaves no new file.
-    const auto save_map = [&] {
-      if (!o->save_map.empty()) unwrap::SaveRemapTable(o->save_map, table);
-    };
-    const double table_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
-    if (!global->quiet) std::printf("hovs unwrap: %zu views, mapping %s in %.0f ms\n", table.views.size(), source.c_str(), table_ms);
-    if (o->input.empty()) {
-      save_map();
-      return 0;
-    }
-
-    // Ground-truth views: pinhole renders of the scene (without the units' hardware) at the unit's viewpoint.
-    std::vector<std::optional<std::vector<uint8_t>>> truth(table.views.size());
-    if (truth_cfg) {
-      std::vector<VirtualView<double>> views;
-      for (const auto& v : table.views) views.push_back(v.view);
-      truth = scenes::RenderTruthViews(*truth_cfg, o->unit, views, o->truth_samples, o->truth_scene);
-    }
-    StagedDirectory staged(o->out, "unwrap");
-    unwrap::Remapper remapper(table);
-    nlohmann::json frames_json = nlohmann::json::array();
-    nlohmann::json truth_json = nlohmann::json::object();
-    std::vector<double> remap_ms;
-    // The views' buffers are reused from frame to frame (Run keeps outputs of the right size): after the first
-    // frame the remap time is the kernels' alone, not the first touch of fresh pages.
-    std::vector<unwrap::Image8> views;
-    for (size_t f = 0; f < frames.size(); ++f) {
-      int w = 0, h = 0, c = 0;
-      const io::PixelBuffer px = io::ReadImage(frames[f].image, &w, &h, &c);
-      unwrap::PixelFormat fmt;
-      if (o->format == "auto") {
-        HOVS_REQUIRE(c == 1 || c == 3 || c == 4, frames[f].image.string(), "unsupported channel count ", c);
-        fmt = c == 1 ? unwrap::PixelFormat::kGray8 : unwrap::PixelFormat::kRgb8;
-      } else {
-        fmt = unwrap::ParsePixelFormat(o->format);
-        HOVS_REQUIRE((fmt == unwrap::PixelFormat::kRgb8) == (c >= 3), frames[f].image.string(), "has ", c,
-                     " channels, which is not ", o->format);
-      }
-      HOVS_REQUIRE(w == table.source_width && h == table.source_height, frames[f].image.string(), "the image is ", w,
-                   " x ", h, " but the model is for ", table.source_width, " x ", table.source_height);
-      const int oc = fmt == unwrap::PixelFormat::kRgb8 ? 3 : 1;
-      std::vector<uint8_t> bytes(size_t(w) * h * oc);
-      for (size_t k = 0; k < size_t(w) * h; ++k)
-        for (int ch = 0; ch < oc; ++ch)
-          bytes[k * oc + ch] = uint8_t(std::lround(std::clamp(px[k * c + ch], 0.f, 1.f) * 255));
-      const auto a = std::chrono::steady_clock::now();
-      remapper.Run({bytes.data(), w, h, size_t(w) * oc, fmt}, interp, &views);
-      remap_ms.push_back(std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - a).count());
-      nlohmann::json outs = nlohmann::json::object();
-      for (size_t v = 0; v < views.size(); ++v) {
-        const std::string rel = frames[f].name + "/" + table.views[v].spec.name + ".png";
-        std::vector<float> fl(views[v].data.size());
-        for (size_t k = 0; k < fl.size(); ++k) fl[k] = views[v].data[k] / 255.f;
-        io::WriteImage(staged.staging() / rel, views[v].width, views[v].height, views[v].channels, fl, 8);
-        outs[table.views[v].spec.name] = rel;
-        if (truth[v] && views[v].channels == 3) {
-          const unwrap::ViewPsnr q = unwrap::CompareWithReference(table, static_cast<int>(v), views[v], *truth[v]);
-          const double psnr = q.psnr_db;
-          const std::string trel = frames[f].name + "/" + table.views[v].spec.name + "_truth.png";
-          for (size_t k = 0; k < fl.size(); ++k) fl[k] = (*truth[v])[k] / 255.f;
-          io::WriteImage(staged.staging() / trel, views[v].width, views[v].height, 3, fl, 8);
-          truth_json[frames[f].name][table.views[v].spec.name] = {{"psnr_db", psnr}, {"truth", trel},
-                                                                  {"valid_fraction", q.valid_fraction}};
-          if (!global->quiet)
-            std::fprintf(stderr, "\r  %s %s: PSNR %.2f dB against the pinhole truth render\n", frames[f].name.c_str(),
-                         table.views[v].spec.name.c_str(), psnr);
-        }
-      }
-      frames_json.push_back({{"frame", frames[f].name}, {"input", frames[f].image.string()}, {"views", outs},
-                             {"remap_ms", remap_ms.back()}, {"pixel_format", unwrap::ToString(fmt)}});
-      if (!global->quiet) std::fprintf(stderr, "\r  frame %zu / %zu", f + 1, frames.size());
-    }
-    if (!global->quiet) std::fprintf(stderr, "\n");
-    nlohmann::json views_json = nlohmann::json::array();
-    for (const auto& vt : table.views) views_json.push_back(unwrap::ViewJson(vt));
-    std::vector<double> sorted = remap_ms;
-    std::sort(sorted.begin(), sorted.end());
-    nlohmann::json j = {{"tool", "hovs unwrap"}, {"versions", Versions()},
-                              {"mapping", nlohmann::json::parse(table.header)}, {"mapping_source", source},
-                              {"interpolation", o->interp}, {"views", views_json}, {"frames", frames_json},
-                              {"timing", {{"mapping_ms", table_ms}, {"median_remap_ms", sorted[sorted.size() / 2]},
-                                          {"note", "remap of all views of one frame, this machine, threads: TBB default"}}}};
-    if (!truth_json.empty()) {
-      j["truth"] = {{"scene", o->truth_scene}, {"samples", o->truth_samples}, {"per_frame", truth_json}};
-    }
-    WriteFileAtomic(staged.staging() / "views.json", j.dump(1));
-    save_map();
-    staged.Commit();
-    if (!global->quiet)
-      std::printf("hovs unwrap: %zu frames x %zu views -> %s (median remap %.2f ms per frame)\n", frames.size(),
-                  table.views.size(), o->out.c_str(), sorted[sorted.size() / 2]);
-    return 0;
-  };
+  return [o, global]() { return RunUnwrap(*o, *global); };
 }
 
 }  // namespace hovs::apps

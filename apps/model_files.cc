@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <map>
 #include <nlohmann/json.hpp>
 
 #include "calib/ocam_io.h"
@@ -110,4 +111,34 @@ unwrap::Image8 LoadImage8(const std::filesystem::path& path) {
   return im;
 }
 
+
+std::vector<InputFrame> ListInputs(const std::string& input, const std::string& unit) {
+  const std::filesystem::path p(input);
+  HOVS_REQUIRE(std::filesystem::exists(p), "--input " + input, "not found");
+  std::vector<InputFrame> frames;
+  if (std::filesystem::is_directory(p)) {
+    // Each image's views go to a folder named after it: two images of one name (a.png, a.jpg) would write the
+    // same files.
+    std::map<std::string, std::filesystem::path> seen;
+    for (const auto& f : ListImageFiles(p)) {
+      const auto [it, fresh] = seen.emplace(f.stem().string(), f);
+      HOVS_REQUIRE(fresh, "--input " + input, "two images named '", f.stem().string(), "' (",
+                   it->second.filename().string(), " and ", f.filename().string(),
+                   "): their views would be written to the same folder");
+      frames.push_back({f.stem().string(), f});
+    }
+    return frames;
+  }
+  if (EndsWith(input, ".json")) {
+    const auto m = LoadDatasetManifest(p);
+    const std::string want = unit.empty() ? m.at("units")[0]["name"].get<std::string>() : unit;
+    for (const auto& fr : m.at("frames"))
+      for (const auto& v : fr.at("views"))
+        if (v.at("unit") == want)
+          frames.push_back({"frame" + std::to_string(fr.at("id").get<int>()), p.parent_path() / v.at("image").get<std::string>()});
+    HOVS_REQUIRE(!frames.empty(), input, "no frame of unit '", want, "'");
+    return frames;
+  }
+  return {{p.stem().string(), p}};
+}
 }  // namespace hovs::apps

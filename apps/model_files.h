@@ -5,6 +5,7 @@
 #include <filesystem>
 #include <nlohmann/json.hpp>
 #include <string>
+#include <vector>
 
 #include "core/any_model.h"
 #include "core/manifest.h"  // LoadDatasetManifest, used with the models by every command
@@ -24,6 +25,14 @@ AnyModel LoadCalibratedModel(const std::filesystem::path& path, const std::strin
 // The model named by --model: a scene YAML or a dataset manifest (the exact rig of `unit`, default the first),
 // calib_results.txt, or a hovs calibration.json (LoadCalibratedModel). Throws naming the file.
 AnyModel LoadModelSpec(const std::string& spec, const std::string& unit, double scene_distance);
+
+// The frames an --input names: an image, a folder of images (each frame named after its file; two of one name
+// are refused), or a dataset manifest (every view of `unit`, default the first; frames named frame<id>).
+struct InputFrame {
+  std::string name;
+  std::filesystem::path image;
+};
+std::vector<InputFrame> ListInputs(const std::string& input, const std::string& unit);
 
 // An image as 8-bit grey (one channel) or RGB (three or more channels: alpha dropped).
 unwrap::Image8 LoadImage8(const std::filesystem::path& path);

@@ -79,4 +79,13 @@ class Validation {
   nlohmann::json metrics_;
 };
 
+// The stages, in the report's order (apps/validate_stages.cc): the design study and the renders, detection and
+// monocular calibration of both units, stereo calibration with exact and calibrated models, the six views and
+// the panorama, dense depth, and the real images of `real` (skipped when empty or absent).
+void DesignAndRenders(Validation& v, uint64_t seed);
+void MonoCalibrations(Validation& v);
+void StereoCalibrations(Validation& v);
+void ViewsAndDenseDepth(Validation& v);
+void RealImages(Validation& v, const std::string& real);
+
 }  // namespace hovs::apps

@@ -51,4 +51,23 @@ inline double Median(std::vector<double> v) {
   return v[v.size() / 2];
 }
 
+// Order statistics of a sample (latencies, errors): median (upper of an even count), 95th percentile (the value
+// at index floor(0.95 n) of the sorted sample), maximum and mean. All 0 for an empty sample.
+struct SampleSummary {
+  size_t count = 0;
+  double median = 0, p95 = 0, max = 0, mean = 0;
+};
+
+inline SampleSummary Summarise(std::vector<double> v) {
+  SampleSummary s;
+  if (v.empty()) return s;
+  std::sort(v.begin(), v.end());
+  double sum = 0;
+  for (double x : v) sum += x;
+  s.count = v.size();
+  s.median = v[v.size() / 2], s.p95 = v[std::min(v.size() - 1, v.size() * 95 / 100)], s.max = v.back();
+  s.mean = sum / v.size();
+  return s;
+}
+
 }  // namespace hovs

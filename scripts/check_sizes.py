@@ -20,9 +20,6 @@ ALLOWED = {
     ("scenes/scene_config.cc", "ParseSceneConfigUnguarded"),
     ("design/study.cc", "WriteDesignReport"),
     ("hw/capture.cc", "CaptureDataset"),
-    ("apps/cmd_unwrap.cc", "SetupUnwrap"),
-    ("apps/cmd_depth.cc", "SetupDepth"),
-    ("apps/cmd_live.cc", "SetupLive"),
 }
 ROOT = pathlib.Path(__file__).resolve().parent.parent
 FOLDERS = ["core", "io", "results", "design", "raytrace", "calib", "scenes",

@@ -1,0 +1,46 @@
+// The live loop: frames from a source expanded into the views of a mapping as they arrive (a raw BayerRG8 frame
+// goes straight to RGB views, demosaiced inside the remap), every Nth frame's views written, each shown through
+// a caller's display, with the latency of every stage.
+#pragma once
+
+#include <atomic>
+#include <filesystem>
+#include <functional>
+#include <string>
+#include <vector>
+
+#include "hw/camera_source.h"
+#include "unwrap/remap.h"
+#include "unwrap/remap_table.h"
+
+namespace hovs::hw {
+
+struct LiveOptions {
+  int frames = 100;                  // 0: until stopped or `seconds`
+  double seconds = 0;                // 0: no limit
+  double timeout = 3;                // s: a complete frame must arrive within this of the previous one
+  int write_every = 0;               // write the views of every Nth frame into out_dir (0: never)
+  std::filesystem::path out_dir;
+  bool software_trigger = false;
+  bool replay = false;               // the source ends (a replay): no frame is the end, not a timeout
+  std::string source_name, mapping_name;   // named in errors
+  unwrap::PixelFormat format = unwrap::PixelFormat::kGray8;
+  unwrap::Interpolation interpolation = unwrap::Interpolation::kBilinear;
+};
+
+struct LiveRun {
+  int processed = 0, incomplete = 0, written = 0;
+  double seconds = 0;
+  // Per processed frame, ms: waiting for the frame, the remap, writing (when written), the display (with one),
+  // and from the frame's arrival to its output.
+  std::vector<double> wait_ms, remap_ms, write_ms, display_ms, total_ms;
+};
+
+// Runs until `frames` frames are processed, `seconds` pass, the replay ends or *stop is set (Ctrl-C; the display
+// may set it too). Starts and stops the camera; throws hovs::Error naming the source when no complete frame
+// arrives in time or a frame does not match the mapping's size.
+LiveRun RunLive(CameraSource& camera, const unwrap::RemapTable& table, const LiveOptions& options,
+                std::atomic<bool>* stop,
+                const std::function<void(const std::vector<unwrap::Image8>&)>& display = {});
+
+}  // namespace hovs::hw
