@@ -27,21 +27,93 @@ void ParseSize(const std::string& text, int* w, int* h) {
                "--size", "expected WxH of 1..65535 pixels each, e.g. 1024x768 (got '", text, "')");
 }
 
+struct Options {
+  std::string corners, size, dataset, unit, images, board, out = "results/calibration", loss = "none";
+  bool truth_corners = false, physical = false, physical_intrinsics = false, physical_mirror = false, rim = true;
+  std::string nominal;
+  int subpix = 0;
+  std::string corner_refinement = "edges";
+  std::vector<int> degrees = {2, 3, 4, 5, 6};
+  int degree = 4;
+  double loss_scale = 1.0, noise = 0.0, outlier_sigmas = 5.0;
+  uint64_t seed = 1;
+  bool omnidir = false;
+};
+
+int RunCalibrate(const Options& o, const GlobalOptions& global) {
+  HOVS_REQUIRE(int(!o.corners.empty()) + int(!o.dataset.empty()) + int(!o.images.empty()) == 1, "hovs calibrate",
+               "give exactly one of --corners, --dataset and --images");
+  HOVS_REQUIRE(o.noise == 0 || o.truth_corners, "--corner-noise",
+               "adds noise to a synthetic manifest's exact corners: it needs --truth-corners");
+  calib::CheckerboardDetectOptions detect;
+  detect.subpix_half_window = o.subpix;
+  detect.corner_refinement = o.corner_refinement;
+  if (!o.board.empty())
+    detect.board = calib::ParseBoardSpec(o.board, "--board");
+  else
+    detect.board.square = 0;  // from the manifest
+  calib::CalibrationInput in;
+  std::optional<raytrace::CatadioptricUnit> unit;  // a synthetic dataset's exact unit
+  if (!o.corners.empty()) {
+    int w = 0, h = 0;
+    ParseSize(o.size, &w, &h);
+    in = calib::CornerTableInput(o.corners, w, h);
+  } else if (!o.dataset.empty()) {
+    auto d = scenes::LoadDatasetCalibrationInput(o.dataset, {o.unit, o.truth_corners, o.noise, o.seed, detect});
+    in = std::move(d.input), unit = std::move(d.unit);
+  } else {
+    HOVS_REQUIRE(!o.board.empty(), "--images", "a folder of images needs --board");
+    in = calib::ImageFolderInput(o.images, detect);
+  }
+  const std::string input_name = !o.corners.empty() ? o.corners : !o.dataset.empty() ? o.dataset : o.images;
+  if (!in.detection.empty()) {
+    const std::string failed = calib::CheckDetections(in, input_name);
+    if (!global.quiet && !failed.empty()) std::fprintf(stderr, "hovs calibrate: no board in %s\n", failed.c_str());
+  }
+  calib::MonoCalibrationOptions mo;
+  mo.polynomial.degree = o.degree, mo.polynomial.loss = o.loss, mo.polynomial.loss_scale = o.loss_scale;
+  mo.polynomial.outlier_sigmas = o.outlier_sigmas;
+  mo.omnidir = o.omnidir;
+  std::optional<raytrace::CatadioptricUnit> design;
+  if (o.physical) {
+    if (!o.nominal.empty()) {
+      auto cfg = scenes::LoadSceneConfig(o.nominal);
+      if (!o.unit.empty()) scenes::SelectUnit(&cfg, o.unit);
+      design = scenes::AlignedDesign(cfg.description.units[0]);
+    } else {
+      HOVS_REQUIRE(unit.has_value(), "--physical", "give the unit's design with --nominal scene.yaml");
+      design = scenes::AlignedDesign(*unit);  // the manifest's unit without its misalignment
+    }
+    mo.physical_nominal = design->rig;
+    mo.physical.estimate_intrinsics = o.physical_intrinsics;
+    mo.physical.estimate_mirror = o.physical_mirror;
+    mo.rim = o.rim;
+  }
+  const auto warn = [&](const std::string& w) {
+    if (!global.quiet) std::fprintf(stderr, "hovs calibrate: %s\n", w.c_str());
+  };
+  const calib::MonoCalibration result = OnInput(input_name, [&] { return calib::CalibrateMono(in, mo, warn); });
+  nlohmann::json j = calib::MonoCalibrationJson(in, mo, result);
+  j["tool"] = "hovs calibrate";
+  j["versions"] = Versions();
+  if (result.physical) {
+    raytrace::CatadioptricUnit calibrated = *design;
+    calibrated.rig = result.physical->rig;
+    j["physical"]["unit"] = scenes::UnitToJson(calibrated);
+  }
+  StagedDirectory stage(o.out, "calibrate");
+  calib::WriteMonoCalibrationReport(stage.staging(), in, result, j);
+  stage.Commit();
+  if (global.json)
+    std::cout << j.dump(2) << "\n";
+  else if (!global.quiet)
+    std::cout << calib::MonoCalibrationSummary(in, result);
+  return 0;
+}
+
 }  // namespace
 
 Runner SetupCalibrate(CLI::App* sub, const GlobalOptions* global) {
-  struct Options {
-    std::string corners, size, dataset, unit, images, board, out = "results/calibration", loss = "none";
-    bool truth_corners = false, physical = false, physical_intrinsics = false, physical_mirror = false, rim = true;
-    std::string nominal;
-    int subpix = 0;
-    std::string corner_refinement = "edges";
-    std::vector<int> degrees = {2, 3, 4, 5, 6};
-    int degree = 4;
-    double loss_scale = 1.0, noise = 0.0, outlier_sigmas = 5.0;
-    uint64_t seed = 1;
-    bool omnidir = false;
-  };
   auto o = std::make_shared<Options>();
   sub->add_option("--corners", o->corners, "corner table: image,corner,board_x_mm,board_y_mm,u_px,v_px");
   sub->add_option("--size", o->size, "image size WxH (with --corners)");
@@ -66,85 +138,30 @@ Runner SetupCalibrate(CLI::App* sub, const GlobalOptions* global) {
                   "edges: corners where the board lines measured along their length cross (default); subpix: "
                   "cv::cornerSubPix alone")
       ->capture_default_str();
-  sub->add_option("--subpix-window", o->subpix, "cornerSubPix half window, px (0: 0.35 x the local square)")->check(Bounded(0, 100))
+  sub->add_option("--subpix-window", o->subpix, "cornerSubPix half window, px (0: 0.35 x the local square)")
+      ->check(Bounded(0, 100))
       ->capture_default_str();
   sub->add_option("--unit", o->unit, "unit name in the manifest (default: the first)");
-  sub->add_option("--corner-noise", o->noise, "Gaussian noise added to ground-truth corners, px")->check(Bounded(0, 100))->capture_default_str();
-  sub->add_option("--seed", o->seed, "seed of the corner noise")->check(Bounded(0, 9007199254740992.0))->capture_default_str();
-  sub->add_option("--degree", o->degree, "polynomial degree of the reported model")->check(Bounded(2, 8))->capture_default_str();
+  sub->add_option("--corner-noise", o->noise, "Gaussian noise added to ground-truth corners, px")
+      ->check(Bounded(0, 100))
+      ->capture_default_str();
+  sub->add_option("--seed", o->seed, "seed of the corner noise")
+      ->check(Bounded(0, 9007199254740992.0))
+      ->capture_default_str();
+  sub->add_option("--degree", o->degree, "polynomial degree of the reported model")
+      ->check(Bounded(2, 8))
+      ->capture_default_str();
   sub->add_option("--loss", o->loss, "none | huber | cauchy")->capture_default_str();
-  sub->add_option("--loss-scale", o->loss_scale, "robust loss scale, px")->check(Bounded(0, 1000, true))->capture_default_str();
+  sub->add_option("--loss-scale", o->loss_scale, "robust loss scale, px")
+      ->check(Bounded(0, 1000, true))
+      ->capture_default_str();
   sub->add_flag("--compare-omnidir", o->omnidir, "also run OpenCV omnidir on the same corners");
   sub->add_option("--outlier-sigmas", o->outlier_sigmas,
-                  "reject corners above this many robust sigmas (at least 0.5 px) after the first solve; 0: keep all")->check(Bounded(0, 1000))
+                  "reject corners above this many robust sigmas (at least 0.5 px) after the first solve; 0: keep all")
+      ->check(Bounded(0, 1000))
       ->capture_default_str();
   sub->add_option("-o,--out", o->out, "report folder (replaced atomically)")->capture_default_str();
-  return [o, global]() {
-    HOVS_REQUIRE(int(!o->corners.empty()) + int(!o->dataset.empty()) + int(!o->images.empty()) == 1,
-                 "hovs calibrate", "give exactly one of --corners, --dataset and --images");
-    HOVS_REQUIRE(o->noise == 0 || o->truth_corners, "--corner-noise",
-                 "adds noise to a synthetic manifest's exact corners: it needs --truth-corners");
-    calib::CheckerboardDetectOptions detect;
-    detect.subpix_half_window = o->subpix;
-    detect.corner_refinement = o->corner_refinement;
-    if (!o->board.empty()) detect.board = calib::ParseBoardSpec(o->board, "--board");
-    else detect.board.square = 0;  // from the manifest
-    calib::CalibrationInput in;
-    std::optional<raytrace::CatadioptricUnit> unit;   // a synthetic dataset's exact unit
-    if (!o->corners.empty()) {
-      int w = 0, h = 0;
-      ParseSize(o->size, &w, &h);
-      in = calib::CornerTableInput(o->corners, w, h);
-    } else if (!o->dataset.empty()) {
-      auto d = scenes::LoadDatasetCalibrationInput(o->dataset, {o->unit, o->truth_corners, o->noise, o->seed, detect});
-      in = std::move(d.input), unit = std::move(d.unit);
-    } else {
-      HOVS_REQUIRE(!o->board.empty(), "--images", "a folder of images needs --board");
-      in = calib::ImageFolderInput(o->images, detect);
-    }
-    const std::string input_name = !o->corners.empty() ? o->corners : !o->dataset.empty() ? o->dataset : o->images;
-    if (!in.detection.empty()) {
-      const std::string failed = calib::CheckDetections(in, input_name);
-      if (!global->quiet && !failed.empty()) std::fprintf(stderr, "hovs calibrate: no board in %s\n", failed.c_str());
-    }
-    calib::MonoCalibrationOptions mo;
-    mo.polynomial.degree = o->degree, mo.polynomial.loss = o->loss, mo.polynomial.loss_scale = o->loss_scale;
-    mo.polynomial.outlier_sigmas = o->outlier_sigmas;
-    mo.omnidir = o->omnidir;
-    std::optional<raytrace::CatadioptricUnit> design;
-    if (o->physical) {
-      if (!o->nominal.empty()) {
-        auto cfg = scenes::LoadSceneConfig(o->nominal);
-        if (!o->unit.empty()) scenes::SelectUnit(&cfg, o->unit);
-        design = scenes::AlignedDesign(cfg.description.units[0]);
-      } else {
-        HOVS_REQUIRE(unit.has_value(), "--physical", "give the unit's design with --nominal scene.yaml");
-        design = scenes::AlignedDesign(*unit);   // the manifest's unit without its misalignment
-      }
-      mo.physical_nominal = design->rig;
-      mo.physical.estimate_intrinsics = o->physical_intrinsics;
-      mo.physical.estimate_mirror = o->physical_mirror;
-      mo.rim = o->rim;
-    }
-    const auto warn = [&](const std::string& w) {
-      if (!global->quiet) std::fprintf(stderr, "hovs calibrate: %s\n", w.c_str());
-    };
-    const calib::MonoCalibration result = OnInput(input_name, [&] { return calib::CalibrateMono(in, mo, warn); });
-    nlohmann::json j = calib::MonoCalibrationJson(in, mo, result);
-    j["tool"] = "hovs calibrate";
-    j["versions"] = Versions();
-    if (result.physical) {
-      raytrace::CatadioptricUnit calibrated = *design;
-      calibrated.rig = result.physical->rig;
-      j["physical"]["unit"] = scenes::UnitToJson(calibrated);
-    }
-    StagedDirectory stage(o->out, "calibrate");
-    calib::WriteMonoCalibrationReport(stage.staging(), in, result, j);
-    stage.Commit();
-    if (global->json) std::cout << j.dump(2) << "\n";
-    else if (!global->quiet) std::cout << calib::MonoCalibrationSummary(in, result);
-    return 0;
-  };
+  return [o, global]() { return RunCalibrate(*o, *global); };
 }
 
 }  // namespace hovs::apps

@@ -29,11 +29,17 @@ Runner SetupCapture(CLI::App* sub, const GlobalOptions* global) {
   auto o = std::make_shared<Options>();
   AddSourceOptions(sub, &o->source);
   sub->add_option("-n,--frames", o->frames, "frames (pairs) to write")->check(Bounded(1, 1e9))->capture_default_str();
-  sub->add_option("--seconds", o->seconds, "stop after this long (0: no limit)")->check(Bounded(0, 1e7))->capture_default_str();
-  sub->add_option("--timeout", o->timeout, "seconds to wait for a frame")->check(Bounded(0, 3600, true))->capture_default_str();
-  sub->add_option("--pair-tolerance-ms", o->pair_ms, "two cameras: timestamps of a pair differ by at most this")->check(Bounded(0, 10000, true))
+  sub->add_option("--seconds", o->seconds, "stop after this long (0: no limit)")
+      ->check(Bounded(0, 1e7))
       ->capture_default_str();
-  sub->add_option("--write-queue", o->write_queue, "frames (pairs) grabbed but not yet written, at most")->check(Bounded(1, 4096))
+  sub->add_option("--timeout", o->timeout, "seconds to wait for a frame")
+      ->check(Bounded(0, 3600, true))
+      ->capture_default_str();
+  sub->add_option("--pair-tolerance-ms", o->pair_ms, "two cameras: timestamps of a pair differ by at most this")
+      ->check(Bounded(0, 10000, true))
+      ->capture_default_str();
+  sub->add_option("--write-queue", o->write_queue, "frames (pairs) grabbed but not yet written, at most")
+      ->check(Bounded(1, 4096))
       ->capture_default_str();
   sub->add_option("--image-format", o->image_format,
                   "png (compressed) | pgm (uncompressed, written at disk speed for full frame rates)")
@@ -66,9 +72,11 @@ Runner SetupCapture(CLI::App* sub, const GlobalOptions* global) {
     if (global->json) {
       std::cout << r.manifest.dump(1) << "\n";
     } else if (!global->quiet) {
-      std::printf("hovs capture: %d frames written, %d incomplete (not written), %llu unpaired%s, writer queue up to "
-                  "%d -> %s/dataset.json\n", r.written, r.incomplete, static_cast<unsigned long long>(r.unpaired),
-                  r.interrupted ? ", interrupted" : "", r.max_queue_depth, o->out.c_str());
+      std::printf(
+          "hovs capture: %d frames written, %d incomplete (not written), %llu unpaired%s, writer queue up to "
+          "%d -> %s/dataset.json\n",
+          r.written, r.incomplete, static_cast<unsigned long long>(r.unpaired), r.interrupted ? ", interrupted" : "",
+          r.max_queue_depth, o->out.c_str());
     }
     return 0;
   };

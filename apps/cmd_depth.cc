@@ -79,10 +79,10 @@ DepthFrame LoadDepthFrame(const Options& o) {
 // The models (the manifest's exact rigs or the calibrated ones) and the relative pose (the manifest's or
 // --stereo's); `pose_source` says which.
 depth::StereoRig RigFor(const Options& o, const DepthFrame& f, std::string* pose_source) {
-  depth::StereoRig rig{o.left_model.empty() ? AnyModel::Exact(f.left.rig) : LoadCalibratedModel(o.left_model, o.model_kind),
-                       o.right_model.empty() ? AnyModel::Exact(f.right.rig)
-                                             : LoadCalibratedModel(o.right_model, o.model_kind),
-                       f.right.world_from_mirror.Inverse() * f.left.world_from_mirror};
+  depth::StereoRig rig{
+      o.left_model.empty() ? AnyModel::Exact(f.left.rig) : LoadCalibratedModel(o.left_model, o.model_kind),
+      o.right_model.empty() ? AnyModel::Exact(f.right.rig) : LoadCalibratedModel(o.right_model, o.model_kind),
+      f.right.world_from_mirror.Inverse() * f.left.world_from_mirror};
   *pose_source = "manifest";
   if (!o.stereo.empty()) {
     const auto sj = ReadJsonFile(o.stereo);
@@ -111,7 +111,8 @@ size_t WriteDepthOutputs(const fs::path& folder, const Options& o, const depth::
   io::WriteImage(folder / "disparity.png", d.width, d.height, 1, f, 16);
   depth::WriteRangeExr(folder / "range.exr", d,
                        {{"hovs:what", "range from the left viewpoint (Z) and its sigma (Z.sigma), m, rectified grid"},
-                        {"hovs:dataset", o.dataset}, {"hovs:versions", versions.dump()}});
+                        {"hovs:dataset", o.dataset},
+                        {"hovs:versions", versions.dump()}});
   std::vector<depth::ColouredPoint> pts;
   std::vector<float> sig;
   depth::SubsampledCloud(rect, d, left, o.max_points, &pts, &sig);
@@ -146,7 +147,8 @@ int RunDepth(const Options& o, const GlobalOptions& global) {
 
   const auto t0 = std::chrono::steady_clock::now();
   const depth::Rectification rect = OnInput(o.dataset, [&] { return depth::Rectify(rig, ro); });
-  const double rectify_build_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+  const double rectify_build_ms =
+      std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
   const auto fmt = il8.channels == 3 ? unwrap::PixelFormat::kRgb8 : unwrap::PixelFormat::kGray8;
   unwrap::Remapper ml(rect.left), mr(rect.right);
   std::vector<unwrap::Image8> left, right;
@@ -154,27 +156,44 @@ int RunDepth(const Options& o, const GlobalOptions& global) {
   ml.Run(il8.View(fmt), unwrap::Interpolation::kBilinear, &left);
   mr.Run(ir8.View(fmt), unwrap::Interpolation::kBilinear, &right);
   const double rectify_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t1).count();
-  const depth::DenseDepth d = OnInput(o.dataset, [&] { return depth::ComputeDenseDepth(rect, left[0], right[0], dop); });
+  const depth::DenseDepth d =
+      OnInput(o.dataset, [&] { return depth::ComputeDenseDepth(rect, left[0], right[0], dop); });
 
   StagedDirectory staged(o.out, "depth");
   const nlohmann::json versions = Versions();
   const size_t points = WriteDepthOutputs(staged.staging(), o, rect, d, left[0], right[0], versions);
   const size_t nvalid = std::count(d.valid.begin(), d.valid.end(), 1);
-  nlohmann::json j = {{"tool", "hovs depth"}, {"versions", versions}, {"dataset", o.dataset}, {"frame", o.frame},
+  nlohmann::json j = {{"tool", "hovs depth"},
+                      {"versions", versions},
+                      {"dataset", o.dataset},
+                      {"frame", o.frame},
                       {"units", {frame.left.name, frame.right.name}},
                       {"models", {rig.left.KindName(), rig.right.KindName()}},
-                      {"baseline_m", rect.baseline}, {"relative_pose_from", pose_source},
-                      {"rectification", {{"width", ro.width}, {"height", ro.height},
-                                         {"theta_deg", {ro.theta_min_deg, ro.theta_max_deg}},
-                                         {"phi_deg", {ro.phi_min_deg, ro.phi_max_deg}},
-                                         {"dtheta_deg", rect.dtheta * 180 / M_PI}}},
-                      {"matcher", {{"kind", o.matcher}, {"sgbm_mode", "3way"}, {"num_disparities", dop.num_disparities},
-                                   {"block_size", dop.block_size}, {"refine_radius", dop.refine_radius}}},
-                      {"mask", {{"min_theta_deg", dop.min_theta_deg}, {"max_relative_sigma", dop.max_relative_sigma},
-                                {"sigma_disparity_px", dop.sigma_disparity_px}}},
-                      {"valid_pixels", nvalid}, {"points_written", points},
-                      {"timing_ms", {{"rectification_tables", rectify_build_ms}, {"rectify", rectify_ms},
-                                     {"matching", d.match_ms}, {"dense_total", d.total_ms}}}};
+                      {"baseline_m", rect.baseline},
+                      {"relative_pose_from", pose_source},
+                      {"rectification",
+                       {{"width", ro.width},
+                        {"height", ro.height},
+                        {"theta_deg", {ro.theta_min_deg, ro.theta_max_deg}},
+                        {"phi_deg", {ro.phi_min_deg, ro.phi_max_deg}},
+                        {"dtheta_deg", rect.dtheta * 180 / M_PI}}},
+                      {"matcher",
+                       {{"kind", o.matcher},
+                        {"sgbm_mode", "3way"},
+                        {"num_disparities", dop.num_disparities},
+                        {"block_size", dop.block_size},
+                        {"refine_radius", dop.refine_radius}}},
+                      {"mask",
+                       {{"min_theta_deg", dop.min_theta_deg},
+                        {"max_relative_sigma", dop.max_relative_sigma},
+                        {"sigma_disparity_px", dop.sigma_disparity_px}}},
+                      {"valid_pixels", nvalid},
+                      {"points_written", points},
+                      {"timing_ms",
+                       {{"rectification_tables", rectify_build_ms},
+                        {"rectify", rectify_ms},
+                        {"matching", d.match_ms},
+                        {"dense_total", d.total_ms}}}};
   std::string table;
   if (!vl.exr.empty()) {
     // Ground truth: the left unit's range channel at each rectified pixel's source pixel.
@@ -203,23 +222,39 @@ Runner SetupDepth(CLI::App* sub, const GlobalOptions* global) {
   sub->add_option("--dataset", o->dataset, "dataset manifest with two units (dataset.json)")->required();
   sub->add_option("--left", o->left, "left unit name (default: the first)");
   sub->add_option("--right", o->right, "right unit name (default: the second)");
-  sub->add_option("--left-model", o->left_model, "calibrated model of the left unit (calib_results.txt or calibration.json)");
-  sub->add_option("--model-kind", o->model_kind, "with calibration.json models: auto (physical if present) | physical | polynomial | unified")
+  sub->add_option("--left-model", o->left_model,
+                  "calibrated model of the left unit (calib_results.txt or calibration.json)");
+  sub->add_option("--model-kind", o->model_kind,
+                  "with calibration.json models: auto (physical if present) | physical | polynomial | unified")
       ->capture_default_str();
   sub->add_option("--right-model", o->right_model, "calibrated model of the right unit");
-  sub->add_option("--stereo", o->stereo, "relative pose from hovs stereo-calibrate (stereo.json) instead of the manifest's");
+  sub->add_option("--stereo", o->stereo,
+                  "relative pose from hovs stereo-calibrate (stereo.json) instead of the manifest's");
   sub->add_option("--frame", o->frame, "frame index in the manifest")->check(Bounded(0, 1e9))->capture_default_str();
-  sub->add_option("--width", o->width, "rectified width (angle from the baseline)")->check(Bounded(16, 16384))->capture_default_str();
-  sub->add_option("--height", o->height, "rectified height (angle around the baseline)")->check(Bounded(16, 16384))->capture_default_str();
-  sub->add_option("--num-disparities", o->disparities, "SGBM disparity range, multiple of 16")->check(Bounded(16, 4096))->capture_default_str();
+  sub->add_option("--width", o->width, "rectified width (angle from the baseline)")
+      ->check(Bounded(16, 16384))
+      ->capture_default_str();
+  sub->add_option("--height", o->height, "rectified height (angle around the baseline)")
+      ->check(Bounded(16, 16384))
+      ->capture_default_str();
+  sub->add_option("--num-disparities", o->disparities, "SGBM disparity range, multiple of 16")
+      ->check(Bounded(16, 4096))
+      ->capture_default_str();
   sub->add_option("--block-size", o->block, "SGBM block size (odd)")->check(Bounded(1, 21))->capture_default_str();
-  sub->add_option("--matcher", o->matcher,
-                  "coarse-to-fine (SGBM at half resolution + block search at full; about 4x faster) | sgbm (full resolution)")
+  sub->add_option(
+         "--matcher", o->matcher,
+         "coarse-to-fine (SGBM at half resolution + block search at full; about 4x faster) | sgbm (full resolution)")
       ->capture_default_str()
       ->check(CLI::IsMember({"coarse-to-fine", "sgbm"}));
-  sub->add_option("--refine-radius", o->refine_radius, "coarse-to-fine: block search radius, columns")->check(Bounded(2, 16))->capture_default_str();
-  sub->add_option("--sigma-disparity", o->sigma_px, "matching noise for sigma, px")->check(Bounded(0, 100, true))->capture_default_str();
-  sub->add_option("--max-relative-sigma", o->max_rel_sigma, "mask where sigma / range exceeds this")->check(Bounded(0, 10, true))->capture_default_str();
+  sub->add_option("--refine-radius", o->refine_radius, "coarse-to-fine: block search radius, columns")
+      ->check(Bounded(2, 16))
+      ->capture_default_str();
+  sub->add_option("--sigma-disparity", o->sigma_px, "matching noise for sigma, px")
+      ->check(Bounded(0, 100, true))
+      ->capture_default_str();
+  sub->add_option("--max-relative-sigma", o->max_rel_sigma, "mask where sigma / range exceeds this")
+      ->check(Bounded(0, 10, true))
+      ->capture_default_str();
   sub->add_option("--max-points", o->max_points, "points written to PLY / VTP (evenly subsampled)")
       ->check(Bounded(1, 1e9))
       ->capture_default_str();

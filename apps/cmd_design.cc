@@ -23,8 +23,10 @@ Runner SetupDesign(CLI::App* sub, const GlobalOptions* global) {
                  "figures need an X display and DISPLAY is unset; run under `xvfb-run -a`");
     const design::DesignStudy study = design::RunDesignStudy(cfg);
     const std::string summary = design::WriteDesignReport(cfg, study, opts->out);
-    if (global->json) std::cout << ReadFile(std::filesystem::path(opts->out) / "design.json");
-    else if (!global->quiet) std::cout << summary;
+    if (global->json)
+      std::cout << ReadFile(std::filesystem::path(opts->out) / "design.json");
+    else if (!global->quiet)
+      std::cout << summary;
     return 0;
   };
 }

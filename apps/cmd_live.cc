@@ -77,10 +77,10 @@ int RunLiveCommand(const Options& o, const GlobalOptions& global) {
   lo.interpolation = unwrap::ParseInterpolation(o.interp);
   const auto tb = std::chrono::steady_clock::now();
   const unwrap::RemapTable table =
-      o.map.empty() ? unwrap::BuildRemapTable(LoadModelSpec(o.model, o.unit, o.scene_distance),
-                                              unwrap::ResolveLayout(o.layout), unwrap::RemapOptions(),
-                                              nlohmann::json(Versions()).dump())
-                    : unwrap::LoadRemapTable(o.map);
+      o.map.empty()
+          ? unwrap::BuildRemapTable(LoadModelSpec(o.model, o.unit, o.scene_distance), unwrap::ResolveLayout(o.layout),
+                                    unwrap::RemapOptions(), nlohmann::json(Versions()).dump())
+          : unwrap::LoadRemapTable(o.map);
   const double table_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - tb).count();
   OpenedSources src = OpenSources(o.source);
   hw::CameraSource& cam = *src.sources[0];
@@ -98,22 +98,33 @@ int RunLiveCommand(const Options& o, const GlobalOptions& global) {
   lo.mapping_name = o.map.empty() ? o.model : o.map;
   lo.format = o.source.pixel_format == "BayerRG8" ? unwrap::PixelFormat::kBayerRggb8 : unwrap::PixelFormat::kGray8;
   std::atomic<bool> stop{false};
-  const InterruptScope interrupt(&stop);   // Ctrl-C ends the run with its figures; a second one ends the process
+  const InterruptScope interrupt(&stop);  // Ctrl-C ends the run with its figures; a second one ends the process
   std::function<void(const std::vector<unwrap::Image8>&)> display;
   if (o.display) display = [&](const std::vector<unwrap::Image8>& views) { ShowMosaic(views, &stop); };
   const hw::LiveRun r = hw::RunLive(cam, table, lo, &stop, display);
   const auto stats = cam.Stats();
-  nlohmann::json j = {{"tool", "hovs live"}, {"versions", Versions()},
-                      {"source", cam.Info()}, {"pixel_format", o.source.pixel_format},
-                      {"views", table.views.size()}, {"interpolation", o.interp}, {"mapping_ms", table_ms},
-                      {"frames_processed", r.processed}, {"frames_incomplete", r.incomplete},
-                      {"frames_written", r.written}, {"seconds", r.seconds},
-                      {"fps", r.processed / std::max(r.seconds, 1e-9)}, {"stream", stats.ToJson()},
-                      {"latency", {{"wait_for_frame", Latency(r.wait_ms)}, {"remap", Latency(r.remap_ms)},
-                                   {"write", Latency(r.write_ms)}, {"display", Latency(r.display_ms)},
-                                   {"frame_to_output", Latency(r.total_ms)}}},
-                      {"note", "remap: all views of one frame, TBB threads; wait_for_frame includes the camera's "
-                               "frame period"}};
+  nlohmann::json j = {{"tool", "hovs live"},
+                      {"versions", Versions()},
+                      {"source", cam.Info()},
+                      {"pixel_format", o.source.pixel_format},
+                      {"views", table.views.size()},
+                      {"interpolation", o.interp},
+                      {"mapping_ms", table_ms},
+                      {"frames_processed", r.processed},
+                      {"frames_incomplete", r.incomplete},
+                      {"frames_written", r.written},
+                      {"seconds", r.seconds},
+                      {"fps", r.processed / std::max(r.seconds, 1e-9)},
+                      {"stream", stats.ToJson()},
+                      {"latency",
+                       {{"wait_for_frame", Latency(r.wait_ms)},
+                        {"remap", Latency(r.remap_ms)},
+                        {"write", Latency(r.write_ms)},
+                        {"display", Latency(r.display_ms)},
+                        {"frame_to_output", Latency(r.total_ms)}}},
+                      {"note",
+                       "remap: all views of one frame, TBB threads; wait_for_frame includes the camera's "
+                       "frame period"}};
   if (staged) {
     WriteFileAtomic(lo.out_dir / "live.json", j.dump(1) + "\n");
     staged->Commit();
@@ -121,11 +132,11 @@ int RunLiveCommand(const Options& o, const GlobalOptions& global) {
   if (global.json) {
     std::cout << j.dump(1) << "\n";
   } else if (!global.quiet) {
-    std::printf("hovs live: %d frames in %.1f s (%.1f fps), %d incomplete, %llu stream underruns; median remap "
-                "%.1f ms, frame-to-output %.1f ms\n",
-                r.processed, r.seconds, r.processed / std::max(r.seconds, 1e-9), r.incomplete,
-                static_cast<unsigned long long>(stats.underruns), Summarise(r.remap_ms).median,
-                Summarise(r.total_ms).median);
+    std::printf(
+        "hovs live: %d frames in %.1f s (%.1f fps), %d incomplete, %llu stream underruns; median remap "
+        "%.1f ms, frame-to-output %.1f ms\n",
+        r.processed, r.seconds, r.processed / std::max(r.seconds, 1e-9), r.incomplete,
+        static_cast<unsigned long long>(stats.underruns), Summarise(r.remap_ms).median, Summarise(r.total_ms).median);
   }
   return 0;
 }
@@ -140,12 +151,19 @@ Runner SetupLive(CLI::App* sub, const GlobalOptions* global) {
   sub->add_option("--map", o->map, "a mapping file (hovs unwrap --save-map) instead of --model");
   sub->add_option("--layout", o->layout, "article | panorama | longlat | layout YAML")->capture_default_str();
   sub->add_option("--interp", o->interp, "bilinear | bicubic | nearest")->capture_default_str();
-  sub->add_option("-n,--frames", o->frames, "frames to process (0: until Ctrl-C or --seconds)")->check(Bounded(0, 1e9))->capture_default_str();
-  sub->add_option("--seconds", o->seconds, "stop after this long (0: no limit)")->check(Bounded(0, 1e7))->capture_default_str();
-  sub->add_option("--timeout", o->timeout, "seconds to wait for a frame")->check(Bounded(0, 3600, true))->capture_default_str();
+  sub->add_option("-n,--frames", o->frames, "frames to process (0: until Ctrl-C or --seconds)")
+      ->check(Bounded(0, 1e9))
+      ->capture_default_str();
+  sub->add_option("--seconds", o->seconds, "stop after this long (0: no limit)")
+      ->check(Bounded(0, 1e7))
+      ->capture_default_str();
+  sub->add_option("--timeout", o->timeout, "seconds to wait for a frame")
+      ->check(Bounded(0, 3600, true))
+      ->capture_default_str();
   sub->add_flag("--display", o->display, "show the views (needs a display; q or Esc ends)");
   sub->add_option("-o,--out", o->out, "folder for live.json and written views");
-  sub->add_option("--write-every", o->write_every, "write the views of every Nth frame (0: never)")->check(Bounded(0, 1e9))
+  sub->add_option("--write-every", o->write_every, "write the views of every Nth frame (0: never)")
+      ->check(Bounded(0, 1e9))
       ->capture_default_str();
   return [o, global]() { return RunLiveCommand(*o, *global); };
 }

@@ -24,13 +24,18 @@ Runner SetupPosition(CLI::App* sub, const GlobalOptions* global) {
     calib::RimEdgeOptions edge;
   };
   auto o = std::make_shared<Options>();
-  sub->add_option("-i,--image", o->image, "an image of the unit (grey or RGB; a raw Bayer mosaic works as grey)")->required();
+  sub->add_option("-i,--image", o->image, "an image of the unit (grey or RGB; a raw Bayer mosaic works as grey)")
+      ->required();
   sub->add_option("--design", o->scene, "the unit's design: scene YAML or dataset.json (its misalignment is ignored)")
       ->required();
   sub->add_option("--unit", o->unit, "unit name (default: the first)");
   sub->add_option("--rays", o->edge.rays, "rim search rays")->check(Bounded(16, 100000))->capture_default_str();
-  sub->add_option("--search", o->edge.search_px, "rim search half width around the design's rim, px")->check(Bounded(1, 2000, true))->capture_default_str();
-  sub->add_option("--min-step", o->edge.min_step, "grey levels across the rim edge, at least")->check(Bounded(0, 255, true))->capture_default_str();
+  sub->add_option("--search", o->edge.search_px, "rim search half width around the design's rim, px")
+      ->check(Bounded(1, 2000, true))
+      ->capture_default_str();
+  sub->add_option("--min-step", o->edge.min_step, "grey levels across the rim edge, at least")
+      ->check(Bounded(0, 255, true))
+      ->capture_default_str();
   sub->add_option("-o,--out", o->out, "report folder (replaced atomically)")->capture_default_str();
   return [o, global]() {
     o->edge.Check("--rays/--search/--min-step");
@@ -67,19 +72,31 @@ Runner SetupPosition(CLI::App* sub, const GlobalOptions* global) {
       grey[k] = static_cast<uint8_t>(s / img.channels);
     }
     calib::RimEdge edge;
-    const calib::MirrorPosition p = calib::LocateMirror(grey.data(), img.width, img.height, design, o->edge, &edge, o->image);
+    const calib::MirrorPosition p =
+        calib::LocateMirror(grey.data(), img.width, img.height, design, o->edge, &edge, o->image);
     const Vec3d mm = 1e3 * p.offset;
-    nlohmann::json j = {{"tool", "hovs position"}, {"versions", Versions()}, {"image", o->image},
-                        {"design", o->scene}, {"unit", unit_name},
-                        {"camera_offset_mm", {mm.x(), mm.y(), mm.z()}},
-                        {"note", "camera centre minus the design's second focus, mirror frame (z towards the mirror), "
-                                 "the camera's orientation held at the design's"},
-                        {"equivalent_tilt_deg", {p.equivalent_tilt_rad.x() * 180 / M_PI, p.equivalent_tilt_rad.y() * 180 / M_PI}},
-                        {"rim", {{"centre_px", {p.rim_centre_px.x(), p.rim_centre_px.y()}}, {"radius_px", p.rim_radius_px},
-                                 {"design_centre_px", {p.nominal_rim_centre_px.x(), p.nominal_rim_centre_px.y()}},
-                                 {"design_radius_px", p.nominal_rim_radius_px}}},
-                        {"edge_points", p.points}, {"rays", edge.rays}, {"rms_px", p.rms_px}, {"converged", p.converged},
-                        {"rim_inliers", p.inliers}, {"rim_inlier_fraction", p.inlier_fraction}};
+    nlohmann::json j = {
+        {"tool", "hovs position"},
+        {"versions", Versions()},
+        {"image", o->image},
+        {"design", o->scene},
+        {"unit", unit_name},
+        {"camera_offset_mm", {mm.x(), mm.y(), mm.z()}},
+        {"note",
+         "camera centre minus the design's second focus, mirror frame (z towards the mirror), "
+         "the camera's orientation held at the design's"},
+        {"equivalent_tilt_deg", {p.equivalent_tilt_rad.x() * 180 / M_PI, p.equivalent_tilt_rad.y() * 180 / M_PI}},
+        {"rim",
+         {{"centre_px", {p.rim_centre_px.x(), p.rim_centre_px.y()}},
+          {"radius_px", p.rim_radius_px},
+          {"design_centre_px", {p.nominal_rim_centre_px.x(), p.nominal_rim_centre_px.y()}},
+          {"design_radius_px", p.nominal_rim_radius_px}}},
+        {"edge_points", p.points},
+        {"rays", edge.rays},
+        {"rms_px", p.rms_px},
+        {"converged", p.converged},
+        {"rim_inliers", p.inliers},
+        {"rim_inlier_fraction", p.inlier_fraction}};
     char buf[512];
     std::snprintf(buf, sizeof buf,
                   "hovs position: rim found on %d of %d rays (fit RMS %.3f px)\n"
@@ -98,21 +115,25 @@ Runner SetupPosition(CLI::App* sub, const GlobalOptions* global) {
       for (int k = 0; k < 720; ++k) {
         const double a = 2 * M_PI * k / 720, R = rig.mirror.RimRadius();
         Vec2d uv;
-        if (rig.camera.ImgFromCam(rig.cam_from_mirror * Vec3d(R * std::cos(a), R * std::sin(a), rig.mirror.RimZ()), &uv))
+        if (rig.camera.ImgFromCam(rig.cam_from_mirror * Vec3d(R * std::cos(a), R * std::sin(a), rig.mirror.RimZ()),
+                                  &uv))
           poly.emplace_back(static_cast<int>(std::lround(uv.x())), static_cast<int>(std::lround(uv.y())));
       }
       cv::polylines(fig, poly, true, colour, std::max(1, img.width / 900), cv::LINE_AA);
     };
     draw_rim(design, cv::Scalar(255, 120, 0));
     draw_rim(calib::WithCameraOffset(design, p.offset), cv::Scalar(0, 200, 0));
-    for (const Vec2d& e : edge.points) cv::circle(fig, cv::Point2d(e.x(), e.y()), std::max(1, img.width / 700), cv::Scalar(0, 0, 255), cv::FILLED);
+    for (const Vec2d& e : edge.points)
+      cv::circle(fig, cv::Point2d(e.x(), e.y()), std::max(1, img.width / 700), cv::Scalar(0, 0, 255), cv::FILLED);
     StagedDirectory stage(o->out, "position");
     WriteFileAtomic(stage.staging() / "position.json", j.dump(2) + "\n");
     WriteFileAtomic(stage.staging() / "summary.txt", buf);
     HOVS_REQUIRE(cv::imwrite((stage.staging() / "rim.png").string(), fig), o->out, "cannot write rim.png");
     stage.Commit();
-    if (global->json) std::cout << j.dump(2) << "\n";
-    else if (!global->quiet) std::cout << buf;
+    if (global->json)
+      std::cout << j.dump(2) << "\n";
+    else if (!global->quiet)
+      std::cout << buf;
     return 0;
   };
 }

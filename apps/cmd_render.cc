@@ -21,7 +21,9 @@ Runner SetupRender(CLI::App* sub, const GlobalOptions* global) {
   CLI::Option* samples =
       sub->add_option("--samples", o->samples, "samples per pixel (overrides the scene)")->check(Bounded(1, 4096));
   sub->add_option("--seed", o->seed, "render seed (overrides the scene)")->check(Bounded(0, 9007199254740992.0));
-  sub->add_option("--downscale", o->downscale, "same optics at 1/N of the resolution (quick runs)")->check(Bounded(1, 100))->capture_default_str();
+  sub->add_option("--downscale", o->downscale, "same optics at 1/N of the resolution (quick runs)")
+      ->check(Bounded(1, 100))
+      ->capture_default_str();
   return [o, global, samples]() {
     scenes::SceneConfig cfg = scenes::LoadSceneConfig(o->scene);
     scenes::DownscaleCameras(&cfg, o->downscale);
@@ -48,22 +50,32 @@ Runner SetupDataset(CLI::App* sub, const GlobalOptions* global) {
     std::vector<double> elevation;
   };
   auto o = std::make_shared<Options>();
-  sub->add_option("-s,--scene", o->scene, "base scene: units, background (its boards are replaced)")->capture_default_str();
+  sub->add_option("-s,--scene", o->scene, "base scene: units, background (its boards are replaced)")
+      ->capture_default_str();
   sub->add_option("-o,--out", o->out, "output folder (replaced atomically)")->capture_default_str();
   sub->add_option("--kind", o->kind, "mono_calibration | stereo_aruco | depth_sequence")->capture_default_str();
-  sub->add_option("--step", o->step, "depth_sequence: rig motion per frame, m")->check(Bounded(-100, 100))->capture_default_str();
-  sub->add_option("--heading", o->heading, "depth_sequence: direction of motion, degrees from world +x towards +y")->check(Bounded(-360, 360))
+  sub->add_option("--step", o->step, "depth_sequence: rig motion per frame, m")
+      ->check(Bounded(-100, 100))
       ->capture_default_str();
-  sub->add_option("--yaw-step", o->yaw_step, "depth_sequence: rig turn per frame about the vertical, degrees")->check(Bounded(-90, 90))
+  sub->add_option("--heading", o->heading, "depth_sequence: direction of motion, degrees from world +x towards +y")
+      ->check(Bounded(-360, 360))
+      ->capture_default_str();
+  sub->add_option("--yaw-step", o->yaw_step, "depth_sequence: rig turn per frame about the vertical, degrees")
+      ->check(Bounded(-90, 90))
       ->capture_default_str();
   CLI::Option* count =
       sub->add_option("-n,--count", o->count, "frames (default: 9 mono, 12 stereo)")->check(Bounded(1, 10000));
-  sub->add_option("--seed", o->seed, "seed of the board poses")->check(Bounded(0, 9007199254740992.0))->capture_default_str();
+  sub->add_option("--seed", o->seed, "seed of the board poses")
+      ->check(Bounded(0, 9007199254740992.0))
+      ->capture_default_str();
   CLI::Option* samples =
       sub->add_option("--samples", o->samples, "samples per pixel (overrides the scene)")->check(Bounded(1, 4096));
-  sub->add_option("--downscale", o->downscale, "same optics at 1/N of the resolution (quick runs)")->check(Bounded(1, 100))->capture_default_str();
+  sub->add_option("--downscale", o->downscale, "same optics at 1/N of the resolution (quick runs)")
+      ->check(Bounded(1, 100))
+      ->capture_default_str();
   sub->add_option("--unit", o->unit, "mono_calibration: the unit to calibrate (default: the scene's first)");
-  sub->add_option("--elevation", o->elevation, "board centre elevation range MIN MAX, degrees (default: per kind)")->check(Bounded(-90, 90))
+  sub->add_option("--elevation", o->elevation, "board centre elevation range MIN MAX, degrees (default: per kind)")
+      ->check(Bounded(-90, 90))
       ->expected(2);
   return [o, global, samples, count]() {
     scenes::SceneConfig cfg = scenes::LoadSceneConfig(o->scene);
@@ -77,9 +89,12 @@ Runner SetupDataset(CLI::App* sub, const GlobalOptions* global) {
     d.seed = o->seed;
     d.progress = !global->quiet;
     d.step_m = o->step, d.heading_deg = o->heading, d.yaw_step_deg = o->yaw_step;
-    if (d.kind == "depth_sequence") scenes::WriteDepthSequence(cfg, d, o->out, Versions());
-    else scenes::WriteCalibrationDataset(cfg, d, o->out, Versions());
-    if (!global->quiet) std::cout << "hovs dataset: " << d.count << " frames (" << d.kind << ") -> " << o->out << "/dataset.json\n";
+    if (d.kind == "depth_sequence")
+      scenes::WriteDepthSequence(cfg, d, o->out, Versions());
+    else
+      scenes::WriteCalibrationDataset(cfg, d, o->out, Versions());
+    if (!global->quiet)
+      std::cout << "hovs dataset: " << d.count << " frames (" << d.kind << ") -> " << o->out << "/dataset.json\n";
     return 0;
   };
 }

@@ -21,13 +21,16 @@ Runner SetupStereoCalibrate(CLI::App* sub, const GlobalOptions* global) {
   };
   auto o = std::make_shared<Options>();
   sub->add_option("--dataset", o->dataset, "stereo_aruco dataset manifest (two units per frame)")->required();
-  sub->add_option("--left-model", o->left_model, "calibrated model of the first unit (calib_results.txt or calibration.json)");
-  sub->add_option("--model-kind", o->model_kind, "with calibration.json models: auto (physical if present) | physical | polynomial | unified")
+  sub->add_option("--left-model", o->left_model,
+                  "calibrated model of the first unit (calib_results.txt or calibration.json)");
+  sub->add_option("--model-kind", o->model_kind,
+                  "with calibration.json models: auto (physical if present) | physical | polynomial | unified")
       ->capture_default_str();
   sub->add_option("--right-model", o->right_model, "calibrated model of the second unit");
   sub->add_option("--huber", o->huber, "robust loss scale, px")->check(Bounded(0, 1000, true))->capture_default_str();
   sub->add_option("--marker-check", o->marker_check_px,
-                  "drop markers with a corner this far (px) from the board pose of the other corners; 0: keep all")->check(Bounded(0, 1000))
+                  "drop markers with a corner this far (px) from the board pose of the other corners; 0: keep all")
+      ->check(Bounded(0, 1000))
       ->capture_default_str();
   sub->add_option("--corner-refinement", o->corner_refinement,
                   "marker corners: edges (where the marker's two sides, measured along their length, meet) | "
@@ -45,10 +48,11 @@ Runner SetupStereoCalibrate(CLI::App* sub, const GlobalOptions* global) {
     detect.markers.corner_refinement = o->corner_refinement;
     detect.marker_check_px = o->marker_check_px;
     std::vector<depth::PairDetection> detections;
-    auto pairs = depth::DetectStereoPairs(dataset, left, right, detect, &detections, [&](const depth::PairDetection& d) {
-      if (!global->quiet) std::fprintf(stderr, "  %s: %d corners left, %d right\n", d.pair.c_str(), d.left_corners,
-                                       d.right_corners);
-    });
+    auto pairs =
+        depth::DetectStereoPairs(dataset, left, right, detect, &detections, [&](const depth::PairDetection& d) {
+          if (!global->quiet)
+            std::fprintf(stderr, "  %s: %d corners left, %d right\n", d.pair.c_str(), d.left_corners, d.right_corners);
+        });
     depth::StereoCalibrationOptions so;
     so.huber_px = o->huber;
     const depth::StereoRun run = OnInput(o->dataset, [&] {

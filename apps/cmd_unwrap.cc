@@ -61,7 +61,8 @@ std::vector<io::ImageHeader> CheckFrames(const std::vector<InputFrame>& frames, 
   return headers;
 }
 
-void CheckSizes(const std::vector<InputFrame>& frames, const std::vector<io::ImageHeader>& headers, int width, int height) {
+void CheckSizes(const std::vector<InputFrame>& frames, const std::vector<io::ImageHeader>& headers, int width,
+                int height) {
   for (size_t f = 0; f < frames.size(); ++f)
     HOVS_REQUIRE(headers[f].width == width && headers[f].height == height, frames[f].image.string(), "the image is ",
                  headers[f].width, " x ", headers[f].height, " but the model is for ", width, " x ", height);
@@ -102,12 +103,13 @@ std::vector<uint8_t> LoadFrame(const InputFrame& frame, const std::string& forma
     HOVS_REQUIRE((*fmt == unwrap::PixelFormat::kRgb8) == (c >= 3), frame.image.string(), "has ", c,
                  " channels, which is not ", format);
   }
-  HOVS_REQUIRE(w == table.source_width && h == table.source_height, frame.image.string(), "the image is ", w, " x ",
-               h, " but the model is for ", table.source_width, " x ", table.source_height);
+  HOVS_REQUIRE(w == table.source_width && h == table.source_height, frame.image.string(), "the image is ", w, " x ", h,
+               " but the model is for ", table.source_width, " x ", table.source_height);
   const int oc = *fmt == unwrap::PixelFormat::kRgb8 ? 3 : 1;
   std::vector<uint8_t> bytes(size_t(w) * h * oc);
   for (size_t k = 0; k < size_t(w) * h; ++k)
-    for (int ch = 0; ch < oc; ++ch) bytes[k * oc + ch] = uint8_t(std::lround(std::clamp(px[k * c + ch], 0.f, 1.f) * 255));
+    for (int ch = 0; ch < oc; ++ch)
+      bytes[k * oc + ch] = uint8_t(std::lround(std::clamp(px[k * c + ch], 0.f, 1.f) * 255));
   return bytes;
 }
 
@@ -147,14 +149,17 @@ nlohmann::json UnwrapFrames(const Options& o, bool quiet, const std::vector<Inpu
       const unwrap::ViewPsnr q = unwrap::CompareWithReference(table, static_cast<int>(v), views[v], *truth[v]);
       const std::string trel = frames[f].name + "/" + name + "_truth.png";
       WriteRgb8(folder / trel, views[v].width, views[v].height, 3, *truth[v]);
-      (*truth_json)[frames[f].name][name] = {{"psnr_db", q.psnr_db}, {"truth", trel},
-                                             {"valid_fraction", q.valid_fraction}};
+      (*truth_json)[frames[f].name][name] = {
+          {"psnr_db", q.psnr_db}, {"truth", trel}, {"valid_fraction", q.valid_fraction}};
       if (!quiet)
         std::fprintf(stderr, "\r  %s %s: PSNR %.2f dB against the pinhole truth render\n", frames[f].name.c_str(),
                      name.c_str(), q.psnr_db);
     }
-    frames_json.push_back({{"frame", frames[f].name}, {"input", frames[f].image.string()}, {"views", outs},
-                           {"remap_ms", remap_ms->back()}, {"pixel_format", unwrap::ToString(fmt)}});
+    frames_json.push_back({{"frame", frames[f].name},
+                           {"input", frames[f].image.string()},
+                           {"views", outs},
+                           {"remap_ms", remap_ms->back()},
+                           {"pixel_format", unwrap::ToString(fmt)}});
     if (!quiet) std::fprintf(stderr, "\r  frame %zu / %zu", f + 1, frames.size());
   }
   if (!quiet) std::fprintf(stderr, "\n");
@@ -173,7 +178,8 @@ int RunUnwrap(const Options& o, const GlobalOptions& global) {
     return 0;
   }
   HOVS_REQUIRE(!o.input.empty() || !o.save_map.empty(), "hovs unwrap", "give --input (and/or --save-map)");
-  HOVS_REQUIRE(o.save_map.empty() || o.map.empty(), "--save-map", "saves the mapping built from --model, not one "
+  HOVS_REQUIRE(o.save_map.empty() || o.map.empty(), "--save-map",
+               "saves the mapping built from --model, not one "
                "loaded with --map");
   unwrap::ParseInterpolation(o.interp);
   if (!o.save_map.empty()) CheckOutputFile(o.save_map, "HOVSMAP", "a hovs mapping file");
@@ -208,11 +214,17 @@ int RunUnwrap(const Options& o, const GlobalOptions& global) {
   nlohmann::json views_json = nlohmann::json::array();
   for (const auto& vt : table.views) views_json.push_back(unwrap::ViewJson(vt));
   const double median_ms = Median(remap_ms);
-  nlohmann::json j = {{"tool", "hovs unwrap"}, {"versions", Versions()},
-                      {"mapping", nlohmann::json::parse(table.header)}, {"mapping_source", source},
-                      {"interpolation", o.interp}, {"views", views_json}, {"frames", frames_json},
-                      {"timing", {{"mapping_ms", table_ms}, {"median_remap_ms", median_ms},
-                                  {"note", "remap of all views of one frame, this machine, threads: TBB default"}}}};
+  nlohmann::json j = {{"tool", "hovs unwrap"},
+                      {"versions", Versions()},
+                      {"mapping", nlohmann::json::parse(table.header)},
+                      {"mapping_source", source},
+                      {"interpolation", o.interp},
+                      {"views", views_json},
+                      {"frames", frames_json},
+                      {"timing",
+                       {{"mapping_ms", table_ms},
+                        {"median_remap_ms", median_ms},
+                        {"note", "remap of all views of one frame, this machine, threads: TBB default"}}}};
   if (!truth_json.empty())
     j["truth"] = {{"scene", o.truth_scene}, {"samples", o.truth_samples}, {"per_frame", truth_json}};
   WriteFileAtomic(staged.staging() / "views.json", j.dump(1));
@@ -237,17 +249,24 @@ Runner SetupUnwrap(CLI::App* sub, const GlobalOptions* global) {
   sub->add_option("-o,--out", o->out, "output folder (replaced atomically)")->capture_default_str();
   sub->add_option("--interp", o->interp, "bilinear | bicubic | nearest")->capture_default_str();
   sub->add_option("--format", o->format, "auto | rgb | gray | bayer_rggb (input pixel format)")->capture_default_str();
-  sub->add_option("--scene-distance", o->scene_distance, "m; depth at which a non-single-viewpoint rig is unwrapped")->check(Bounded(0, 1e6, true))
+  sub->add_option("--scene-distance", o->scene_distance, "m; depth at which a non-single-viewpoint rig is unwrapped")
+      ->check(Bounded(0, 1e6, true))
       ->capture_default_str();
-  sub->add_option("--tile", o->tile, "tile size of the mapping (8, 16, 32, 64; 0: per view, 64 where every tile of the view is "
-                  "interpolated at that size without minifying, else 32)")->check(Bounded(0, 64))->capture_default_str();
+  sub->add_option("--tile", o->tile,
+                  "tile size of the mapping (8, 16, 32, 64; 0: per view, 64 where every tile of the view is "
+                  "interpolated at that size without minifying, else 32)")
+      ->check(Bounded(0, 64))
+      ->capture_default_str();
   sub->add_option("--truth-scene", o->truth_scene,
                   "scene YAML the input was rendered from: render each perspective view with a pinhole camera at the "
                   "unit's viewpoint and report PSNR against it");
-  sub->add_option("--truth-samples", o->truth_samples, "samples per pixel of the truth renders")->check(Bounded(1, 4096))->capture_default_str();
+  sub->add_option("--truth-samples", o->truth_samples, "samples per pixel of the truth renders")
+      ->check(Bounded(1, 4096))
+      ->capture_default_str();
   sub->add_flag("--interactive", o->interactive,
                 "control panel: adjust each view live on the first input frame (needs a display; s saves the layout)");
-  sub->add_option("--layout-out", o->layout_out, "where --interactive saves the adjusted layout")->capture_default_str();
+  sub->add_option("--layout-out", o->layout_out, "where --interactive saves the adjusted layout")
+      ->capture_default_str();
   return [o, global]() { return RunUnwrap(*o, *global); };
 }
 

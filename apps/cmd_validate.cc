@@ -40,7 +40,9 @@ Runner SetupValidate(CLI::App* sub, const GlobalOptions* global) {
   sub->add_option("--preset", o->preset, "full (the report's run, about 10 min) | reduced (half resolution, CI)")
       ->capture_default_str();
   sub->add_option("-o,--out", o->out, "run folder (default results/validate-<preset>)");
-  sub->add_option("--seed", o->seed, "seed of board poses and renders")->check(Bounded(0, 9007199254740992.0))->capture_default_str();
+  sub->add_option("--seed", o->seed, "seed of board poses and renders")
+      ->check(Bounded(0, 9007199254740992.0))
+      ->capture_default_str();
   // Each override, when given, must be valid (0 does not mean "the preset").
   sub->add_option("--downscale", o->downscale, "override the preset: render at 1/N resolution (1, 2, 5, 10)")
       ->check(Bounded(1, 16));
@@ -74,8 +76,10 @@ Runner SetupValidate(CLI::App* sub, const GlobalOptions* global) {
     RealImages(v, o->real);
     v.Finish(std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());
     stage.Commit();
-    if (global->json) std::cout << v.metrics().dump(1) << "\n";
-    else if (!global->quiet) std::cout << v.Summary();
+    if (global->json)
+      std::cout << v.metrics().dump(1) << "\n";
+    else if (!global->quiet)
+      std::cout << v.Summary();
     return v.Failed() ? 1 : 0;
   };
 }

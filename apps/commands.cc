@@ -67,8 +67,8 @@ std::map<std::string, std::string> Versions() {
 }
 
 CLI::Validator Bounded(double lo, double hi, bool low_open) {
-  const std::string range = std::string(low_open ? "(" : "[") + CLI::detail::to_string(lo) + ", " +
-                            CLI::detail::to_string(hi) + "]";
+  const std::string range =
+      std::string(low_open ? "(" : "[") + CLI::detail::to_string(lo) + ", " + CLI::detail::to_string(hi) + "]";
   CLI::Validator v(
       [lo, hi, low_open, range](std::string& text) -> std::string {
         char* end = nullptr;
@@ -88,14 +88,26 @@ const std::vector<Command>& Commands() {
       {"design", "Mirror design study: sweep (a, b[, d]), constrained optima, report with figures", SetupDesign},
       {"render", "Render a scene through its catadioptric units, with ground truth (EXR + JSON)", SetupRender},
       {"dataset", "Render a dataset (a monocular calibration set) with ground truth and a manifest", SetupDataset},
-      {"calibrate", "Monocular calibration (polynomial and unified models) from a corner table or a dataset", SetupCalibrate},
-      {"unwrap", "Virtual perspective views and panoramas from catadioptric images (any model), mapping files", SetupUnwrap},
-      {"stereo-calibrate", "Relative pose of two units from ArUco board pairs (detection in unwrapped views, joint solve)", SetupStereoCalibrate},
-      {"depth", "Dense and sparse binocular depth of a two-unit dataset (rectification, SGBM, point clouds)", SetupDepth},
-      {"capture", "Capture frames from GigE Vision cameras (Aravis), a replay or the GigE Vision simulator into a dataset", SetupCapture},
-      {"position", "Visual positioning: the camera's offset from the mirror design, from the rim in one image", SetupPosition},
-      {"live", "Live expansion: camera (or simulator, replay) frames into views, raw Bayer to RGB, with latency figures", SetupLive},
-      {"validate", "End to end against ground truth: design, renders, detection, calibration, stereo, views, depth; report", SetupValidate},
+      {"calibrate", "Monocular calibration (polynomial and unified models) from a corner table or a dataset",
+       SetupCalibrate},
+      {"unwrap", "Virtual perspective views and panoramas from catadioptric images (any model), mapping files",
+       SetupUnwrap},
+      {"stereo-calibrate",
+       "Relative pose of two units from ArUco board pairs (detection in unwrapped views, joint solve)",
+       SetupStereoCalibrate},
+      {"depth", "Dense and sparse binocular depth of a two-unit dataset (rectification, SGBM, point clouds)",
+       SetupDepth},
+      {"capture",
+       "Capture frames from GigE Vision cameras (Aravis), a replay or the GigE Vision simulator into a dataset",
+       SetupCapture},
+      {"position", "Visual positioning: the camera's offset from the mirror design, from the rim in one image",
+       SetupPosition},
+      {"live",
+       "Live expansion: camera (or simulator, replay) frames into views, raw Bayer to RGB, with latency figures",
+       SetupLive},
+      {"validate",
+       "End to end against ground truth: design, renders, detection, calibration, stereo, views, depth; report",
+       SetupValidate},
       {"version", "Print the versions of hovs and its libraries", SetupVersion},
   };
   return table;
@@ -128,7 +140,7 @@ int RunCommandLine(int argc, const char* const* argv, bool rethrow) {
     } else {
       continue;
     }
-    if (message.empty()) break;   // the command: its own options follow
+    if (message.empty()) break;  // the command: its own options follow
     if (rethrow) throw Error("command line", message);
     std::cerr << "hovs: error: " << message << "\n";
     return 2;
@@ -137,7 +149,7 @@ int RunCommandLine(int argc, const char* const* argv, bool rethrow) {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
     if (rethrow) throw Error("command line", std::string(e.what()));
-    if (e.get_exit_code() == 0) return app.exit(e);   // --help, --version: CLI11's own output
+    if (e.get_exit_code() == 0) return app.exit(e);  // --help, --version: CLI11's own output
     // Any other command-line error is bad input like the rest: one line, exit 2.
     std::cerr << "hovs: error: " << e.what() << " (see --help)\n";
     return 2;

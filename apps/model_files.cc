@@ -56,7 +56,7 @@ AnyModel LoadCalibratedModel(const std::filesystem::path& path, const std::strin
   }
   if (path.extension() != ".txt" && prefer != "polynomial") {
     const auto j = ReadJsonFile(path);
-        if (j.contains("physical") && j["physical"].contains("unit"))
+    if (j.contains("physical") && j["physical"].contains("unit"))
       return AnyModel::Exact(scenes::UnitFromJson(j["physical"]["unit"], path.string() + " (physical.unit)").rig,
                              scene_distance, path.string() + " (physical.unit)");
     HOVS_REQUIRE(prefer != "physical", path.string(), "has no physical model (calibrate with --physical)");
@@ -93,7 +93,7 @@ AnyModel LoadModelSpec(const std::string& spec, const std::string& unit, double 
   if (EndsWith(spec, ".txt")) return AnyModel::Polynomial(LoadPolynomialModelFile(path), spec);
   const auto j = ReadJsonFile(path);
   if (j.is_object() && JsonText(j, "format") == "hovs-dataset") {
-    CheckDatasetManifest(j, path.string());   // units are objects with string names from here on
+    CheckDatasetManifest(j, path.string());  // units are objects with string names from here on
     const auto& units = j["units"];
     HOVS_REQUIRE(!units.empty(), path.string(), "the manifest lists no units");
     const size_t i = pick(units.size(), [&](size_t k) { return units[k]["name"].get<std::string>(); });
@@ -110,7 +110,6 @@ unwrap::Image8 LoadImage8(const std::filesystem::path& path) {
   im.data = std::move(in.data);
   return im;
 }
-
 
 std::vector<InputFrame> ListInputs(const std::string& input, const std::string& unit) {
   const std::filesystem::path p(input);
@@ -135,7 +134,8 @@ std::vector<InputFrame> ListInputs(const std::string& input, const std::string& 
     for (const auto& fr : m.at("frames"))
       for (const auto& v : fr.at("views"))
         if (v.at("unit") == want)
-          frames.push_back({"frame" + std::to_string(fr.at("id").get<int>()), p.parent_path() / v.at("image").get<std::string>()});
+          frames.push_back(
+              {"frame" + std::to_string(fr.at("id").get<int>()), p.parent_path() / v.at("image").get<std::string>()});
     HOVS_REQUIRE(!frames.empty(), input, "no frame of unit '", want, "'");
     return frames;
   }

@@ -23,9 +23,11 @@ std::vector<hw::FakeFrame> SimulatorFrames(const nlohmann::json& m, const fs::pa
       f.width = im.width, f.height = im.height;
       f.data.resize(size_t(im.width) * im.height);
       for (size_t k = 0; k < f.data.size(); ++k)
-        f.data[k] = im.channels == 1 ? im.data[k]
-                                     : static_cast<uint8_t>((299 * im.data[3 * k] + 587 * im.data[3 * k + 1] +
-                                                             114 * im.data[3 * k + 2] + 500) / 1000);
+        f.data[k] =
+            im.channels == 1
+                ? im.data[k]
+                : static_cast<uint8_t>(
+                      (299 * im.data[3 * k] + 587 * im.data[3 * k + 1] + 114 * im.data[3 * k + 2] + 500) / 1000);
       frames.push_back(std::move(f));
     }
   HOVS_REQUIRE(!frames.empty(), manifest.string(), "no images of unit '", unit, "'");
@@ -47,17 +49,23 @@ void AddSourceOptions(CLI::App* sub, SourceOptions* o) {
   sub->add_option("--simulate", o->simulate,
                   "serve a rendered dataset through Aravis' GigE Vision simulator (127.0.0.1, and 127.0.0.2 for a "
                   "second unit) and take the frames over the protocol");
-  sub->add_option("--simulate-loss", o->loss, "simulator: GVSP packets dropped on purpose (0.01 = 1 %)")->check(Bounded(0, 0.99))
+  sub->add_option("--simulate-loss", o->loss, "simulator: GVSP packets dropped on purpose (0.01 = 1 %)")
+      ->check(Bounded(0, 0.99))
       ->capture_default_str();
   sub->add_option("--units", o->units, "unit names, one per camera (default: unit0, unit1; --simulate: the dataset's)");
   sub->add_option("--pixel-format", o->pixel_format, "Mono8 | BayerRG8 | Mono16")->capture_default_str();
-  sub->add_option("--exposure-us", o->exposure, "exposure time, microseconds (default: the camera's)")->check(Bounded(0, 1e8, true));
+  sub->add_option("--exposure-us", o->exposure, "exposure time, microseconds (default: the camera's)")
+      ->check(Bounded(0, 1e8, true));
   sub->add_option("--gain", o->gain, "gain (default: the camera's)")->check(Bounded(0, 1000));
-  sub->add_option("--frame-rate", o->frame_rate, "free-running frame rate, Hz (default: the camera's)")->check(Bounded(0, 10000, true));
+  sub->add_option("--frame-rate", o->frame_rate, "free-running frame rate, Hz (default: the camera's)")
+      ->check(Bounded(0, 10000, true));
   sub->add_option("--region", o->region, "WxH+X+Y (default: the full sensor)");
-  sub->add_option("--packet-size", o->packet_size, "GigE Vision packet size, bytes (default: the camera's)")->check(Bounded(64, 65535));
-  sub->add_option("--packet-delay-ns", o->packet_delay, "inter-packet delay, ns (default: the camera's)")->check(Bounded(0, 1e9));
-  sub->add_option("--socket-buffer", o->socket_buffer, "receive socket buffer, bytes (0: automatic)")->check(Bounded(0, 1073741824))
+  sub->add_option("--packet-size", o->packet_size, "GigE Vision packet size, bytes (default: the camera's)")
+      ->check(Bounded(64, 65535));
+  sub->add_option("--packet-delay-ns", o->packet_delay, "inter-packet delay, ns (default: the camera's)")
+      ->check(Bounded(0, 1e9));
+  sub->add_option("--socket-buffer", o->socket_buffer, "receive socket buffer, bytes (0: automatic)")
+      ->check(Bounded(0, 1073741824))
       ->capture_default_str();
   sub->add_option("--buffers", o->buffers, "stream buffer pool")->check(Bounded(1, 1024))->capture_default_str();
   sub->add_option("--trigger", o->trigger, "free | software | Line0 ...")->capture_default_str();
@@ -74,10 +82,10 @@ OpenedSources OpenSources(const SourceOptions& o) {
   s.buffers = o.buffers, s.trigger = o.trigger, s.packet_socket = o.packet_socket;
   if (!o.region.empty()) {
     char x = 0, p1 = 0, p2 = 0;
-    int end = -1;   // nothing may follow
+    int end = -1;  // nothing may follow
     HOVS_REQUIRE(std::sscanf(o.region.c_str(), "%d%c%d%c%d%c%d%n", &s.width, &x, &s.height, &p1, &s.offset_x, &p2,
-                             &s.offset_y, &end) == 7 && x == 'x' && p1 == '+' && p2 == '+' &&
-                     end == static_cast<int>(o.region.size()),
+                             &s.offset_y, &end) == 7 &&
+                     x == 'x' && p1 == '+' && p2 == '+' && end == static_cast<int>(o.region.size()),
                  "--region", "expected WxH+X+Y (got '", o.region, "')");
     HOVS_REQUIRE(s.width >= 1 && s.height >= 1 && s.width <= 65535 && s.height <= 65535 && s.offset_x >= 0 &&
                      s.offset_y >= 0 && s.offset_x <= 65535 && s.offset_y <= 65535,

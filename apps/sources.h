@@ -25,7 +25,7 @@ struct SourceOptions {
 struct OpenedSources {
   std::vector<std::unique_ptr<hw::FakeGigECamera>> simulators;  // --simulate: kept alive while capturing
   std::vector<std::unique_ptr<hw::CameraSource>> sources;
-  std::vector<std::string> units;                                // one name per source
+  std::vector<std::string> units;  // one name per source
   std::vector<hw::CameraSource*> Raw() const;
 };
 

@@ -16,9 +16,11 @@ std::string LayoutYaml(const unwrap::Layout& layout) {
   std::ostringstream os;
   os << "# hovs layout (angles in degrees, sizes in pixels)\nname: " << layout.name << "\nviews:\n";
   for (const auto& v : layout.views) {
-    os << "  - {name: " << v.name << ", type: " << ToString(v.type) << ", width: " << v.width << ", height: " << v.height;
+    os << "  - {name: " << v.name << ", type: " << ToString(v.type) << ", width: " << v.width
+       << ", height: " << v.height;
     if (v.type == ViewProjection::kPerspective) {
-      os << ", yaw: " << v.yaw_deg << ", pitch: " << v.pitch_deg << ", roll: " << v.roll_deg << ", hfov: " << v.hfov_deg;
+      os << ", yaw: " << v.yaw_deg << ", pitch: " << v.pitch_deg << ", roll: " << v.roll_deg
+         << ", hfov: " << v.hfov_deg;
     } else {
       os << ", elevation_min: " << v.elevation_min_deg << ", elevation_max: " << v.elevation_max_deg
          << ", azimuth_centre: " << v.azimuth_centre_deg << ", azimuth_span: " << v.azimuth_span_deg;
@@ -35,7 +37,7 @@ struct Panel {
   unwrap::Layout layout;
   unwrap::ImageView frame;
   int view = 0;
-  int yaw = 0, pitch = 0, roll = 0, fov = 0;   // slider positions
+  int yaw = 0, pitch = 0, roll = 0, fov = 0;  // slider positions
   bool dirty = true;
 };
 
@@ -109,8 +111,12 @@ void RunUnwrapViewer(const AnyModel& model, unwrap::Layout layout, const unwrap:
         unwrap::Image8 out;
         r.RunView(p.frame, unwrap::Interpolation::kBilinear, 0, &out);
         cv::Mat m(out.height, out.width, out.channels == 3 ? CV_8UC3 : CV_8UC1, out.data.data());
-        if (out.channels == 3) cv::cvtColor(m, shown, cv::COLOR_RGB2BGR); else shown = m.clone();
-        std::printf("\r%s: %s            ", one.views[0].name.c_str(), LayoutYaml(one).substr(LayoutYaml(one).find("{")).c_str());
+        if (out.channels == 3)
+          cv::cvtColor(m, shown, cv::COLOR_RGB2BGR);
+        else
+          shown = m.clone();
+        std::printf("\r%s: %s            ", one.views[0].name.c_str(),
+                    LayoutYaml(one).substr(LayoutYaml(one).find("{")).c_str());
         std::fflush(stdout);
       } catch (const Error& e) {
         std::fprintf(stderr, "\n%s\n", e.what());

@@ -6,11 +6,13 @@
 namespace hovs::calib {
 namespace {
 const std::map<std::string, int>& Table() {
-  static const std::map<std::string, int> ids = {
-      {"DICT_4X4_50", cv::aruco::DICT_4X4_50},   {"DICT_4X4_250", cv::aruco::DICT_4X4_250},
-      {"DICT_5X5_100", cv::aruco::DICT_5X5_100}, {"DICT_5X5_250", cv::aruco::DICT_5X5_250},
-      {"DICT_6X6_250", cv::aruco::DICT_6X6_250}, {"DICT_6X6_1000", cv::aruco::DICT_6X6_1000},
-      {"DICT_ARUCO_ORIGINAL", cv::aruco::DICT_ARUCO_ORIGINAL}};
+  static const std::map<std::string, int> ids = {{"DICT_4X4_50", cv::aruco::DICT_4X4_50},
+                                                 {"DICT_4X4_250", cv::aruco::DICT_4X4_250},
+                                                 {"DICT_5X5_100", cv::aruco::DICT_5X5_100},
+                                                 {"DICT_5X5_250", cv::aruco::DICT_5X5_250},
+                                                 {"DICT_6X6_250", cv::aruco::DICT_6X6_250},
+                                                 {"DICT_6X6_1000", cv::aruco::DICT_6X6_1000},
+                                                 {"DICT_ARUCO_ORIGINAL", cv::aruco::DICT_ARUCO_ORIGINAL}};
   return ids;
 }
 }  // namespace

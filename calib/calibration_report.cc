@@ -21,9 +21,9 @@ std::string F(const char* fmt, double v) {
 // The reprojection figure of one image (the article's Fig. 19): a crop around the board, detected corners (green
 // circles; rejected corners large magenta), the polynomial model's reprojections (red crosses) and the
 // residuals magnified 20 times (yellow).
-void ReprojectionFigure(const std::filesystem::path& image, const BoardObservation& ob,
-                        const std::vector<bool>& inlier, const PolynomialModel<double>& model,
-                        const Rigid3d& cam_from_board, double rms, const std::filesystem::path& out) {
+void ReprojectionFigure(const std::filesystem::path& image, const BoardObservation& ob, const std::vector<bool>& inlier,
+                        const PolynomialModel<double>& model, const Rigid3d& cam_from_board, double rms,
+                        const std::filesystem::path& out) {
   const cv::Mat grey = ReadGreyImage(image);
   double x0 = 1e9, y0 = 1e9, x1 = -1e9, y1 = -1e9;
   for (const auto& p : ob.pixels)
@@ -40,7 +40,8 @@ void ReprojectionFigure(const std::filesystem::path& image, const BoardObservati
   for (size_t k = 0; k < ob.pixels.size(); ++k) {
     Vec2d uv;
     const bool in = k >= inlier.size() || inlier[k];
-    cv::circle(crop, at(ob.pixels[k]), in ? 5 : 9, in ? cv::Scalar(0, 200, 0) : cv::Scalar(255, 0, 255), in ? 1 : 2, cv::LINE_AA);
+    cv::circle(crop, at(ob.pixels[k]), in ? 5 : 9, in ? cv::Scalar(0, 200, 0) : cv::Scalar(255, 0, 255), in ? 1 : 2,
+               cv::LINE_AA);
     if (!model.ImgFromCam(cam_from_board * ob.board_points[k], &uv)) continue;
     cv::drawMarker(crop, at(uv), cv::Scalar(0, 0, 255), cv::MARKER_CROSS, 8, 1, cv::LINE_AA);
     cv::line(crop, at(ob.pixels[k]), at(ob.pixels[k] + 20 * (uv - ob.pixels[k])), cv::Scalar(0, 220, 255), 1,
@@ -76,7 +77,10 @@ void ErrorMapFigure(const std::vector<BoardObservation>& obs, const PolynomialCa
   // A round axis limit: 1, 2 or 5 times a power of ten.
   double lim = std::pow(10, std::floor(std::log10(extent)));
   for (double f : {1.0, 2.0, 5.0, 10.0})
-    if (f * lim >= extent) { lim *= f; break; }
+    if (f * lim >= extent) {
+      lim *= f;
+      break;
+    }
   const auto put = [&](const std::string& t, cv::Point p, double sc = 0.45) {
     cv::putText(fig, t, p, cv::FONT_HERSHEY_SIMPLEX, sc, cv::Scalar(0, 0, 0), 1, cv::LINE_AA);
   };
@@ -94,14 +98,17 @@ void ErrorMapFigure(const std::vector<BoardObservation>& obs, const PolynomialCa
   put("du (px)", cv::Point(left.x + left.width / 2 - 20, left.br().y + 15));
   put("dv (px), down", cv::Point(left.x, left.y - 6));
   cv::Mat hue(1, static_cast<int>(std::max<size_t>(obs.size(), 1)), CV_8UC3);
-  for (int i = 0; i < hue.cols; ++i) hue.at<cv::Vec3b>(0, i) = cv::Vec3b(static_cast<uchar>(170 * i / std::max(1, hue.cols)), 230, 210);
+  for (int i = 0; i < hue.cols; ++i)
+    hue.at<cv::Vec3b>(0, i) = cv::Vec3b(static_cast<uchar>(170 * i / std::max(1, hue.cols)), 230, 210);
   cv::cvtColor(hue, hue, cv::COLOR_HSV2BGR);
   for (size_t i = 0; i < obs.size(); ++i) {
     const cv::Vec3b c = hue.at<cv::Vec3b>(0, static_cast<int>(i));
     for (size_t k = 0; k < res[i].size(); ++k) {
       const Vec2d r = res[i][k].cwiseMax(Vec2d(-lim, -lim)).cwiseMin(Vec2d(lim, lim));
-      if (cal.inlier.empty() || cal.inlier[i][k]) cv::circle(fig, at(r), 2, cv::Scalar(c[0], c[1], c[2]), cv::FILLED, cv::LINE_AA);
-      else cv::drawMarker(fig, at(r), cv::Scalar(c[0], c[1], c[2]), cv::MARKER_TILTED_CROSS, 9, 2, cv::LINE_AA);
+      if (cal.inlier.empty() || cal.inlier[i][k])
+        cv::circle(fig, at(r), 2, cv::Scalar(c[0], c[1], c[2]), cv::FILLED, cv::LINE_AA);
+      else
+        cv::drawMarker(fig, at(r), cv::Scalar(c[0], c[1], c[2]), cv::MARKER_TILTED_CROSS, 9, 2, cv::LINE_AA);
     }
   }
   // Right: positions in the image, colour = |error| on a 0..lim scale.
@@ -115,8 +122,9 @@ void ErrorMapFigure(const std::vector<BoardObservation>& obs, const PolynomialCa
     for (size_t k = 0; k < res[i].size(); ++k) {
       const int idx = static_cast<int>(std::clamp(res[i][k].norm() / lim, 0.0, 1.0) * 255);
       const cv::Vec3b c = ramp.at<cv::Vec3b>(0, idx);
-      cv::circle(fig, cv::Point2d(right.x + (obs[i].pixels[k].x() + 0.5) * sc, right.y + (obs[i].pixels[k].y() + 0.5) * sc), 3,
-                 cv::Scalar(c[0], c[1], c[2]), cv::FILLED, cv::LINE_AA);
+      cv::circle(fig,
+                 cv::Point2d(right.x + (obs[i].pixels[k].x() + 0.5) * sc, right.y + (obs[i].pixels[k].y() + 0.5) * sc),
+                 3, cv::Scalar(c[0], c[1], c[2]), cv::FILLED, cv::LINE_AA);
     }
   cv::resize(ramp, ramp, cv::Size(200, 10), 0, 0, cv::INTER_NEAREST);
   ramp.copyTo(fig(cv::Rect(right.x, S + 10, 200, 10)));
@@ -161,15 +169,17 @@ void WriteMonoCalibrationReport(const std::filesystem::path& folder, const Calib
     page.Heading("Reprojection per image (polynomial model; residuals x20)");
     for (size_t i = 0; i < in.observations.size() && i < in.paths.size(); ++i) {
       const std::string fig = "figures/" + std::filesystem::path(in.observations[i].image).stem().string() + ".png";
-      ReprojectionFigure(in.paths[i], in.observations[i], p.inlier[i], p.model, p.cam_from_board[i],
-                         p.per_image_rms[i], folder / fig);
+      ReprojectionFigure(in.paths[i], in.observations[i], p.inlier[i], p.model, p.cam_from_board[i], p.per_image_rms[i],
+                         folder / fig);
       page.Figure(fig, in.observations[i].image + ": RMS " + F("%.3f", p.per_image_rms[i]) + " px", 420);
     }
   }
   ErrorMapFigure(in.observations, p, folder / "figures/error_map.png");
   page.Heading("Reprojection error map (polynomial model; the article's Fig. 20)");
-  page.Figure("figures/error_map.png", "left: (du, dv) of every corner, one colour per image, rejected corners as "
-              "crosses; right: where in the image, colour = error length", 900);
+  page.Figure("figures/error_map.png",
+              "left: (du, dv) of every corner, one colour per image, rejected corners as "
+              "crosses; right: where in the image, colour = error length",
+              900);
   page.Heading("Files");
   page.Link("Every figure above, the solver reports and the standard deviations: ", "calibration.json",
             "calibration.json", ".");

@@ -227,8 +227,8 @@ class GridGrower {
 // Saddle points in noise or texture form grids that fail it: their squares are neither flat nor alternating.
 struct CheckerTest {
   bool pass = false;
-  double consistent = 0;   // fraction of squares on their class's side
-  double contrast = 0;     // difference of the class means, grey in [0, 1]
+  double consistent = 0;  // fraction of squares on their class's side
+  double contrast = 0;    // difference of the class means, grey in [0, 1]
 };
 CheckerTest TestChecker(const cv::Mat& grey, const std::vector<Candidate>& c, const std::vector<std::vector<int>>& g,
                         double min_contrast) {
@@ -240,7 +240,7 @@ CheckerTest TestChecker(const cv::Mat& grey, const std::vector<Candidate>& c, co
     const uint8_t* r1 = grey.ptr<uint8_t>(y0 + 1);
     return ((1 - ay) * ((1 - ax) * r0[x0] + ax * r0[x0 + 1]) + ay * ((1 - ax) * r1[x0] + ax * r1[x0 + 1])) / 255.0;
   };
-  std::vector<std::pair<int, double>> squares;   // parity, level
+  std::vector<std::pair<int, double>> squares;  // parity, level
   std::vector<double> spreads;
   for (size_t j = 0; j + 1 < g.size(); ++j)
     for (size_t i = 0; i + 1 < g[j].size(); ++i) {
@@ -395,8 +395,10 @@ CheckerboardDetection DetectCheckerboard(const cv::Mat& image, const Checkerboar
                  " board: the board description does not match the image";
     return det;
   }
-  if (!fits && fits_t) transpose();
-  else if (fits && fits_t && (cols >= rows) != (o.board.cols >= o.board.rows)) transpose();
+  if (!fits && fits_t)
+    transpose();
+  else if (fits && fits_t && (cols >= rows) != (o.board.cols >= o.board.rows))
+    transpose();
   // Handedness: cross(x axis, y axis) must have the expected sign.
   double cross = 0;
   for (int j = 0; j + 1 < rows; ++j)

@@ -44,14 +44,14 @@ struct CheckerboardSpec {
 
 struct CheckerboardDetectOptions {
   CheckerboardSpec board;
-  int min_corners = 12;          // smaller grids are not reported as found
-  bool allow_partial = true;     // false: only the complete board counts as found
+  int min_corners = 12;       // smaller grids are not reported as found
+  bool allow_partial = true;  // false: only the complete board counts as found
   // Expected sign of cross(x axis, y axis) of the board in the image ((u, v) pixels): -1 for a board seen through
   // one mirror reflection from its printed side (catadioptric cameras), +1 for a direct view.
   int orientation = -1;
-  double min_contrast = 0.06;    // bright minus dark on the verification circle, in [0, 1] grey
-  int max_seeds = 60;            // seed candidates tried (strongest first)
-  int subpix_half_window = 0;    // cv::cornerSubPix half window; 0: 0.35 x the local square size, in [2, 11]
+  double min_contrast = 0.06;  // bright minus dark on the verification circle, in [0, 1] grey
+  int max_seeds = 60;          // seed candidates tried (strongest first)
+  int subpix_half_window = 0;  // cv::cornerSubPix half window; 0: 0.35 x the local square size, in [2, 11]
   // "edges": after cornerSubPix, each corner where the two board lines measured along their length cross
   // (calib/checkerboard_edges.h); "subpix": cornerSubPix alone.
   std::string corner_refinement = "edges";
@@ -61,14 +61,14 @@ struct CheckerboardDetectOptions {
 
 struct CheckerboardDetection {
   bool found = false;
-  bool complete = false;   // every inner corner of the board
-  std::string status;      // e.g. "complete 7x5", "partial 5x4 (20 of 35)", "no grid: 3 saddle candidates"
-  int candidates = 0;      // verified saddle points in the image
+  bool complete = false;  // every inner corner of the board
+  std::string status;     // e.g. "complete 7x5", "partial 5x4 (20 of 35)", "no grid: 3 saddle candidates"
+  int candidates = 0;     // verified saddle points in the image
   int grid_cols = 0, grid_rows = 0;
-  std::vector<Vec2d> pixels;        // refined corners (u, v)
-  int from_edges = 0;               // corners refined from the board's edges (the others: cornerSubPix)
-  std::vector<Vec3d> board_points;  // board frame, metres, z = 0
-  std::vector<Eigen::Vector2i> indices;      // (column, row) on the board
+  std::vector<Vec2d> pixels;             // refined corners (u, v)
+  int from_edges = 0;                    // corners refined from the board's edges (the others: cornerSubPix)
+  std::vector<Vec3d> board_points;       // board frame, metres, z = 0
+  std::vector<Eigen::Vector2i> indices;  // (column, row) on the board
 };
 
 // image: 8-bit grey (CV_8UC1). Throws hovs::Error for an empty or non-grey image or bad options.

@@ -19,10 +19,12 @@ std::optional<bool> DarkOnPlusN(const cv::Mat& g, const Vec2d& q, const Vec2d& n
 // The board line through corner c along one grid direction, between its neighbours prev and next (either may
 // be missing: the line then continues over the board's outer square, measured to 0.8 of a square).
 std::optional<EdgeCurve> MeasureLine(const cv::Mat& g, const Vec2d& c, const std::optional<Vec2d>& prev,
-                                     const std::optional<Vec2d>& next, double across,
-                                     const CheckerboardEdgeOptions& o, double* t_corner) {
+                                     const std::optional<Vec2d>& next, double across, const CheckerboardEdgeOptions& o,
+                                     double* t_corner) {
   if (!prev && !next) return std::nullopt;
-  const Vec2d e = prev && next ? (*next - *prev).normalized() : next ? (*next - c).normalized() : (c - *prev).normalized();
+  const Vec2d e = prev && next ? (*next - *prev).normalized()
+                  : next       ? (*next - c).normalized()
+                               : (c - *prev).normalized();
   const Vec2d n(-e.y(), e.x());
   double lm = prev ? (c - *prev).dot(e) : 0, lp = next ? (*next - c).dot(e) : 0;
   if (!prev) lm = 0.8 * lp;
@@ -44,7 +46,8 @@ std::optional<EdgeCurve> MeasureLine(const cv::Mat& g, const Vec2d& c, const std
   const Vec2d p = c - lm * e;
   *t_corner = lm;
   return MeasureEdgeCurve(g, p, e, lm + lp,
-                          {{lm - end, prev ? end : 0.0, !*before}, {lm + end, lm + lp - (next ? end : 0.0), !*after}}, eo);
+                          {{lm - end, prev ? end : 0.0, !*before}, {lm + end, lm + lp - (next ? end : 0.0), !*after}},
+                          eo);
 }
 
 }  // namespace

@@ -22,13 +22,13 @@
 namespace hovs::calib {
 
 struct CheckerboardEdgeOptions {
-  double min_contrast = 20;       // grey levels between dark and bright squares
-  double max_fit_rms_px = 0.35;   // a line whose edge points scatter more is not used
-  double min_square_px = 5;       // smaller squares keep their corners as they were
-  double max_shift_px = 1.5;      // a refined corner further than this from its start is not trusted
+  double min_contrast = 20;      // grey levels between dark and bright squares
+  double max_fit_rms_px = 0.35;  // a line whose edge points scatter more is not used
+  double min_square_px = 5;      // smaller squares keep their corners as they were
+  double max_shift_px = 1.5;     // a refined corner further than this from its start is not trusted
   int max_passes = 4;
-  double settled_px = 0.02;       // a pass that moves no corner more than this ends the refinement
-  double unsettled_px = 0.1;      // a corner still moving this much in the last pass keeps its start
+  double settled_px = 0.02;   // a pass that moves no corner more than this ends the refinement
+  double unsettled_px = 0.1;  // a corner still moving this much in the last pass keeps its start
 };
 
 // grey: 8-bit grey image. grid: cols x rows inner corners, corner (column i, row j) at grid[j * cols + i],

@@ -58,9 +58,10 @@ std::optional<double> EdgeByArea(const std::vector<double>& prof, double dark, d
                                  double step) {
   const int np = static_cast<int>(prof.size());
   const double contrast = bright - dark, mid = 0.5 * (dark + bright);
-  int cross = -1;   // the crossing nearest the profile's centre: between cross and cross + 1
+  int cross = -1;  // the crossing nearest the profile's centre: between cross and cross + 1
   for (int i = 0; i + 1 < np; ++i)
-    if (prof[i] < mid && prof[i + 1] >= mid && (cross < 0 || std::abs(i - (np - 1) / 2) < std::abs(cross - (np - 1) / 2)))
+    if (prof[i] < mid && prof[i + 1] >= mid &&
+        (cross < 0 || std::abs(i - (np - 1) / 2) < std::abs(cross - (np - 1) / 2)))
       cross = i;
   if (cross < 0) return std::nullopt;
   std::vector<double> f(np);
@@ -109,7 +110,7 @@ std::optional<EdgeCurve> MeasureEdgeCurve(const cv::Mat& g, const Vec2d& p, cons
   // Pass 1: track along each stretch (each profile centred where the edge found so far predicts it: the edge
   // bends), with each profile's own dark and bright levels.
   std::vector<double> ts, offs, darks, brights;
-  std::vector<int> which;   // stretch of each point
+  std::vector<int> which;  // stretch of each point
   std::vector<double> prof;
   int expected = 0;
   for (size_t k = 0; k < stretches.size(); ++k) {
@@ -133,7 +134,7 @@ std::optional<EdgeCurve> MeasureEdgeCurve(const cv::Mat& g, const Vec2d& p, cons
       const double bright = *std::max_element(prof.begin() + np / 2, prof.end());
       if (bright - dark < o.min_contrast) continue;
       const auto off = EdgeByArea(prof, dark, bright, half, step);
-      if (!off || std::abs(*off) > half - 0.5) continue;   // the edge is not inside this profile
+      if (!off || std::abs(*off) > half - 0.5) continue;  // the edge is not inside this profile
       kt.push_back(t), ko.push_back(centre + sg * *off);
       ts.push_back(t), offs.push_back(ko.back()), darks.push_back(dark), brights.push_back(bright);
       which.push_back(static_cast<int>(k));
@@ -166,11 +167,12 @@ std::optional<EdgeCurve> MeasureEdgeCurve(const cv::Mat& g, const Vec2d& p, cons
   }
   for (int i = 0; i < n; ++i) {
     const double centre = fit.Offset(ts[i]), sg = stretches[which[i]].dark_on_minus_n ? 1 : -1;
-    const auto off = profile(ts[i], centre, sg, &prof)
-                         ? EdgeByArea(prof, dark[which[i]], bright[which[i]], half, step)
-                         : std::nullopt;
-    if (off) offs[i] = centre + sg * *off;
-    else use[i] = 0;
+    const auto off = profile(ts[i], centre, sg, &prof) ? EdgeByArea(prof, dark[which[i]], bright[which[i]], half, step)
+                                                       : std::nullopt;
+    if (off)
+      offs[i] = centre + sg * *off;
+    else
+      use[i] = 0;
   }
   fit.coef = FitPoly(s, offs, use, degree);
   // One round of outlier rejection (a target partly hidden, a stray edge), then the final fit.
@@ -180,7 +182,8 @@ std::optional<EdgeCurve> MeasureEdgeCurve(const cv::Mat& g, const Vec2d& p, cons
   if (absr.size() < 6) return std::nullopt;
   const double sigma = 1.4826 * Median(absr);
   int kept = 0;
-  for (int i = 0; i < n; ++i) kept += use[i] = use[i] && std::abs(offs[i] - fit.Offset(ts[i])) <= std::max(3 * sigma, 0.15);
+  for (int i = 0; i < n; ++i)
+    kept += use[i] = use[i] && std::abs(offs[i] - fit.Offset(ts[i])) <= std::max(3 * sigma, 0.15);
   if (kept < std::max(6, static_cast<int>(0.7 * n))) return std::nullopt;
   fit.coef = FitPoly(s, offs, use, degree);
   double ss = 0;
@@ -202,7 +205,7 @@ std::optional<Vec2d> IntersectEdgeCurves(const EdgeCurve& a, double ta0, const E
     Eigen::Matrix2d J;
     J.col(0) = a.Tangent(ta);
     J.col(1) = -b.Tangent(tb);
-    if (std::abs(J.determinant()) < 1e-3) return std::nullopt;   // (nearly) parallel
+    if (std::abs(J.determinant()) < 1e-3) return std::nullopt;  // (nearly) parallel
     const Eigen::Vector2d d = J.lu().solve(-r);
     ta += d(0), tb += d(1);
     if (d.norm() < 1e-9) break;

@@ -30,11 +30,11 @@ std::optional<double> SampleGrey(const cv::Mat& grey, double u, double v);
 struct EdgeCurve {
   Vec2d p = Vec2d::Zero(), e = Vec2d::UnitX(), n = Vec2d::UnitY();
   double len = 1;
-  Eigen::VectorXd coef;   // f(s) = sum coef[k] s^k
-  double fit_rms = 0;     // px, of the kept edge points about the fit
-  int points = 0;         // edge points kept
+  Eigen::VectorXd coef;  // f(s) = sum coef[k] s^k
+  double fit_rms = 0;    // px, of the kept edge points about the fit
+  int points = 0;        // edge points kept
   double Offset(double t) const;
-  double Slope(double t) const;   // df/dt
+  double Slope(double t) const;  // df/dt
   Vec2d At(double t) const { return p + t * e + Offset(t) * n; }
   Vec2d Tangent(double t) const { return e + Slope(t) * n; }
 };
@@ -47,10 +47,10 @@ struct EdgeStretch {
 };
 
 struct EdgeCurveOptions {
-  double half_profile = 2;      // px: the profile reaches this far to either side of the predicted edge
-  double min_contrast = 20;     // grey levels between the dark and the bright level
-  double max_fit_rms_px = 0.35; // an edge whose points scatter more is not used
-  double min_coverage = 0.6;    // fraction of the stretches' one-pixel steps that must give an edge point
+  double half_profile = 2;       // px: the profile reaches this far to either side of the predicted edge
+  double min_contrast = 20;      // grey levels between the dark and the bright level
+  double max_fit_rms_px = 0.35;  // an edge whose points scatter more is not used
+  double min_coverage = 0.6;     // fraction of the stretches' one-pixel steps that must give an edge point
 };
 
 // Measures an edge along the chord (p, e, len; n = e rotated by +90 degrees) over the given stretches and

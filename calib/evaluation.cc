@@ -16,7 +16,7 @@ RayAccuracy CompareWithTruth(const CatadioptricCamera<double>& truth, const Poly
                              const RayAccuracyOptions& options) {
   const int width = truth.camera.width, height = truth.camera.height, step = GridStep(width, options);
   RunningStats raw;
-  std::vector<std::pair<Vec3d, Vec3d>> rays;   // (true, model)
+  std::vector<std::pair<Vec3d, Vec3d>> rays;  // (true, model)
   for (int v = 0; v < height; v += step)
     for (int u = 0; u < width; u += step) {
       const Vec2d uv(u, v);
@@ -31,7 +31,7 @@ RayAccuracy CompareWithTruth(const CatadioptricCamera<double>& truth, const Poly
   RayAccuracy r;
   r.pixels = static_cast<int>(raw.count);
   if (rays.empty()) return r;
-  const Mat3<double> R = BestRotation(rays);   // a ~ R b
+  const Mat3<double> R = BestRotation(rays);  // a ~ R b
   RunningStats aligned;
   for (const auto& [a, b] : rays) aligned.Add(AngleBetweenDeg(a, R * b));
   r.mean_deg = raw.Mean(), r.max_deg = raw.max;

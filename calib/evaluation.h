@@ -17,15 +17,15 @@ namespace hovs::calib {
 // the model's symmetry, so a small tilt of the whole frame is nearly unobservable and harmless downstream
 // (stereo calibration estimates the relative pose of the calibrated frames).
 struct RayAccuracy {
-  int pixels = 0;                       // compared pixels; 0: no figure (the model's annulus misses the mirror)
+  int pixels = 0;  // compared pixels; 0: no figure (the model's annulus misses the mirror)
   double mean_deg = 0, max_deg = 0;
   double mean_aligned_deg = 0, max_aligned_deg = 0;
-  double frame_rotation_deg = 0;        // the rotation removed
+  double frame_rotation_deg = 0;  // the rotation removed
 };
 
 struct RayAccuracyOptions {
-  double distance = 2.0;                // m, along each true ray from its mirror point
-  int min_step = 4;                     // pixel grid: every max(min_step, width / columns) pixels
+  double distance = 2.0;  // m, along each true ray from its mirror point
+  int min_step = 4;       // pixel grid: every max(min_step, width / columns) pixels
   int columns = 110;
 };
 

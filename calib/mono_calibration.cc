@@ -19,9 +19,10 @@ std::string F(const char* fmt, double v) {
 }
 
 nlohmann::json DetectionJson(const ImageDetection& d) {
-  nlohmann::json row = {{"image", d.image}, {"status", d.status}, {"found", d.found}, {"complete", d.complete},
-                        {"corners", d.corners}, {"from_edges", d.from_edges}, {"candidates", d.candidates},
-                        {"corner_refinement", d.corner_refinement}};
+  nlohmann::json row = {{"image", d.image},           {"status", d.status},
+                        {"found", d.found},           {"complete", d.complete},
+                        {"corners", d.corners},       {"from_edges", d.from_edges},
+                        {"candidates", d.candidates}, {"corner_refinement", d.corner_refinement}};
   if (d.to_truth) row["rms_to_truth_px"] = d.to_truth->rms_px, row["max_to_truth_px"] = d.to_truth->max_px;
   return row;
 }
@@ -29,19 +30,35 @@ nlohmann::json DetectionJson(const ImageDetection& d) {
 nlohmann::json PolynomialJson(const PolynomialCalibration& r, const std::vector<BoardObservation>& obs) {
   const auto& m = r.model;
   nlohmann::json j = {{"model", "polynomial"},
-                      {"cx", m.cx}, {"cy", m.cy}, {"c", m.c}, {"d", m.d}, {"e", m.e},
-                      {"poly", m.poly}, {"inv_poly", m.inv_poly}, {"rho_range", {m.rho_min, m.rho_max}},
-                      {"width", m.width}, {"height", m.height},
-                      {"rms_px", r.rms}, {"mean_px", r.mean}, {"initial_rms_px", r.initial_rms},
-                      {"converged", r.converged}, {"solver", r.solver_report}, {"stddev", r.stddev}};
+                      {"cx", m.cx},
+                      {"cy", m.cy},
+                      {"c", m.c},
+                      {"d", m.d},
+                      {"e", m.e},
+                      {"poly", m.poly},
+                      {"inv_poly", m.inv_poly},
+                      {"rho_range", {m.rho_min, m.rho_max}},
+                      {"width", m.width},
+                      {"height", m.height},
+                      {"rms_px", r.rms},
+                      {"mean_px", r.mean},
+                      {"initial_rms_px", r.initial_rms},
+                      {"converged", r.converged},
+                      {"solver", r.solver_report},
+                      {"stddev", r.stddev}};
   nlohmann::json per = nlohmann::json::array();
   for (size_t i = 0; i < obs.size(); ++i)
-    per.push_back({{"image", obs[i].image}, {"corners", obs[i].pixels.size()}, {"rms_px", r.per_image_rms[i]},
-                   {"mean_px", r.per_image_mean[i]}, {"above_5px", r.per_image_mean[i] > 5.0}});
+    per.push_back({{"image", obs[i].image},
+                   {"corners", obs[i].pixels.size()},
+                   {"rms_px", r.per_image_rms[i]},
+                   {"mean_px", r.per_image_mean[i]},
+                   {"above_5px", r.per_image_mean[i] > 5.0}});
   j["per_image"] = per;
   nlohmann::json outl = nlohmann::json::array();
   for (const auto& o : r.outliers)
-    outl.push_back({{"image", o.image}, {"corner", o.corner}, {"residual_px", o.residual_px},
+    outl.push_back({{"image", o.image},
+                    {"corner", o.corner},
+                    {"residual_px", o.residual_px},
                     {"residual_after_px", o.residual_after_px}});
   j["outliers"] = outl;
   j["outlier_threshold_px"] = r.outlier_threshold_px;
@@ -81,7 +98,8 @@ std::vector<Vec2d> PhysicalRimPoints(const CalibrationInput& input, const Catadi
     }
     points.insert(points.end(), edge.points.begin(), edge.points.end());
   }
-  HOVS_REQUIRE(points.size() >= 20, "--physical", "the rim of the mirror image was not found in the "
+  HOVS_REQUIRE(points.size() >= 20, "--physical",
+               "the rim of the mirror image was not found in the "
                "images (--no-rim calibrates without it)");
   return points;
 }
@@ -92,8 +110,10 @@ cv::Mat ReadGreyImage(const std::filesystem::path& path) {
   io::Image8Bits im = io::ReadImage8(path);
   cv::Mat m(im.height, im.width, im.channels == 3 ? CV_8UC3 : CV_8UC1, im.data.data());
   cv::Mat grey;
-  if (im.channels == 3) cv::cvtColor(m, grey, cv::COLOR_RGB2GRAY);
-  else grey = m.clone();
+  if (im.channels == 3)
+    cv::cvtColor(m, grey, cv::COLOR_RGB2GRAY);
+  else
+    grey = m.clone();
   return grey;
 }
 
@@ -129,7 +149,8 @@ CalibrationInput CornerTableInput(const std::filesystem::path& table, int width,
 CalibrationInput ImageFolderInput(const std::filesystem::path& folder, const CheckerboardDetectOptions& options) {
   CalibrationInput in;
   for (const auto& f : ListImageFiles(folder)) DetectInto(f, f.filename().string(), options, nullptr, &in);
-  in.description = {{"images", folder.string()}, {"corners", "hovs checkerboard detector"},
+  in.description = {{"images", folder.string()},
+                    {"corners", "hovs checkerboard detector"},
                     {"board", {options.board.cols, options.board.rows, options.board.square}}};
   return in;
 }
@@ -146,7 +167,7 @@ std::string CheckDetections(const CalibrationInput& input, const std::string& wh
 CheckerboardSpec ParseBoardSpec(const std::string& text, const std::string& where) {
   CheckerboardSpec b;
   char x1 = 0, x2 = 0;
-  int end = -1;   // where parsing stopped: nothing may follow (7x6x0.03x9 is not 7x6x0.03)
+  int end = -1;  // where parsing stopped: nothing may follow (7x6x0.03x9 is not 7x6x0.03)
   HOVS_REQUIRE(std::sscanf(text.c_str(), "%d%c%d%c%lf%n", &b.cols, &x1, &b.rows, &x2, &b.square, &end) == 5 &&
                    x1 == 'x' && x2 == 'x' && end == static_cast<int>(text.size()),
                where, "expected COLSxROWSxSQUARE (inner corners, square in metres), e.g. 7x6x0.03 (got '", text, "')");
@@ -201,52 +222,76 @@ nlohmann::json MonoCalibrationJson(const CalibrationInput& in, const MonoCalibra
   }
   j["polynomial"] = PolynomialJson(r.polynomial, in.observations);
   const auto& u = r.unified;
-  j["unified"] = {{"model", "unified_radtan"}, {"xi", u.model.xi}, {"fx", u.model.fx}, {"fy", u.model.fy},
-                  {"cx", u.model.cx}, {"cy", u.model.cy},
-                  {"distortion", {u.model.distortion.k1, u.model.distortion.k2, u.model.distortion.p1,
-                                  u.model.distortion.p2}},
-                  {"rms_px", u.rms}, {"mean_px", u.mean}, {"converged", u.converged}, {"solver", u.solver_report},
-                  {"stddev", u.stddev}, {"opencv_yaml", "unified.yaml"}};
+  j["unified"] = {
+      {"model", "unified_radtan"},
+      {"xi", u.model.xi},
+      {"fx", u.model.fx},
+      {"fy", u.model.fy},
+      {"cx", u.model.cx},
+      {"cy", u.model.cy},
+      {"distortion", {u.model.distortion.k1, u.model.distortion.k2, u.model.distortion.p1, u.model.distortion.p2}},
+      {"rms_px", u.rms},
+      {"mean_px", u.mean},
+      {"converged", u.converged},
+      {"solver", u.solver_report},
+      {"stddev", u.stddev},
+      {"opencv_yaml", "unified.yaml"}};
   nlohmann::json orders = nlohmann::json::array();
   for (const auto& o : r.orders)
-    orders.push_back({{"degree", o.degree}, {"rms_px", o.rms_px}, {"mean_px", o.mean_px}, {"converged", o.converged},
+    orders.push_back({{"degree", o.degree},
+                      {"rms_px", o.rms_px},
+                      {"mean_px", o.mean_px},
+                      {"converged", o.converged},
                       {"per_image_mean_px", o.per_image_mean_px}});
   j["order_selection"] = orders;
   if (r.physical) {
     const auto& p = *r.physical;
     const double deg = 180 / M_PI;
     j["physical"] = {{"model", "physical (hyperboloid + camera pose, exact projection)"},
-                     {"a", p.rig.mirror.a}, {"b", p.rig.mirror.b},
+                     {"a", p.rig.mirror.a},
+                     {"b", p.rig.mirror.b},
                      {"tilt_deg", {p.tilt.x() * deg, p.tilt.y() * deg, p.tilt.z() * deg}},
                      {"offset_m", {p.offset.x(), p.offset.y(), p.offset.z()}},
                      {"intrinsics_estimated", options.physical.estimate_intrinsics},
                      {"mirror_estimated", options.physical.estimate_mirror},
-                     {"rms_px", p.rms}, {"converged", p.converged}, {"solver", p.solver_report},
-                     {"rim_points", static_cast<int>(r.rim_points)}, {"rim_rms_px", p.rim_rms}};
+                     {"rms_px", p.rms},
+                     {"converged", p.converged},
+                     {"solver", p.solver_report},
+                     {"rim_points", static_cast<int>(r.rim_points)},
+                     {"rim_rms_px", p.rim_rms}};
   }
   if (r.omnidir) {
     const auto& cv = *r.omnidir;
-    j["opencv_omnidir"] = cv.ok ? nlohmann::json{{"rms_px", cv.rms}, {"opencv_reported_rms", cv.opencv_rms},
-                                                 {"images_used", cv.images_used}, {"xi", cv.xi}, {"fx", cv.fx},
-                                                 {"fy", cv.fy}, {"cx", cv.cx}, {"cy", cv.cy}}
+    j["opencv_omnidir"] = cv.ok ? nlohmann::json{{"rms_px", cv.rms},
+                                                 {"opencv_reported_rms", cv.opencv_rms},
+                                                 {"images_used", cv.images_used},
+                                                 {"xi", cv.xi},
+                                                 {"fx", cv.fx},
+                                                 {"fy", cv.fy},
+                                                 {"cx", cv.cx},
+                                                 {"cy", cv.cy}}
                                 : nlohmann::json{{"error", cv.error}};
   }
   if (in.truth) {
     const auto& rig = *in.truth;
     if (r.physical_vs_truth) {
       const auto& g = *r.physical_vs_truth;
-      j["physical"]["ground_truth"] = {
-          {"mean_ray_angle_deg", g.pixels ? nlohmann::json(g.mean_deg) : nlohmann::json()},
-          {"max_ray_angle_deg", g.pixels ? nlohmann::json(g.max_deg) : nlohmann::json()},
-          {"tilt_error_deg", g.tilt_error_deg}, {"camera_centre_error_m", g.centre_error_m},
-          {"pixels", g.pixels}, {"true_a", rig.mirror.a}, {"true_b", rig.mirror.b},
-          {"note", "over the whole mirror image, points at 2 m, mirror frame"}};
+      j["physical"]["ground_truth"] = {{"mean_ray_angle_deg", g.pixels ? nlohmann::json(g.mean_deg) : nlohmann::json()},
+                                       {"max_ray_angle_deg", g.pixels ? nlohmann::json(g.max_deg) : nlohmann::json()},
+                                       {"tilt_error_deg", g.tilt_error_deg},
+                                       {"camera_centre_error_m", g.centre_error_m},
+                                       {"pixels", g.pixels},
+                                       {"true_a", rig.mirror.a},
+                                       {"true_b", rig.mirror.b},
+                                       {"note", "over the whole mirror image, points at 2 m, mirror frame"}};
     }
     // No pixel to compare (the model's annulus misses the true mirror image): no figure, not a zero.
     const auto& g = *r.polynomial_vs_truth;
     const auto figure = [&](double v) { return g.pixels ? nlohmann::json(v) : nlohmann::json(); };
-    j["ground_truth"] = {{"mean_ray_angle_deg", figure(g.mean_deg)}, {"max_ray_angle_deg", figure(g.max_deg)},
-                         {"pixels", g.pixels}, {"mean_ray_angle_aligned_deg", figure(g.mean_aligned_deg)},
+    j["ground_truth"] = {{"mean_ray_angle_deg", figure(g.mean_deg)},
+                         {"max_ray_angle_deg", figure(g.max_deg)},
+                         {"pixels", g.pixels},
+                         {"mean_ray_angle_aligned_deg", figure(g.mean_aligned_deg)},
                          {"max_ray_angle_aligned_deg", figure(g.max_aligned_deg)},
                          {"frame_rotation_deg", g.frame_rotation_deg},
                          {"true_centre", {rig.camera.cx, rig.camera.cy}}};
@@ -289,7 +334,8 @@ std::string MonoCalibrationSummary(const CalibrationInput& in, const MonoCalibra
          F("%.3f", ph.tilt.y() * 180 / M_PI) + ") deg, offset (" + F("%.2f", ph.offset.x() * 1e3) + ", " +
          F("%.2f", ph.offset.y() * 1e3) + ", " + F("%.2f", ph.offset.z() * 1e3) + ") mm" +
          (r.rim_points ? ", rim " + std::to_string(r.rim_points) + " points (RMS " + F("%.3f", ph.rim_rms) + " px)"
-                       : "") + "\n";
+                       : "") +
+         "\n";
     if (r.physical_vs_truth && r.physical_vs_truth->pixels)
       s += "  physical model vs ground truth: mean ray angle " + F("%.5f", r.physical_vs_truth->mean_deg) + " deg\n";
   }

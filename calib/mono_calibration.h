@@ -25,7 +25,7 @@ struct ImageDetection {
   std::string image, status, corner_refinement;
   bool found = false, complete = false;
   int corners = 0, from_edges = 0, candidates = 0;
-  std::optional<CornerAccuracy> to_truth;   // with the exact corners of a synthetic image
+  std::optional<CornerAccuracy> to_truth;  // with the exact corners of a synthetic image
 };
 
 // What a calibration starts from: corners per image and the image size; for a synthetic dataset the exact rig;
@@ -34,9 +34,9 @@ struct CalibrationInput {
   std::vector<BoardObservation> observations;
   int width = 0, height = 0;
   std::optional<CatadioptricCamera<double>> truth;
-  nlohmann::json description;                 // where the corners came from, recorded in the output
-  std::vector<ImageDetection> detection;      // detection modes only
-  std::vector<std::filesystem::path> paths;   // the image file of each observation (detection modes)
+  nlohmann::json description;                // where the corners came from, recorded in the output
+  std::vector<ImageDetection> detection;     // detection modes only
+  std::vector<std::filesystem::path> paths;  // the image file of each observation (detection modes)
 };
 
 // An image file as 8-bit grey (RGB converted as OpenCV does).
@@ -62,13 +62,13 @@ std::string CheckDetections(const CalibrationInput& input, const std::string& wh
 CheckerboardSpec ParseBoardSpec(const std::string& text, const std::string& where);
 
 struct MonoCalibrationOptions {
-  std::vector<int> degrees = {2, 3, 4, 5, 6};   // the order-selection table
-  PolynomialCalibrationOptions polynomial;       // its degree is the reported model's
-  bool omnidir = false;                          // also OpenCV omnidir on the same corners
+  std::vector<int> degrees = {2, 3, 4, 5, 6};  // the order-selection table
+  PolynomialCalibrationOptions polynomial;     // its degree is the reported model's
+  bool omnidir = false;                        // also OpenCV omnidir on the same corners
   // The physical model, from this design (mirror, camera, occluder; aligned) when set.
   std::optional<CatadioptricCamera<double>> physical_nominal;
   PhysicalCalibrationOptions physical;
-  bool rim = true;                               // fit the rim of the mirror image in every image (with paths)
+  bool rim = true;  // fit the rim of the mirror image in every image (with paths)
 };
 
 struct OrderRow {
@@ -80,8 +80,8 @@ struct OrderRow {
 
 struct MonoCalibration {
   std::vector<OrderRow> orders;
-  PolynomialCalibration polynomial;             // the reported degree
-  std::vector<BoardObservation> inliers;         // the corners it kept
+  PolynomialCalibration polynomial;       // the reported degree
+  std::vector<BoardObservation> inliers;  // the corners it kept
   UnifiedCalibration unified;
   std::optional<PhysicalCalibration> physical;
   size_t rim_points = 0;

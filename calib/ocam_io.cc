@@ -16,10 +16,14 @@ std::string FormatOcamCalibResults(const PolynomialModel<double>& m) {
   HOVS_REQUIRE(!m.inv_poly.empty(), "OCamCalib export", "the model has no inverse polynomial");
   std::string out;
   char buf[64];
-  out += "#polynomial coefficients for the DIRECT mapping function (ocam_model.ss in MATLAB). These are used by cam2world\n\n";
+  out +=
+      "#polynomial coefficients for the DIRECT mapping function (ocam_model.ss in MATLAB). These are used by "
+      "cam2world\n\n";
   out += std::to_string(m.poly.size()) + " ";
   for (double a : m.poly) std::snprintf(buf, sizeof buf, "%e ", a), out += buf;
-  out += "\n\n#polynomial coefficients for the inverse mapping function (ocam_model.invpol in MATLAB). These are used by world2cam\n\n";
+  out +=
+      "\n\n#polynomial coefficients for the inverse mapping function (ocam_model.invpol in MATLAB). These are used by "
+      "world2cam\n\n";
   out += std::to_string(m.inv_poly.size()) + " ";
   for (double a : m.inv_poly) std::snprintf(buf, sizeof buf, "%f ", a), out += buf;
   out += "\n\n#center: \"row\" and \"column\", starting from 0 (C convention)\n\n";
@@ -70,7 +74,8 @@ PolynomialModel<double> ParseOcamCalibResults(const std::string& text, const std
   const auto size = data("the image size");
   HOVS_REQUIRE(size.size() == 2 && size[0] >= 1 && size[1] >= 1 && size[0] <= 65535 && size[1] <= 65535 &&
                    size[0] == std::floor(size[0]) && size[1] == std::floor(size[1]),
-               source + ":" + std::to_string(lineno), "the image size needs height and width, whole numbers in 1..65535");
+               source + ":" + std::to_string(lineno),
+               "the image size needs height and width, whole numbers in 1..65535");
   m.height = static_cast<int>(size[0]), m.width = static_cast<int>(size[1]);
   m.rho_min = 0, m.rho_max = 0.5 * std::hypot(m.width, m.height);
   m.Check(source);

@@ -41,7 +41,8 @@ namespace {
 // parsers refuse), not cv::FileStorage, whose parser loops and takes gigabytes on some malformed files (a
 // matrix whose "cols:" holds another key). The format is a mapping of scalars and !!opencv-matrix mappings
 // (rows, cols, dt, data).
-std::vector<double> ReadMatrix(const YamlReader& r, const YAML::Node& root, const std::string& key, int rows, int cols) {
+std::vector<double> ReadMatrix(const YamlReader& r, const YAML::Node& root, const std::string& key, int rows,
+                               int cols) {
   const YAML::Node n = root[key];
   HOVS_REQUIRE(n.IsDefined() && !n.IsNull(), r.Where(root, key), "missing");
   if (n.IsScalar()) {
@@ -69,9 +70,10 @@ OmnidirFile ParseOmnidirYamlUnguarded(const std::string& text, const std::string
   // Line numbers in errors count from the file's first line: the directive line is kept as a blank one.
   const YAML::Node root = r.Load(first_line == std::string::npos ? std::string() : "\n" + text.substr(first_line + 1));
   HOVS_REQUIRE(root.IsMap(), source, "expected a mapping of the model's parameters");
-  std::set<std::string> known = {"image_width", "image_height", "camera_matrix", "distortion_coefficients", "xi",
-                                 "rms_px", "annulus_px"};
-  for (const char* name : {"xi", "fx", "fy", "cx", "cy", "k1", "k2", "p1", "p2"}) known.insert(std::string("stddev_") + name);
+  std::set<std::string> known = {"image_width", "image_height", "camera_matrix", "distortion_coefficients",
+                                 "xi",          "rms_px",       "annulus_px"};
+  for (const char* name : {"xi", "fx", "fy", "cx", "cy", "k1", "k2", "p1", "p2"})
+    known.insert(std::string("stddev_") + name);
   r.OnlyKeys(root, "", known);
   OmnidirFile f;
   auto& m = f.model;

@@ -22,9 +22,9 @@ OmnidirResult RunOpenCvOmnidir(const std::vector<BoardObservation>& obs, int wid
   cv::Mat K, xi, D, idx;
   std::vector<cv::Mat> rvecs, tvecs;
   try {
-    out.opencv_rms = cv::omnidir::calibrate(object_points, image_points, cv::Size(width, height), K, xi, D, rvecs, tvecs,
-                                            cv::omnidir::CALIB_FIX_SKEW,
-                                            cv::TermCriteria(cv::TermCriteria::COUNT + cv::TermCriteria::EPS, 300, 1e-10), idx);
+    out.opencv_rms = cv::omnidir::calibrate(
+        object_points, image_points, cv::Size(width, height), K, xi, D, rvecs, tvecs, cv::omnidir::CALIB_FIX_SKEW,
+        cv::TermCriteria(cv::TermCriteria::COUNT + cv::TermCriteria::EPS, 300, 1e-10), idx);
   } catch (const cv::Exception& e) {
     out.error = e.what();
     return out;

@@ -13,8 +13,8 @@ namespace hovs::calib {
 struct OmnidirResult {
   bool ok = false;
   std::string error;
-  double rms = 0;            // hovs' definition
-  double opencv_rms = 0;     // the value cv::omnidir::calibrate returns
+  double rms = 0;         // hovs' definition
+  double opencv_rms = 0;  // the value cv::omnidir::calibrate returns
   int images_used = 0;
   double xi = 0, fx = 0, fy = 0, cx = 0, cy = 0, skew = 0;
   double k1 = 0, k2 = 0, p1 = 0, p2 = 0;

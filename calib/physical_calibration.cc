@@ -26,7 +26,8 @@ struct PhysicalReprojection {
     rig.mirror.a = mirror[0], rig.mirror.b = mirror[1];
     rig.camera.fx = intr[0], rig.camera.fy = intr[1], rig.camera.cx = intr[2], rig.camera.cy = intr[3];
     rig.camera.distortion = {dist[0], dist[1], dist[2], dist[3]};
-    rig.cam_from_mirror = CamFromMirrorMisaligned<T>(rig.mirror, Vec3<T>(mis[0], mis[1], mis[2]), Vec3<T>(mis[3], mis[4], mis[5]));
+    rig.cam_from_mirror =
+        CamFromMirrorMisaligned<T>(rig.mirror, Vec3<T>(mis[0], mis[1], mis[2]), Vec3<T>(mis[3], mis[4], mis[5]));
     const T Pb[3] = {T(P_.x()), T(P_.y()), T(P_.z())};
     T X[3];
     ceres::AngleAxisRotatePoint(pose, Pb, X);
@@ -52,7 +53,8 @@ struct RimRayResidual {
     rig.mirror.a = mirror[0], rig.mirror.b = mirror[1];
     rig.camera.fx = intr[0], rig.camera.fy = intr[1], rig.camera.cx = intr[2], rig.camera.cy = intr[3];
     rig.camera.distortion = {dist[0], dist[1], dist[2], dist[3]};
-    rig.cam_from_mirror = CamFromMirrorMisaligned<T>(rig.mirror, Vec3<T>(mis[0], mis[1], mis[2]), Vec3<T>(mis[3], mis[4], mis[5]));
+    rig.cam_from_mirror =
+        CamFromMirrorMisaligned<T>(rig.mirror, Vec3<T>(mis[0], mis[1], mis[2]), Vec3<T>(mis[3], mis[4], mis[5]));
     Vec3<T> ray;
     if (!rig.camera.CamFromImg(Vec2<T>(T(px_.x()), T(px_.y())), &ray)) return false;
     const Rigid3<T> mirror_from_cam = rig.cam_from_mirror.Inverse();
@@ -71,8 +73,9 @@ struct RimRayResidual {
 
 }  // namespace
 
-PhysicalCalibration CalibratePhysical(const std::vector<BoardObservation>& obs, const CatadioptricCamera<double>& nominal,
-                                      const PolynomialCalibration& start, const PhysicalCalibrationOptions& opt) {
+PhysicalCalibration CalibratePhysical(const std::vector<BoardObservation>& obs,
+                                      const CatadioptricCamera<double>& nominal, const PolynomialCalibration& start,
+                                      const PhysicalCalibrationOptions& opt) {
   nominal.Check("physical calibration (nominal rig)");
   HOVS_REQUIRE(obs.size() >= 3 && start.cam_from_board.size() == obs.size(), "physical calibration",
                "needs at least three images and a start with their poses");
@@ -90,8 +93,9 @@ PhysicalCalibration CalibratePhysical(const std::vector<BoardObservation>& obs, 
                                    new PhysicalReprojection(obs[i].board_points[j], obs[i].pixels[j], &nominal)),
                                nullptr, mirror, intr, dist, mis, poses[i].data());
   for (const Vec2d& p : opt.rim_points)
-    problem.AddResidualBlock(new ceres::AutoDiffCostFunction<RimRayResidual, 1, 2, 4, 4, 6>(new RimRayResidual(p, &nominal)),
-                             new ceres::HuberLoss(1.0), mirror, intr, dist, mis);
+    problem.AddResidualBlock(
+        new ceres::AutoDiffCostFunction<RimRayResidual, 1, 2, 4, 4, 6>(new RimRayResidual(p, &nominal)),
+        new ceres::HuberLoss(1.0), mirror, intr, dist, mis);
   if (!opt.estimate_distortion) problem.SetParameterBlockConstant(dist);
   if (!opt.estimate_intrinsics) problem.SetParameterBlockConstant(intr);
   // The mirror is symmetric about its axis: turning the camera about that axis is absorbed by the board poses.
@@ -123,7 +127,8 @@ PhysicalCalibration CalibratePhysical(const std::vector<BoardObservation>& obs, 
     out.mirror_from_board.push_back(ParamsToPose(poses[i].data()));
     for (size_t j = 0; j < obs[i].pixels.size(); ++j, ++n) {
       Vec2d uv;
-      sum2 += unlimited.ImgFromMirrorGeneral(out.mirror_from_board[i] * obs[i].board_points[j], &uv) == ProjectionStatus::kOk
+      sum2 += unlimited.ImgFromMirrorGeneral(out.mirror_from_board[i] * obs[i].board_points[j], &uv) ==
+                      ProjectionStatus::kOk
                   ? (uv - obs[i].pixels[j]).squaredNorm()
                   : 1e12;
     }

@@ -18,7 +18,7 @@ struct PhysicalCalibrationOptions {
   // fixed when they are known (the camera calibrated without the mirror) to measure the tilt.
   bool estimate_intrinsics = true;
   bool estimate_distortion = false;
-  bool estimate_mirror = true;     // a and b; their common scale is weakly observable (only off the focus)
+  bool estimate_mirror = true;  // a and b; their common scale is weakly observable (only off the focus)
   int max_iterations = 200;
   // Points on the rim of the mirror image (calib/rim_positioning.h, DetectRimEdge), seen directly by the camera:
   // each adds a residual (px) for its camera ray missing the rim circle. The rim fixes the camera's height and
@@ -28,11 +28,11 @@ struct PhysicalCalibrationOptions {
 
 struct PhysicalCalibration {
   CatadioptricCamera<double> rig;
-  Vec3d tilt = Vec3d::Zero();      // axis-angle, radians; the component about z is held at 0 (mirror symmetry)
-  Vec3d offset = Vec3d::Zero();    // camera centre minus F2, mirror frame, m
+  Vec3d tilt = Vec3d::Zero();    // axis-angle, radians; the component about z is held at 0 (mirror symmetry)
+  Vec3d offset = Vec3d::Zero();  // camera centre minus F2, mirror frame, m
   std::vector<Rigid3d> mirror_from_board;
   double rms = 0;
-  double rim_rms = 0;              // px, over rim_points (0 without)
+  double rim_rms = 0;  // px, over rim_points (0 without)
   bool converged = false;
   std::string solver_report;
 };

@@ -246,7 +246,8 @@ PolynomialCalibration CalibratePolynomial(const std::vector<BoardObservation>& o
         e(centre, affine, poly.data(), pose_params[i].data(), pose_params[i].data() + 3, res);
         const double d2 = res[0] * res[0] + res[1] * res[1];
         for (auto& o : out.outliers)
-          if (o.image_index == static_cast<int>(i) && o.corner == static_cast<int>(j)) o.residual_after_px = std::sqrt(d2);
+          if (o.image_index == static_cast<int>(i) && o.corner == static_cast<int>(j))
+            o.residual_after_px = std::sqrt(d2);
         if (!out.inlier.empty() && !out.inlier[i][j]) continue;
         s2 += d2, s1 += std::sqrt(d2), ++n;
       }
@@ -281,8 +282,9 @@ PolynomialCalibration CalibratePolynomial(const std::vector<BoardObservation>& o
       for (size_t j = 0; j < obs[i].pixels.size(); ++j) {
         if (!out.inlier[i][j]) continue;
         const double hint = (obs[i].pixels[j] - centre0).norm();
-        auto* cost = new ceres::DynamicAutoDiffCostFunction<ReprojectionError, 8>(new ReprojectionError(
-            obs[i].board_points[j], obs[i].pixels[j], N, scale, hint, opt.estimate_affine ? nullptr : &kIdentityAffine));
+        auto* cost = new ceres::DynamicAutoDiffCostFunction<ReprojectionError, 8>(
+            new ReprojectionError(obs[i].board_points[j], obs[i].pixels[j], N, scale, hint,
+                                  opt.estimate_affine ? nullptr : &kIdentityAffine));
         for (int size : {2, 3, N, 3, 3}) cost->AddParameterBlock(size);
         cost->SetNumResiduals(2);
         problem->AddResidualBlock(cost, MakeLoss(opt.loss, opt.loss_scale), centre, affine, poly.data(),
@@ -382,7 +384,7 @@ std::vector<BoardObservation> LoadCornerCsv(const std::filesystem::path& path) {
 }
 
 std::vector<BoardObservation> ParseCornerCsv(const std::string& text, const std::string& source) {
-  const std::filesystem::path path(source);   // names the table in errors
+  const std::filesystem::path path(source);  // names the table in errors
   std::stringstream in(text);
   std::string line;
   std::getline(in, line);
@@ -391,8 +393,8 @@ std::vector<BoardObservation> ParseCornerCsv(const std::string& text, const std:
                "expected the header image,corner,board_x_mm,board_y_mm,u_px,v_px");
   std::vector<BoardObservation> out;
   std::map<std::string, size_t> index;
-  std::set<std::pair<std::string, long>> ids;   // (image, corner): a row given twice would count twice
-  std::set<std::tuple<std::string, double, double>> points;   // (image, board x, board y)
+  std::set<std::pair<std::string, long>> ids;                // (image, corner): a row given twice would count twice
+  std::set<std::tuple<std::string, double, double>> points;  // (image, board x, board y)
   int lineno = 1;
   while (std::getline(in, line)) {
     ++lineno;
@@ -407,11 +409,13 @@ std::vector<BoardObservation> ParseCornerCsv(const std::string& text, const std:
     while (std::getline(ss, field, ',')) {
       char* end = nullptr;
       const double x = std::strtod(field.c_str(), &end);
-      HOVS_REQUIRE(end != field.c_str() && *end == '\0' && std::isfinite(x), where, "not a finite number: '", field, "'");
+      HOVS_REQUIRE(end != field.c_str() && *end == '\0' && std::isfinite(x), where, "not a finite number: '", field,
+                   "'");
       v.push_back(x);
     }
     HOVS_REQUIRE(v.size() == 5, where, "expected 6 fields (got ", v.size() + 1, ")");
-    HOVS_REQUIRE(v[0] >= 0 && v[0] == std::floor(v[0]) && v[0] < 1e7, where, "the corner index must be a whole number >= 0");
+    HOVS_REQUIRE(v[0] >= 0 && v[0] == std::floor(v[0]) && v[0] < 1e7, where,
+                 "the corner index must be a whole number >= 0");
     for (int k = 1; k < 3; ++k)
       HOVS_REQUIRE(std::abs(v[k]) <= 1e5, where, "board coordinates must be within +-100 m (given in mm)");
     for (int k = 3; k < 5; ++k) HOVS_REQUIRE(std::abs(v[k]) <= 1e6, where, "pixel coordinates must be within +-1e6");
@@ -479,7 +483,8 @@ struct RayFit {
 UnifiedCalibration CalibrateUnified(const std::vector<BoardObservation>& obs, int width, int height,
                                     const PolynomialCalibration& start, const std::string& loss, double loss_scale,
                                     bool estimate_distortion) {
-  HOVS_REQUIRE(start.cam_from_board.size() == obs.size(), "unified calibration", "the start has a different image count");
+  HOVS_REQUIRE(start.cam_from_board.size() == obs.size(), "unified calibration",
+               "the start has a different image count");
   const PolynomialModel<double>& poly = start.model;
   // 1. A unified model through the polynomial model's rays over the observed annulus.
   double intr4[4] = {0.9, 0, poly.cx, poly.cy};

@@ -24,10 +24,10 @@ struct BoardObservation {
 };
 
 struct PolynomialCalibrationOptions {
-  int degree = 4;                 // N; a1 = 0
-  std::string loss = "none";      // none | huber | cauchy
-  double loss_scale = 1.0;        // pixels
-  bool estimate_affine = true;    // c, d, e
+  int degree = 4;                       // N; a1 = 0
+  std::string loss = "none";            // none | huber | cauchy
+  double loss_scale = 1.0;              // pixels
+  bool estimate_affine = true;          // c, d, e
   std::optional<Vec2d> initial_centre;  // default: the image centre
   int max_iterations = 200;
   // Outlier rejection after the first solve: corners above max(outlier_floor_px, outlier_sigmas x the robust
@@ -84,7 +84,7 @@ struct UnifiedCalibration {
   std::vector<Rigid3d> cam_from_board;
   std::vector<double> per_image_rms;
   double rms = 0, mean = 0;
-  std::map<std::string, double> stddev;   // xi, fx, fy, cx, cy, k1, k2, p1, p2 (from the covariance)
+  std::map<std::string, double> stddev;  // xi, fx, fy, cx, cy, k1, k2, p1, p2 (from the covariance)
   bool converged = false;
   std::string solver_report;
 };

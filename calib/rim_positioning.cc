@@ -44,7 +44,7 @@ double Sample(const uint8_t* g, int w, int h, double x, double y) {
 }
 
 struct RimResidual {
-  Vec3d ray;            // camera frame, unit
+  Vec3d ray;  // camera frame, unit
   Rigid3d mirror_from_cam_nominal;
   double R, z, f;
   template <class T>
@@ -122,9 +122,9 @@ MirrorPosition EstimateMirrorPosition(const RimEdge& edge, const CatadioptricCam
   for (const Vec2d& p : edge.points) {
     Vec3d ray;
     if (!rig.camera.CamFromImg(p, &ray)) continue;
-    problem.AddResidualBlock(new ceres::AutoDiffCostFunction<RimResidual, 1, 3>(
-                                 new RimResidual{ray, mirror_from_cam, R, z, f}),
-                             new ceres::HuberLoss(1.0), offset);
+    problem.AddResidualBlock(
+        new ceres::AutoDiffCostFunction<RimResidual, 1, 3>(new RimResidual{ray, mirror_from_cam, R, z, f}),
+        new ceres::HuberLoss(1.0), offset);
   }
   ceres::Solver::Options so;
   so.max_num_iterations = 100;

@@ -24,14 +24,14 @@ namespace hovs::calib {
 
 struct RimEdgeOptions {
   int rays = 360;
-  double search_px = 40;     // around the nominal rim radius
-  double min_step = 20;      // grey levels across the edge (8-bit)
+  double search_px = 40;  // around the nominal rim radius
+  double min_step = 20;   // grey levels across the edge (8-bit)
   void Check(const std::string& where) const;
 };
 
 struct RimEdge {
   std::vector<Vec2d> points;
-  int rays = 0;               // searched
+  int rays = 0;  // searched
 };
 
 // grey: 8-bit, width x height of the nominal camera. Throws hovs::Error on a size mismatch.
@@ -39,12 +39,12 @@ RimEdge DetectRimEdge(const uint8_t* grey, int width, int height, const Catadiop
                       const RimEdgeOptions& options);
 
 struct MirrorPosition {
-  Vec3d offset = Vec3d::Zero();        // camera centre minus its nominal place (second focus), mirror frame, m
-  Vec2d equivalent_tilt_rad = Vec2d::Zero();   // the lateral offset read as a camera tilt instead (about y, x)
+  Vec3d offset = Vec3d::Zero();               // camera centre minus its nominal place (second focus), mirror frame, m
+  Vec2d equivalent_tilt_rad = Vec2d::Zero();  // the lateral offset read as a camera tilt instead (about y, x)
   double rms_px = 0;
   int points = 0;
   Vec2d rim_centre_px = Vec2d::Zero(), nominal_rim_centre_px = Vec2d::Zero();
-  double rim_radius_px = 0, nominal_rim_radius_px = 0;   // circle fits to the detected and the nominal rim
+  double rim_radius_px = 0, nominal_rim_radius_px = 0;  // circle fits to the detected and the nominal rim
   bool converged = false;
   // Confidence: the edge points within kRimInlierPx of the fitted rim, as a count and a fraction of the points.
   int inliers = 0;

@@ -63,7 +63,8 @@ inline bool ParameterStddevs(ceres::Problem* problem, const std::vector<std::pai
   problem->GetParameterBlocks(&all);
   for (const auto& [b, size] : blocks) order.push_back(b);
   for (double* b : all)
-    if (!problem->IsParameterBlockConstant(b) && std::find(order.begin(), order.end(), b) == order.end()) order.push_back(b);
+    if (!problem->IsParameterBlockConstant(b) && std::find(order.begin(), order.end(), b) == order.end())
+      order.push_back(b);
   ceres::Problem::EvaluateOptions eo;
   eo.parameter_blocks = order;
   double cost = 0;
@@ -96,4 +97,3 @@ inline bool ParameterStddevs(ceres::Problem* problem, const std::vector<std::pai
 }
 
 }  // namespace hovs::calib
-

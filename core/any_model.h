@@ -118,8 +118,10 @@ class AnyModel {
       case Kind::kExact:
         return (svp_ ? unbounded_.ImgFromMirrorSvp(X, uv) : unbounded_.ImgFromMirrorGeneral(X, uv)) ==
                ProjectionStatus::kOk;
-      case Kind::kPolynomial: return poly_.ImgFromCam(X, uv);
-      case Kind::kUnified: return unified_.ImgFromCam(X, uv);
+      case Kind::kPolynomial:
+        return poly_.ImgFromCam(X, uv);
+      case Kind::kUnified:
+        return unified_.ImgFromCam(X, uv);
     }
     return false;
   }
@@ -168,27 +170,49 @@ class AnyModel {
         const auto& r = exact_;
         const Vec3d C = r.CameraCentre();
         const auto& q = r.cam_from_mirror.rotation;
-        p = {{"a", r.mirror.a}, {"b", r.mirror.b}, {"rim_diameter", r.mirror.rim_diameter},
-             {"fx", r.camera.fx}, {"fy", r.camera.fy}, {"cx", r.camera.cx}, {"cy", r.camera.cy},
-             {"k1", r.camera.distortion.k1}, {"k2", r.camera.distortion.k2}, {"p1", r.camera.distortion.p1},
-             {"p2", r.camera.distortion.p2}, {"qw", q.w()}, {"qx", q.x()}, {"qy", q.y()}, {"qz", q.z()},
-             {"camera_x", C(0)}, {"camera_y", C(1)}, {"camera_z", C(2)},
-             {"occluder_radius", r.occluder_radius}, {"scene_distance", scene_distance_}};
+        p = {{"a", r.mirror.a},
+             {"b", r.mirror.b},
+             {"rim_diameter", r.mirror.rim_diameter},
+             {"fx", r.camera.fx},
+             {"fy", r.camera.fy},
+             {"cx", r.camera.cx},
+             {"cy", r.camera.cy},
+             {"k1", r.camera.distortion.k1},
+             {"k2", r.camera.distortion.k2},
+             {"p1", r.camera.distortion.p1},
+             {"p2", r.camera.distortion.p2},
+             {"qw", q.w()},
+             {"qx", q.x()},
+             {"qy", q.y()},
+             {"qz", q.z()},
+             {"camera_x", C(0)},
+             {"camera_y", C(1)},
+             {"camera_z", C(2)},
+             {"occluder_radius", r.occluder_radius},
+             {"scene_distance", scene_distance_}};
         break;
       }
       case Kind::kPolynomial: {
-        p = {{"cx", poly_.cx}, {"cy", poly_.cy}, {"c", poly_.c}, {"d", poly_.d}, {"e", poly_.e},
+        p = {{"cx", poly_.cx},           {"cy", poly_.cy},          {"c", poly_.c}, {"d", poly_.d}, {"e", poly_.e},
              {"rho_min", poly_.rho_min}, {"rho_max", poly_.rho_max}};
         for (size_t i = 0; i < poly_.poly.size(); ++i) p.emplace_back("a" + std::to_string(i), poly_.poly[i]);
-        for (size_t i = 0; i < poly_.inv_poly.size(); ++i)
-          p.emplace_back("inv" + std::to_string(i), poly_.inv_poly[i]);
+        for (size_t i = 0; i < poly_.inv_poly.size(); ++i) p.emplace_back("inv" + std::to_string(i), poly_.inv_poly[i]);
         break;
       }
       case Kind::kUnified: {
         const auto& u = unified_;
-        p = {{"xi", u.xi}, {"fx", u.fx}, {"fy", u.fy}, {"cx", u.cx}, {"cy", u.cy}, {"skew", u.skew},
-             {"k1", u.distortion.k1}, {"k2", u.distortion.k2}, {"p1", u.distortion.p1}, {"p2", u.distortion.p2},
-             {"annulus_min", annulus_.first}, {"annulus_max", annulus_.second}};
+        p = {{"xi", u.xi},
+             {"fx", u.fx},
+             {"fy", u.fy},
+             {"cx", u.cx},
+             {"cy", u.cy},
+             {"skew", u.skew},
+             {"k1", u.distortion.k1},
+             {"k2", u.distortion.k2},
+             {"p1", u.distortion.p1},
+             {"p2", u.distortion.p2},
+             {"annulus_min", annulus_.first},
+             {"annulus_max", annulus_.second}};
         break;
       }
     }
@@ -205,7 +229,7 @@ class AnyModel {
   }
 
   Kind kind_ = Kind::kExact;
-  CatadioptricCamera<double> exact_, unbounded_;   // unbounded_: exact_.Unbounded(), for ImgFromPointUnbounded
+  CatadioptricCamera<double> exact_, unbounded_;  // unbounded_: exact_.Unbounded(), for ImgFromPointUnbounded
   PolynomialModel<double> poly_;
   UnifiedModel<double> unified_;
   std::pair<double, double> annulus_{0, 0};

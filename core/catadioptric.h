@@ -32,23 +32,30 @@ namespace hovs {
 
 enum class ProjectionStatus {
   kOk = 0,
-  kMissesMirror,     // the direction from the viewpoint misses the sheet, or meets it outside the rim
-  kInsideMirror,     // the point lies behind the mirror surface (between F1 and the sheet)
-  kOccluded,         // the reflected path is blocked by the camera body
-  kBehindCamera,     // the mirror point is behind the camera's image plane
-  kOutsideImage,     // the pixel falls outside the sensor
-  kNoSolution,       // the law-of-reflection solve found no valid mirror point
+  kMissesMirror,  // the direction from the viewpoint misses the sheet, or meets it outside the rim
+  kInsideMirror,  // the point lies behind the mirror surface (between F1 and the sheet)
+  kOccluded,      // the reflected path is blocked by the camera body
+  kBehindCamera,  // the mirror point is behind the camera's image plane
+  kOutsideImage,  // the pixel falls outside the sensor
+  kNoSolution,    // the law-of-reflection solve found no valid mirror point
 };
 
 inline const char* ToString(ProjectionStatus s) {
   switch (s) {
-    case ProjectionStatus::kOk: return "ok";
-    case ProjectionStatus::kMissesMirror: return "misses the mirror";
-    case ProjectionStatus::kInsideMirror: return "behind the mirror surface";
-    case ProjectionStatus::kOccluded: return "occluded by the camera";
-    case ProjectionStatus::kBehindCamera: return "behind the camera";
-    case ProjectionStatus::kOutsideImage: return "outside the image";
-    case ProjectionStatus::kNoSolution: return "no law-of-reflection solution";
+    case ProjectionStatus::kOk:
+      return "ok";
+    case ProjectionStatus::kMissesMirror:
+      return "misses the mirror";
+    case ProjectionStatus::kInsideMirror:
+      return "behind the mirror surface";
+    case ProjectionStatus::kOccluded:
+      return "occluded by the camera";
+    case ProjectionStatus::kBehindCamera:
+      return "behind the camera";
+    case ProjectionStatus::kOutsideImage:
+      return "outside the image";
+    case ProjectionStatus::kNoSolution:
+      return "no law-of-reflection solution";
   }
   return "unknown";
 }
@@ -81,8 +88,8 @@ template <class T>
 struct CatadioptricCamera {
   HyperboloidMirror<T> mirror;
   PinholeCamera<T> camera;
-  Rigid3<T> cam_from_mirror;   // aligned: identity rotation, translation (0, 0, 2c)
-  T occluder_radius = T(0);    // camera body / lens disc radius around the pinhole
+  Rigid3<T> cam_from_mirror;  // aligned: identity rotation, translation (0, 0, 2c)
+  T occluder_radius = T(0);   // camera body / lens disc radius around the pinhole
 
   // The ideal rig: pinhole at F2, optical axis along the mirror axis.
   static CatadioptricCamera Aligned(const HyperboloidMirror<T>& mirror, const PinholeCamera<T>& camera,
@@ -108,8 +115,7 @@ struct CatadioptricCamera {
   // Projection of a point X given in the mirror frame. Uses the closed form for a single-viewpoint rig and
   // the law-of-reflection solve otherwise. mirror_point (optional) receives M.
   ProjectionStatus ImgFromMirror(const Vec3<T>& X, Vec2<T>* uv, Vec3<T>* mirror_point = nullptr) const {
-    return IsSingleViewpoint() ? ImgFromMirrorSvp(X, uv, mirror_point)
-                               : ImgFromMirrorGeneral(X, uv, mirror_point);
+    return IsSingleViewpoint() ? ImgFromMirrorSvp(X, uv, mirror_point) : ImgFromMirrorGeneral(X, uv, mirror_point);
   }
 
   // Closed form; only meaningful when IsSingleViewpoint().
@@ -173,7 +179,8 @@ struct CatadioptricCamera {
   bool RayFromImg(const Vec2<T>& uv, Vec3<T>* mirror_point, Vec3<T>* direction) const {
     Vec3<T> bearing_cam;
     if (!camera.CamFromImg(uv, &bearing_cam)) return false;
-    return ReflectCameraRay(CameraCentre(), cam_from_mirror.rotation.conjugate() * bearing_cam, mirror_point, direction);
+    return ReflectCameraRay(CameraCentre(), cam_from_mirror.rotation.conjugate() * bearing_cam, mirror_point,
+                            direction);
   }
 
   // Reflection of a ray leaving the camera side (origin o, direction v, mirror frame; e.g. from a point of a
@@ -242,8 +249,8 @@ struct CatadioptricCamera {
     const Vec3d C = ConvertMatrix<double>(Vec3<T>(CameraCentre()));
     const HyperboloidMirror<double> md = mirror.template Cast<double>();
     // The pinhole must be outside the mirror body (on the reflective side of the sheet), below the sheet.
-    const double g = (C(2) + md.c()) * (C(2) + md.c()) / (md.a * md.a) -
-                     (C(0) * C(0) + C(1) * C(1)) / (md.b * md.b) - 1.0;
+    const double g =
+        (C(2) + md.c()) * (C(2) + md.c()) / (md.a * md.a) - (C(0) * C(0) + C(1) * C(1)) / (md.b * md.b) - 1.0;
     const bool inside_upper_cup = g > 0 && C(2) + md.c() > 0;
     HOVS_REQUIRE(!inside_upper_cup, where, "the camera centre (", C.transpose(),
                  " m) lies inside the mirror; it must be below the sheet");

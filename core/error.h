@@ -33,7 +33,7 @@ std::string Concat(const Args&... args) {
 }  // namespace hovs
 
 // Throws hovs::Error(where, message) unless cond holds. For validating inputs and invariants, not hot loops.
-#define HOVS_REQUIRE(cond, where, ...)                                          \
-  do {                                                                          \
+#define HOVS_REQUIRE(cond, where, ...)                                                \
+  do {                                                                                \
     if (!(cond)) throw ::hovs::Error((where), ::hovs::internal::Concat(__VA_ARGS__)); \
   } while (0)

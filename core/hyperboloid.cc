@@ -29,8 +29,8 @@ struct KernelLimits<float> {
 // given), the rim test and ReflectAt. Writes M, d and the lane's flag (0 miss, 1 hit, 2 degenerate).
 template <class T>
 __attribute__((always_inline)) inline void ReflectLane(T cc, T ia2, T ib2, T rim2, T o0, T o1, T o2, T oz, T C, T v0,
-                                                       T v1, T v2, T* M0_out, T* M1_out, T* M2_out, T* d0, T* d1,
-                                                       T* d2, T* flag) {
+                                                       T v1, T v2, T* M0_out, T* M1_out, T* M2_out, T* d0, T* d1, T* d2,
+                                                       T* flag) {
   const T inf = std::numeric_limits<T>::infinity(), zero = 0, one = 1, two = 2;
   const T A = v2 * v2 * ia2 - (v0 * v0 + v1 * v1) * ib2;
   const T B = oz * v2 * ia2 - (o0 * v0 + o1 * v1) * ib2;
@@ -100,8 +100,8 @@ HOVS_VECTOR_CLONES void ReflectRaysKernel(double cc, double ia2, double ib2, dou
 // The count of rays that go up and cross the plane z = zr (from o, which lies below it) within radius^2 lim,
 // without a division: |o_xy vz + (zr - oz) v_xy|^2 <= lim vz^2.
 template <class T>
-HOVS_VECTOR_CLONES int CountRimCrossings(T o0, T o1, T dz, T lim, int n, const T* __restrict vx,
-                                         const T* __restrict vy, const T* __restrict vz) {
+HOVS_VECTOR_CLONES int CountRimCrossings(T o0, T o1, T dz, T lim, int n, const T* __restrict vx, const T* __restrict vy,
+                                         const T* __restrict vz) {
   int count = 0;
   for (int i = 0; i < n; ++i) {
     const T px = o0 * vz[i] + dz * vx[i], py = o1 * vz[i] + dz * vy[i];
@@ -129,8 +129,8 @@ HOVS_VECTOR_CLONES int StoreLaneFlags(int n, const T* __restrict flag, unsigned 
 // The lanes of a block that misses the rim: zero (the caller's z, 0: a value GCC cannot see, or it turns the
 // loop into seven memset calls or rep stos, slow for 64 lanes; so vector stores).
 template <class T>
-HOVS_VECTOR_CLONES void ZeroLanes(int m, T z, T* __restrict Mx, T* __restrict My, T* __restrict Mz,
-                                  T* __restrict dx, T* __restrict dy, T* __restrict dz, unsigned char* __restrict ok) {
+HOVS_VECTOR_CLONES void ZeroLanes(int m, T z, T* __restrict Mx, T* __restrict My, T* __restrict Mz, T* __restrict dx,
+                                  T* __restrict dy, T* __restrict dz, unsigned char* __restrict ok) {
   const unsigned char zb = z != 0 ? 1 : 0;
   for (int i = 0; i < m; ++i) {
     Mx[i] = z, My[i] = z, Mz[i] = z, dx[i] = z, dy[i] = z, dz[i] = z;
@@ -159,8 +159,8 @@ bool MirrorReflector::MissesRim(const Vec3d& o, int n, const double* vx, const d
 }
 
 template <class T>
-int MirrorReflector::ReflectBatchOf(const Vec3d& o, int n, const T* vx, const T* vy, const T* vz, T* Mx, T* My,
-                                    T* Mz, T* dx, T* dy, T* dz, unsigned char* ok) const {
+int MirrorReflector::ReflectBatchOf(const Vec3d& o, int n, const T* vx, const T* vy, const T* vz, T* Mx, T* My, T* Mz,
+                                    T* dx, T* dy, T* dz, unsigned char* ok) const {
   // In blocks, with the lane flags as T (a byte array among doubles stops GCC 12's vectoriser).
   constexpr int kBlock = 64;
   T flag[kBlock];
@@ -177,7 +177,7 @@ int MirrorReflector::ReflectBatchOf(const Vec3d& o, int n, const T* vx, const T*
                      static_cast<T>(C), m, vx + i0, vy + i0, vz + i0, Mx + i0, My + i0, Mz + i0, dx + i0, dy + i0,
                      dz + i0, flag);
     if (StoreLaneFlags<T>(m, flag, ok + i0, &hits) < 2) continue;
-    for (int i = i0; i < i0 + m; ++i) {   // degenerate lanes (flag 2): the scalar solve, in double
+    for (int i = i0; i < i0 + m; ++i) {  // degenerate lanes (flag 2): the scalar solve, in double
       if (ok[i] != 2) continue;
       Vec3d M = Vec3d::Zero(), d = Vec3d::Zero();
       ok[i] = Reflect(o, Vec3d(vx[i], vy[i], vz[i]), &M, &d) ? 1 : 0;
@@ -190,14 +190,13 @@ int MirrorReflector::ReflectBatchOf(const Vec3d& o, int n, const T* vx, const T*
 }
 
 int MirrorReflector::ReflectBatch(const Vec3d& o, int n, const double* vx, const double* vy, const double* vz,
-                                   double* Mx, double* My, double* Mz, double* dx, double* dy, double* dz,
-                                   unsigned char* ok) const {
+                                  double* Mx, double* My, double* Mz, double* dx, double* dy, double* dz,
+                                  unsigned char* ok) const {
   return ReflectBatchOf(o, n, vx, vy, vz, Mx, My, Mz, dx, dy, dz, ok);
 }
 
-int MirrorReflector::ReflectBatch(const Vec3d& o, int n, const float* vx, const float* vy, const float* vz,
-                                   float* Mx, float* My, float* Mz, float* dx, float* dy, float* dz,
-                                   unsigned char* ok) const {
+int MirrorReflector::ReflectBatch(const Vec3d& o, int n, const float* vx, const float* vy, const float* vz, float* Mx,
+                                  float* My, float* Mz, float* dx, float* dy, float* dz, unsigned char* ok) const {
   return ReflectBatchOf(o, n, vx, vy, vz, Mx, My, Mz, dx, dy, dz, ok);
 }
 
@@ -209,10 +208,10 @@ int MirrorReflector::ReflectRays(int n, const double* ox, const double* oy, cons
   int hits = 0;
   for (int i0 = 0; i0 < n; i0 += kBlock) {
     const int m = std::min(kBlock, n - i0);
-    ReflectRaysKernel(c_, ia2_, ib2_, rim2_, m, ox + i0, oy + i0, oz + i0, vx + i0, vy + i0, vz + i0, Mx + i0,
-                      My + i0, Mz + i0, dx + i0, dy + i0, dz + i0, flag);
+    ReflectRaysKernel(c_, ia2_, ib2_, rim2_, m, ox + i0, oy + i0, oz + i0, vx + i0, vy + i0, vz + i0, Mx + i0, My + i0,
+                      Mz + i0, dx + i0, dy + i0, dz + i0, flag);
     if (StoreLaneFlags<double>(m, flag, ok + i0, &hits) < 2) continue;
-    for (int i = i0; i < i0 + m; ++i) {   // degenerate lanes (flag 2): the scalar solve
+    for (int i = i0; i < i0 + m; ++i) {  // degenerate lanes (flag 2): the scalar solve
       if (ok[i] != 2) continue;
       Vec3d M = Vec3d::Zero(), d = Vec3d::Zero();
       ok[i] = Reflect(Vec3d(ox[i], oy[i], oz[i]), Vec3d(vx[i], vy[i], vz[i]), &M, &d) ? 1 : 0;

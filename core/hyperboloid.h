@@ -142,7 +142,6 @@ struct HyperboloidMirror {
   }
 };
 
-
 // The renderer's hot path: the reflection of many camera rays by one mirror in double precision, with the
 // mirror's constants (c, 1/a^2, 1/b^2, rim radius^2) computed once and the normal left unnormalised. The
 // intersection is HyperboloidMirror::IntersectSheetWith itself; the rim test and the law of reflection are
@@ -150,7 +149,10 @@ struct HyperboloidMirror {
 class MirrorReflector {
  public:
   explicit MirrorReflector(const HyperboloidMirror<double>& m)
-      : c_(m.c()), ia2_(1.0 / (m.a * m.a)), ib2_(1.0 / (m.b * m.b)), rim2_(m.RimRadius() * m.RimRadius() * (1 + 1e-12)),
+      : c_(m.c()),
+        ia2_(1.0 / (m.a * m.a)),
+        ib2_(1.0 / (m.b * m.b)),
+        rim2_(m.RimRadius() * m.RimRadius() * (1 + 1e-12)),
         rim_z_(m.RimZ()) {}
 
   // Ray o + t v (mirror frame, v any length): the mirror point within the rim and the unit reflected direction.
@@ -170,8 +172,8 @@ class MirrorReflector {
   // where ray i meets the mirror within the rim, else 0; M and d are meaningful only where ok[i] = 1. Returns the
   // count of rays that meet it.
   // Blocks of rays that all pass the rim plane outside the rim are answered without solving: see MissesRim.
-  int ReflectBatch(const Vec3d& o, int n, const double* vx, const double* vy, const double* vz, double* Mx,
-                   double* My, double* Mz, double* dx, double* dy, double* dz, unsigned char* ok) const;
+  int ReflectBatch(const Vec3d& o, int n, const double* vx, const double* vy, const double* vz, double* Mx, double* My,
+                   double* Mz, double* dx, double* dy, double* dz, unsigned char* ok) const;
   // The same in single precision (twice the lanes per vector): the renderer's colour samples. The same operations
   // in float (the mirror's constants and the origin's terms rounded from double), so M and d carry single
   // precision's relative rounding, about 1e-7 (tests bound them against Reflect); the rim test is made on the
@@ -212,8 +214,8 @@ class MirrorReflector {
   template <class T>
   bool MissesRimOf(const Vec3d& o, int n, const T* vx, const T* vy, const T* vz) const;
   template <class T>
-  int ReflectBatchOf(const Vec3d& o, int n, const T* vx, const T* vy, const T* vz, T* Mx, T* My, T* Mz, T* dx,
-                     T* dy, T* dz, unsigned char* ok) const;
+  int ReflectBatchOf(const Vec3d& o, int n, const T* vx, const T* vy, const T* vz, T* Mx, T* My, T* Mz, T* dx, T* dy,
+                     T* dz, unsigned char* ok) const;
   double c_, ia2_, ib2_, rim2_, rim_z_;
 };
 

@@ -48,7 +48,7 @@ void RemoveRegistered() {
   sigaddset(&one, sig);
   pthread_sigmask(SIG_UNBLOCK, &one, nullptr);
   raise(sig);
-  std::_Exit(128 + sig);   // a signal whose default action does not end the process
+  std::_Exit(128 + sig);  // a signal whose default action does not end the process
 }
 
 void TakeSignals() {
@@ -61,7 +61,7 @@ void TakeSignals() {
     int sig = 0;
     if (sigwait(&set, &sig) != 0) continue;
     std::atomic<bool>* flag = g_flag.exchange(nullptr);
-    if (flag) {   // the command ends by itself
+    if (flag) {  // the command ends by itself
       flag->store(true);
       asked = std::chrono::steady_clock::now();
       continue;

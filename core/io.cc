@@ -48,7 +48,7 @@ fs::path Resolved(const fs::path& p) {
 bool Within(const fs::path& inner, const fs::path& outer) {
   auto i = inner.begin(), o = outer.begin();
   for (; o != outer.end(); ++o, ++i) {
-    if (o->empty()) continue;   // a trailing separator
+    if (o->empty()) continue;  // a trailing separator
     if (i == inner.end() || *i != *o) return false;
   }
   return true;
@@ -167,7 +167,8 @@ void CleanStaleStaging(const fs::path& parent, const std::string& name, bool kee
       const std::string prefix = "." + name + tag;
       if (f.rfind(prefix, 0) != 0) continue;
       const size_t end = f.find('-', prefix.size());
-      const std::string digits = f.substr(prefix.size(), end == std::string::npos ? std::string::npos : end - prefix.size());
+      const std::string digits =
+          f.substr(prefix.size(), end == std::string::npos ? std::string::npos : end - prefix.size());
       if (digits.empty() || digits.size() > 9 || !std::all_of(digits.begin(), digits.end(), ::isdigit)) continue;
       const pid_t pid = static_cast<pid_t>(std::stol(digits));
       if (pid <= 0 || ::kill(pid, 0) == 0 || errno != ESRCH) continue;
@@ -213,7 +214,8 @@ void CheckOutputFolder(const fs::path& target, const std::string& command, const
   const fs::path cwd = fs::current_path(ec);
   HOVS_REQUIRE(ec || !Within(Resolved(cwd), resolved), where,
                "the output folder holds the current directory; hovs replaces its output folder, so give a folder "
-               "below it (for example --out ", (target / "out").string(), ")");
+               "below it (for example --out ",
+               (target / "out").string(), ")");
   std::vector<fs::path> all = inputs;
   for (const auto& p : NotedInputs()) all.push_back(p);
   for (const auto& in : all) {
@@ -225,7 +227,8 @@ void CheckOutputFolder(const fs::path& target, const std::string& command, const
   }
   const auto st = fs::symlink_status(target, ec);
   if (!fs::exists(st)) return;
-  HOVS_REQUIRE(!fs::is_symlink(st), where, "is a symbolic link; hovs replaces output folders and never follows a link "
+  HOVS_REQUIRE(!fs::is_symlink(st), where,
+               "is a symbolic link; hovs replaces output folders and never follows a link "
                "to do so: give the folder itself");
   HOVS_REQUIRE(fs::is_directory(st), where, "exists and is not a folder; hovs never replaces a file with its output");
   if (fs::is_empty(target, ec) && !ec) return;
@@ -242,7 +245,8 @@ void CheckOutputFile(const fs::path& path, const std::string& signature, const s
   HOVS_REQUIRE(!path.empty() && !path.filename().empty(), where, "name the output file itself");
   const fs::path resolved = Resolved(path);
   for (const auto& in : NotedInputs())
-    HOVS_REQUIRE(Resolved(in) != resolved, where, "is an input of this run; hovs never writes its output over an input");
+    HOVS_REQUIRE(Resolved(in) != resolved, where,
+                 "is an input of this run; hovs never writes its output over an input");
   std::error_code ec;
   const auto st = fs::symlink_status(path, ec);
   if (!fs::exists(st)) return;

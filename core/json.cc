@@ -11,7 +11,7 @@ namespace hovs {
 
 nlohmann::json ParseJson(const std::string& text, const std::string& where) {
   constexpr int kMaxDepth = 256;
-  std::vector<std::set<std::string>> keys;   // one set per open object
+  std::vector<std::set<std::string>> keys;  // one set per open object
   std::string duplicate;
   int too_deep = 0;
   const nlohmann::json::parser_callback_t check = [&](int depth, nlohmann::json::parse_event_t event,
@@ -31,15 +31,17 @@ nlohmann::json ParseJson(const std::string& text, const std::string& where) {
     // The line and column of the byte the parser stopped at.
     size_t line = 1, column = 1;
     for (size_t i = 0; i + 1 < e.byte && i < text.size(); ++i) {
-      if (text[i] == '\n') ++line, column = 1;
-      else ++column;
+      if (text[i] == '\n')
+        ++line, column = 1;
+      else
+        ++column;
     }
     std::string what = e.what();
     const size_t colon = what.rfind(": ");
     if (colon != std::string::npos) what = what.substr(colon + 2);
-    throw Error(where, "not valid JSON at line " + std::to_string(line) + ", column " + std::to_string(column) +
-                           ": " + what);
-  } catch (const nlohmann::json::exception& e) {   // a number out of range (1e999), ...
+    throw Error(where,
+                "not valid JSON at line " + std::to_string(line) + ", column " + std::to_string(column) + ": " + what);
+  } catch (const nlohmann::json::exception& e) {  // a number out of range (1e999), ...
     std::string what = e.what();
     const size_t bracket = what.find("] ");
     throw Error(where, "not valid JSON: " + (bracket == std::string::npos ? what : what.substr(bracket + 2)));
@@ -73,8 +75,8 @@ double JsonNumber(const nlohmann::json& j, const char* key, const std::string& w
 
 int64_t JsonInteger(const nlohmann::json& j, const char* key, int64_t lo, int64_t hi, const std::string& where) {
   const double x = JsonNumber(j, key, where);
-  HOVS_REQUIRE(x == std::floor(x) && x >= double(lo) && x <= double(hi), where + "." + key, "expected a whole number in ",
-               lo, "..", hi, " (got ", j[key].dump(), ")");
+  HOVS_REQUIRE(x == std::floor(x) && x >= double(lo) && x <= double(hi), where + "." + key,
+               "expected a whole number in ", lo, "..", hi, " (got ", j[key].dump(), ")");
   return static_cast<int64_t>(x);
 }
 
@@ -85,7 +87,8 @@ std::vector<double> JsonNumbers(const nlohmann::json& j, const char* key, size_t
   HOVS_REQUIRE(a.is_array() && a.size() >= min_size && a.size() <= max_size, where + "." + key, "expected a list of ",
                min_size, " to ", max_size, " numbers");
   std::vector<double> v;
-  for (size_t k = 0; k < a.size(); ++k) v.push_back(FiniteNumber(a[k], where + "." + key + "[" + std::to_string(k) + "]"));
+  for (size_t k = 0; k < a.size(); ++k)
+    v.push_back(FiniteNumber(a[k], where + "." + key + "[" + std::to_string(k) + "]"));
   return v;
 }
 

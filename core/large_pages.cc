@@ -57,7 +57,7 @@ void UnmapLarge(void* p, std::size_t) noexcept { std::free(p); }
 struct KeptBuffers {
   std::mutex mutex;
   std::size_t max_bytes = 0, bytes = 0;
-  std::vector<std::pair<void*, std::size_t>> buffers;   // (address, length)
+  std::vector<std::pair<void*, std::size_t>> buffers;  // (address, length)
 
   // Unmaps the longest kept buffers until at most `limit` bytes are kept. Caller holds the mutex.
   void TrimTo(std::size_t limit) noexcept {
@@ -70,7 +70,7 @@ struct KeptBuffers {
   }
 };
 KeptBuffers& Kept() {
-  static KeptBuffers* kept = new KeptBuffers;   // never destroyed: buffers may be freed during static destruction
+  static KeptBuffers* kept = new KeptBuffers;  // never destroyed: buffers may be freed during static destruction
   return *kept;
 }
 }  // namespace
@@ -104,7 +104,7 @@ void FreeLargePages(void* p, std::size_t bytes) noexcept {
         kept.buffers.emplace_back(p, len);
         kept.bytes += len;
         return;
-      } catch (...) {   // no memory for the list's entry: unmap instead
+      } catch (...) {  // no memory for the list's entry: unmap instead
       }
     }
   }
@@ -180,7 +180,8 @@ void RequireMemory(const std::string& where, const std::string& what, std::size_
                    std::optional<std::size_t> available, const std::string& remedy) {
   if (!available || need <= *available) return;
   char text[96];
-  std::snprintf(text, sizeof text, " needs %.2f GB of memory; %.2f GB are available: ", static_cast<double>(need) * 1e-9,
+  std::snprintf(text, sizeof text,
+                " needs %.2f GB of memory; %.2f GB are available: ", static_cast<double>(need) * 1e-9,
                 static_cast<double>(*available) * 1e-9);
   throw Error(where, what + text + remedy);
 }

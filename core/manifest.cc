@@ -12,14 +12,21 @@ namespace {
 
 // The keys each object of a manifest may hold: every key a hovs writer (render, dataset, capture) puts there. A
 // key outside the list is a misspelling or a manifest of another tool, refused by name.
-const std::set<std::string> kTopKeys = {"format",        "version", "kind",          "name",       "seed",
-                                        "render_seed",   "versions", "scene",        "units",      "frames",
-                                        "boards",        "generator", "render_stats", "statistics", "status",
-                                        "unpaired_frames", "writer", "incomplete_frames", "note"};
-const std::set<std::string> kFrameKeys = {"id", "views", "world_from_board", "world_from_rig", "render_seconds", "rays"};
-const std::set<std::string> kViewKeys = {"unit",      "image",        "ground_truth", "device_ns", "system_ns",
-                                         "frame_id",  "pixel_format", "width",        "height",    "serial",
-                                         "exposure_us", "gain"};
+const std::set<std::string> kTopKeys = {"format",       "version",
+                                        "kind",         "name",
+                                        "seed",         "render_seed",
+                                        "versions",     "scene",
+                                        "units",        "frames",
+                                        "boards",       "generator",
+                                        "render_stats", "statistics",
+                                        "status",       "unpaired_frames",
+                                        "writer",       "incomplete_frames",
+                                        "note"};
+const std::set<std::string> kFrameKeys = {"id",  "views", "world_from_board", "world_from_rig", "render_seconds",
+                                          "rays"};
+const std::set<std::string> kViewKeys = {"unit",      "image",    "ground_truth", "device_ns",
+                                         "system_ns", "frame_id", "pixel_format", "width",
+                                         "height",    "serial",   "exposure_us",  "gain"};
 const std::set<std::string> kTruthKeys = {"exr", "sidecar"};
 
 void OnlyKeys(const nlohmann::json& j, const std::set<std::string>& known, const std::string& where) {
@@ -54,8 +61,9 @@ void CheckBoardFields(const nlohmann::json& b, const std::string& where) {
       HOVS_REQUIRE(b[key].is_number() && b[key].get<double>() > 0 && b[key].get<double>() <= 100, where + "." + key,
                    "must be a length in (0, 100] m");
   if (b.contains("separation"))
-    HOVS_REQUIRE(b["separation"].is_number() && b["separation"].get<double>() >= 0 && b["separation"].get<double>() <= 100,
-                 where + ".separation", "must be a length in [0, 100] m");
+    HOVS_REQUIRE(
+        b["separation"].is_number() && b["separation"].get<double>() >= 0 && b["separation"].get<double>() <= 100,
+        where + ".separation", "must be a length in [0, 100] m");
 }
 
 }  // namespace
@@ -63,9 +71,10 @@ void CheckBoardFields(const nlohmann::json& b, const std::string& where) {
 void CheckDatasetManifest(const nlohmann::json& m, const std::string& source) {
   HOVS_REQUIRE(m.is_object() && JsonText(m, "format") == "hovs-dataset", source, "not a hovs dataset manifest");
   OnlyKeys(m, kTopKeys, source);
-  HOVS_REQUIRE(m.contains("version") && m["version"].is_number_integer() && m["version"].get<int64_t>() == kManifestVersion,
-               source + " (version)", "this hovs reads dataset manifests of version ", kManifestVersion, " (got ",
-               m.contains("version") ? m["version"].dump() : std::string("none"), ")");
+  HOVS_REQUIRE(
+      m.contains("version") && m["version"].is_number_integer() && m["version"].get<int64_t>() == kManifestVersion,
+      source + " (version)", "this hovs reads dataset manifests of version ", kManifestVersion, " (got ",
+      m.contains("version") ? m["version"].dump() : std::string("none"), ")");
   HOVS_REQUIRE(m.contains("units") && m["units"].is_array() && m.contains("frames") && m["frames"].is_array(), source,
                "the manifest lacks 'units' or 'frames'");
   std::set<std::string> names;
@@ -82,19 +91,21 @@ void CheckDatasetManifest(const nlohmann::json& m, const std::string& source) {
   };
   if (m.contains("boards")) {
     HOVS_REQUIRE(m["boards"].is_array() && m["boards"].size() <= 64, source + " (boards)", "must be a list of boards");
-    for (size_t b = 0; b < m["boards"].size(); ++b) CheckBoardFields(m["boards"][b], source + " (boards[" + std::to_string(b) + "])");
+    for (size_t b = 0; b < m["boards"].size(); ++b)
+      CheckBoardFields(m["boards"][b], source + " (boards[" + std::to_string(b) + "])");
   }
   std::set<int64_t> ids;
   for (size_t f = 0; f < m["frames"].size(); ++f) {
     const auto& fr = m["frames"][f];
     const std::string wf = "frames[" + std::to_string(f) + "]", fwhere = source + " (" + wf + ")";
-    HOVS_REQUIRE(fr.is_object() && fr.contains("views") && fr["views"].is_array(), fwhere, "a frame needs a 'views' list");
+    HOVS_REQUIRE(fr.is_object() && fr.contains("views") && fr["views"].is_array(), fwhere,
+                 "a frame needs a 'views' list");
     OnlyKeys(fr, kFrameKeys, fwhere);
     HOVS_REQUIRE(fr.contains("id") && fr["id"].is_number_integer() && fr["id"].get<int64_t>() >= 0 &&
                      fr["id"].get<int64_t>() < (int64_t(1) << 31),
                  source + " (" + wf + ".id)", "a frame needs a non-negative integer 'id'");
-    HOVS_REQUIRE(ids.insert(fr["id"].get<int64_t>()).second, source + " (" + wf + ".id)", "frame id ", fr["id"].get<int64_t>(),
-                 " appears twice");
+    HOVS_REQUIRE(ids.insert(fr["id"].get<int64_t>()).second, source + " (" + wf + ".id)", "frame id ",
+                 fr["id"].get<int64_t>(), " appears twice");
     std::set<std::string> units_seen;
     for (size_t v = 0; v < fr["views"].size(); ++v) {
       const auto& view = fr["views"][v];
@@ -102,8 +113,8 @@ void CheckDatasetManifest(const nlohmann::json& m, const std::string& source) {
       HOVS_REQUIRE(view.is_object() && is_text(view, "unit") && is_text(view, "image"), where,
                    "a view needs the strings 'unit' and 'image'");
       OnlyKeys(view, kViewKeys, where);
-      HOVS_REQUIRE(names.count(view["unit"].get<std::string>()) == 1, where, "unit '",
-                   view["unit"].get<std::string>(), "' is not among the manifest's units");
+      HOVS_REQUIRE(names.count(view["unit"].get<std::string>()) == 1, where, "unit '", view["unit"].get<std::string>(),
+                   "' is not among the manifest's units");
       HOVS_REQUIRE(units_seen.insert(view["unit"].get<std::string>()).second, where, "a second view of unit '",
                    view["unit"].get<std::string>(), "' in one frame");
       CheckRelativePath(view, "image", where);
@@ -121,9 +132,9 @@ void CheckDatasetManifest(const nlohmann::json& m, const std::string& source) {
                      "must be an unsigned integer");
       for (const char* side : {"width", "height"})
         if (view.contains(side))
-          HOVS_REQUIRE(view[side].is_number_integer() && view[side].get<int64_t>() >= 1 &&
-                           view[side].get<int64_t>() <= 65535,
-                       source + " (" + key + "." + side + ")", "must be an integer in 1..65535");
+          HOVS_REQUIRE(
+              view[side].is_number_integer() && view[side].get<int64_t>() >= 1 && view[side].get<int64_t>() <= 65535,
+              source + " (" + key + "." + side + ")", "must be an integer in 1..65535");
     }
   }
 }

@@ -44,10 +44,10 @@ struct PinholeCamera {
   void Check(const std::string& where = "pinhole camera") const {
     const double vals[] = {ScalarPart(fx), ScalarPart(fy), ScalarPart(cx), ScalarPart(cy)};
     for (double v : vals) HOVS_REQUIRE(std::isfinite(v), where, "parameters must be finite");
-    HOVS_REQUIRE(ScalarPart(fx) > 0 && ScalarPart(fy) > 0 && ScalarPart(fx) <= kMaxFocalPx &&
-                     ScalarPart(fy) <= kMaxFocalPx,
-                 where, "focal lengths must be in (0, ", kMaxFocalPx, "] px (fx = ", ScalarPart(fx),
-                 ", fy = ", ScalarPart(fy), ")");
+    HOVS_REQUIRE(
+        ScalarPart(fx) > 0 && ScalarPart(fy) > 0 && ScalarPart(fx) <= kMaxFocalPx && ScalarPart(fy) <= kMaxFocalPx,
+        where, "focal lengths must be in (0, ", kMaxFocalPx, "] px (fx = ", ScalarPart(fx), ", fy = ", ScalarPart(fy),
+        ")");
     CheckImageAndCentre(width, height, ScalarPart(cx), ScalarPart(cy), where);
     distortion.Check(where);
   }
@@ -112,8 +112,7 @@ struct PinholeCamera {
     PinholeCamera<U> c;
     c.width = width;
     c.height = height;
-    c.fx = ConvertScalar<U>(fx), c.fy = ConvertScalar<U>(fy), c.cx = ConvertScalar<U>(cx),
-    c.cy = ConvertScalar<U>(cy);
+    c.fx = ConvertScalar<U>(fx), c.fy = ConvertScalar<U>(fy), c.cx = ConvertScalar<U>(cx), c.cy = ConvertScalar<U>(cy);
     c.distortion = distortion.template Cast<U>();
     return c;
   }

@@ -33,11 +33,11 @@ namespace hovs {
 template <class T>
 struct PolynomialModel {
   int width = 0, height = 0;
-  T cx = T(0), cy = T(0);              // centre: column, row (pixels)
-  T c = T(1), d = T(0), e = T(0);      // affine
-  std::vector<T> poly;                 // a0, a1 (= 0), a2, ..., aN
-  std::vector<double> inv_poly;        // rho = sum inv_poly[i] theta^i
-  double rho_min = 0, rho_max = 0;     // valid annulus (pixels, in the affine-corrected plane)
+  T cx = T(0), cy = T(0);           // centre: column, row (pixels)
+  T c = T(1), d = T(0), e = T(0);   // affine
+  std::vector<T> poly;              // a0, a1 (= 0), a2, ..., aN
+  std::vector<double> inv_poly;     // rho = sum inv_poly[i] theta^i
+  double rho_min = 0, rho_max = 0;  // valid annulus (pixels, in the affine-corrected plane)
 
   int Degree() const { return static_cast<int>(poly.size()) - 1; }
 
@@ -114,8 +114,8 @@ struct PolynomialModel {
   // below max_error_px. Returns the error reached. Throws if theta(rho) is not monotonic or the fit fails.
   double FitInverse(double max_error_px = 0.01, int max_degree = 24) {
     static_assert(std::is_same_v<T, double>, "FitInverse works on a double model");
-    HOVS_REQUIRE(rho_max > rho_min && rho_min >= 0, "polynomial model", "invalid annulus [", rho_min, ", ",
-                 rho_max, "]");
+    HOVS_REQUIRE(rho_max > rho_min && rho_min >= 0, "polynomial model", "invalid annulus [", rho_min, ", ", rho_max,
+                 "]");
     const int n = 4000;
     std::vector<double> theta(n), rho(n);
     for (int i = 0; i < n; ++i) {
@@ -152,8 +152,8 @@ struct PolynomialModel {
   // Throws hovs::Error(where) for a model that cannot be a camera: non-finite or absurd numbers, a centre far
   // outside the image, a0 = 0 (every pixel would look sideways), an annulus where f is not finite.
   void Check(const std::string& where = "polynomial model") const {
-    HOVS_REQUIRE(poly.size() >= 2 && poly.size() <= 21, where, "needs a0, a1 and at most degree 20 (got ",
-                 poly.size(), " coefficients)");
+    HOVS_REQUIRE(poly.size() >= 2 && poly.size() <= 21, where, "needs a0, a1 and at most degree 20 (got ", poly.size(),
+                 " coefficients)");
     for (const auto& a : poly) HOVS_REQUIRE(std::isfinite(ScalarPart(a)), where, "coefficients must be finite");
     HOVS_REQUIRE(ScalarPart(poly[1]) == 0, where, "a1 must be 0 (got ", ScalarPart(poly[1]), ")");
     HOVS_REQUIRE(ScalarPart(poly[0]) != 0 && std::abs(ScalarPart(poly[0])) <= kMaxFocalPx, where,
@@ -163,7 +163,8 @@ struct PolynomialModel {
                    "the affine terms c, d, e must be finite and within +-10 (c is about 1; got ", ScalarPart(v), ")");
     HOVS_REQUIRE(std::abs(ScalarPart(c - d * e)) >= 0.1, where, "the affine matrix is (nearly) singular");
     CheckImageAndCentre(width, height, ScalarPart(cx), ScalarPart(cy), where);
-    HOVS_REQUIRE(inv_poly.size() <= 64, where, "the inverse polynomial has ", inv_poly.size(), " coefficients (at most 64)");
+    HOVS_REQUIRE(inv_poly.size() <= 64, where, "the inverse polynomial has ", inv_poly.size(),
+                 " coefficients (at most 64)");
     for (double a : inv_poly) HOVS_REQUIRE(std::isfinite(a), where, "inverse polynomial coefficients must be finite");
     HOVS_REQUIRE(std::isfinite(rho_min) && std::isfinite(rho_max) && rho_min >= 0 && rho_max >= rho_min &&
                      (width == 0 || rho_max <= 2.0 * (width + height)),

@@ -65,10 +65,10 @@ struct UnifiedModel {
   void Check(const std::string& where = "unified model") const {
     HOVS_REQUIRE(std::isfinite(ScalarPart(xi)) && ScalarPart(xi) >= 0 && ScalarPart(xi) <= 100, where,
                  "xi must be a number in [0, 100] (got ", ScalarPart(xi), ")");
-    HOVS_REQUIRE(ScalarPart(fx) > 0 && ScalarPart(fy) > 0 && ScalarPart(fx) <= kMaxFocalPx &&
-                     ScalarPart(fy) <= kMaxFocalPx,
-                 where, "focal lengths must be in (0, ", kMaxFocalPx, "] px (fx = ", ScalarPart(fx), ", fy = ",
-                 ScalarPart(fy), ")");
+    HOVS_REQUIRE(
+        ScalarPart(fx) > 0 && ScalarPart(fy) > 0 && ScalarPart(fx) <= kMaxFocalPx && ScalarPart(fy) <= kMaxFocalPx,
+        where, "focal lengths must be in (0, ", kMaxFocalPx, "] px (fx = ", ScalarPart(fx), ", fy = ", ScalarPart(fy),
+        ")");
     HOVS_REQUIRE(std::isfinite(ScalarPart(skew)) && std::abs(ScalarPart(skew)) <= kMaxFocalPx, where,
                  "skew must be finite (got ", ScalarPart(skew), ")");
     CheckImageAndCentre(width, height, ScalarPart(cx), ScalarPart(cy), where);
@@ -93,12 +93,12 @@ UnifiedModel<T> UnifiedFromCatadioptric(const CatadioptricCamera<T>& rig) {
   HOVS_REQUIRE(rig.IsSingleViewpoint(1e-12), "unified model from design",
                "the camera centre is not at the second focus: no single viewpoint, no unified model");
   const auto& q = rig.cam_from_mirror.rotation;
-  const double angle = 2 * std::atan2(std::sqrt(ScalarPart(q.x()) * ScalarPart(q.x()) +
-                                                ScalarPart(q.y()) * ScalarPart(q.y()) +
-                                                ScalarPart(q.z()) * ScalarPart(q.z())),
-                                      std::abs(ScalarPart(q.w())));
-  HOVS_REQUIRE(angle < 1e-12, "unified model from design",
-               "the camera is rotated relative to the mirror axis (", angle, " rad)");
+  const double angle =
+      2 * std::atan2(std::sqrt(ScalarPart(q.x()) * ScalarPart(q.x()) + ScalarPart(q.y()) * ScalarPart(q.y()) +
+                               ScalarPart(q.z()) * ScalarPart(q.z())),
+                     std::abs(ScalarPart(q.w())));
+  HOVS_REQUIRE(angle < 1e-12, "unified model from design", "the camera is rotated relative to the mirror axis (", angle,
+               " rad)");
   const T a = rig.mirror.a, b = rig.mirror.b, c = rig.mirror.c();
   const T den = T(2) * a * a + b * b;
   const T eta = b * b / den;

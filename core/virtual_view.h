@@ -47,10 +47,14 @@ enum class ViewProjection { kPerspective, kCylindrical, kLongLat, kEpipolar };
 
 inline const char* ToString(ViewProjection p) {
   switch (p) {
-    case ViewProjection::kPerspective: return "perspective";
-    case ViewProjection::kCylindrical: return "cylindrical";
-    case ViewProjection::kLongLat: return "longlat";
-    case ViewProjection::kEpipolar: return "epipolar";
+    case ViewProjection::kPerspective:
+      return "perspective";
+    case ViewProjection::kCylindrical:
+      return "cylindrical";
+    case ViewProjection::kLongLat:
+      return "longlat";
+    case ViewProjection::kEpipolar:
+      return "epipolar";
   }
   return "?";
 }
@@ -75,8 +79,8 @@ struct VirtualView {
   ViewProjection projection = ViewProjection::kPerspective;
   int width = 0, height = 0;
   Eigen::Quaternion<T> mirror_from_view = Eigen::Quaternion<T>::Identity();
-  PinholeCamera<T> camera;                 // perspective only (no distortion)
-  T azimuth_centre = T(0), azimuth_span = T(2 * M_PI);   // panoramas (radians)
+  PinholeCamera<T> camera;                              // perspective only (no distortion)
+  T azimuth_centre = T(0), azimuth_span = T(2 * M_PI);  // panoramas (radians)
   T elevation_min = T(-M_PI / 4), elevation_max = T(M_PI / 4);
 
   // A perspective view with horizontal field of view hfov (radians), principal point at the image centre.
@@ -92,8 +96,8 @@ struct VirtualView {
     v.mirror_from_view = MirrorFromPerspective<T>(yaw, pitch, roll);
     return v;
   }
-  static VirtualView Panorama(ViewProjection p, int w, int h, const T& e_min, const T& e_max,
-                              const T& az_centre = T(0), const T& az_span = T(2 * M_PI)) {
+  static VirtualView Panorama(ViewProjection p, int w, int h, const T& e_min, const T& e_max, const T& az_centre = T(0),
+                              const T& az_span = T(2 * M_PI)) {
     VirtualView v;
     v.projection = p;
     v.width = w, v.height = h;

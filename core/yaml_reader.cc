@@ -40,8 +40,8 @@ const YAML::Node& YamlReader::Require(const YAML::Node& map, const std::string& 
                                       YAML::Node* out) const {
   HOVS_REQUIRE(map.IsMap(), Where(map, path), "expected a mapping with '", key, "'");
   *out = map[key];
-  HOVS_REQUIRE(out->IsDefined() && !out->IsNull(), Where(map, path), "missing '",
-               path.empty() ? key : path + "." + key, "'");
+  HOVS_REQUIRE(out->IsDefined() && !out->IsNull(), Where(map, path), "missing '", path.empty() ? key : path + "." + key,
+               "'");
   return *out;
 }
 
@@ -78,9 +78,8 @@ uint64_t YamlReader::Seed(const YAML::Node& n, const std::string& key) const {
 
 std::string YamlReader::Name(const YAML::Node& n, const std::string& key) const {
   const std::string s = String(n, key);
-  const bool chars = std::all_of(s.begin(), s.end(), [](unsigned char c) {
-    return std::isalnum(c) || c == '_' || c == '-' || c == '.';
-  });
+  const bool chars = std::all_of(s.begin(), s.end(),
+                                 [](unsigned char c) { return std::isalnum(c) || c == '_' || c == '-' || c == '.'; });
   HOVS_REQUIRE(!s.empty() && s.size() <= 64 && chars && s[0] != '.', Where(n, key), "'", s,
                "' is not a usable name (1 to 64 letters, digits, '_', '-' or '.', not starting with '.': it becomes "
                "part of file names)");
@@ -107,7 +106,8 @@ Vec3d YamlReader::Vector3(const YAML::Node& n, const std::string& key) const {
 
 std::array<float, 3> YamlReader::Colour(const YAML::Node& n, const std::string& key) const {
   const Vec3d c = Vector3(n, key);
-  for (int i = 0; i < 3; ++i) HOVS_REQUIRE(c(i) >= 0 && c(i) <= 1, Where(n, key), "colour components must be in [0, 1]");
+  for (int i = 0; i < 3; ++i)
+    HOVS_REQUIRE(c(i) >= 0 && c(i) <= 1, Where(n, key), "colour components must be in [0, 1]");
   return {static_cast<float>(c(0)), static_cast<float>(c(1)), static_cast<float>(c(2))};
 }
 

@@ -23,10 +23,15 @@ nlohmann::json Listing(const std::vector<const SparseDepthPoint*>& ws) {
   nlohmann::json wl = nlohmann::json::array();
   for (size_t k = 0; k < std::min<size_t>(10, ws.size()); ++k) {
     const SparseDepthPoint& w = *ws[k];
-    wl.push_back({{"pair", w.pair}, {"corner", w.corner}, {"rel_error", std::abs(w.rel_error)}, {"range_m", w.range_m},
+    wl.push_back({{"pair", w.pair},
+                  {"corner", w.corner},
+                  {"rel_error", std::abs(w.rel_error)},
+                  {"range_m", w.range_m},
                   {"angle_to_baseline_deg", w.angle_to_baseline_deg},
-                  {"predicted_sigma_rel_0.1px", w.predicted_sigma_rel}, {"ray_gap_mm", w.ray_gap_mm},
-                  {"left_corner_error_px", w.left_corner_error_px}, {"right_corner_error_px", w.right_corner_error_px},
+                  {"predicted_sigma_rel_0.1px", w.predicted_sigma_rel},
+                  {"ray_gap_mm", w.ray_gap_mm},
+                  {"left_corner_error_px", w.left_corner_error_px},
+                  {"right_corner_error_px", w.right_corner_error_px},
                   {"left_refinement", w.left_from_edges ? "edges" : "window"},
                   {"right_refinement", w.right_from_edges ? "edges" : "window"}});
   }
@@ -48,7 +53,7 @@ SparseDepthEvaluation EvaluateSparseDepth(const StereoDataset& d, const AnyModel
                                           const StereoCalibration& c, const std::vector<StereoPairObservation>& pairs) {
   SparseDepthEvaluation out;
   const StereoRig rig{left, right, c.right_from_left};
-  const double px_rad = 0.1 * (M_PI / 2) / std::max(1, d.left_unit.rig.camera.width / 2);   // ~0.1 px at the rim
+  const double px_rad = 0.1 * (M_PI / 2) / std::max(1, d.left_unit.rig.camera.width / 2);  // ~0.1 px at the rim
   const Vec3d base_dir = c.right_from_left.Inverse().translation.normalized();
   std::set<std::tuple<std::string, std::string, int>> outliers;
   for (const auto& x : c.outliers) outliers.insert({x.pair, x.unit, x.corner});
@@ -93,7 +98,10 @@ SparseDepthEvaluation EvaluateSparseDepth(const StereoDataset& d, const AnyModel
 
 nlohmann::json SparseDepthJson(const SparseDepthEvaluation& e) {
   if (e.points.empty()) return nullptr;
-  struct Band { double lo, hi; std::vector<double> rel; };
+  struct Band {
+    double lo, hi;
+    std::vector<double> rel;
+  };
   std::vector<Band> bands = {{0, 1, {}}, {1, 2, {}}, {2, 3, {}}, {3, 5, {}}, {5, 1e9, {}}};
   double worst = 0, ss = 0;
   std::vector<double> all;
@@ -108,14 +116,20 @@ nlohmann::json SparseDepthJson(const SparseDepthEvaluation& e) {
   for (auto& band : bands) {
     if (band.rel.empty()) continue;
     std::sort(band.rel.begin(), band.rel.end());
-    tab.push_back({{"range_m", {band.lo, band.hi > 1e8 ? -1 : band.hi}}, {"points", band.rel.size()},
-                   {"median_rel_error", SortedMedian(band.rel)}, {"max_rel_error", band.rel.back()}});
+    tab.push_back({{"range_m", {band.lo, band.hi > 1e8 ? -1 : band.hi}},
+                   {"points", band.rel.size()},
+                   {"median_rel_error", SortedMedian(band.rel)},
+                   {"max_rel_error", band.rel.back()}});
   }
   const size_t n = e.points.size();
   std::sort(all.begin(), all.end());
-  nlohmann::json j = {{"points", n}, {"rms_rel_error", std::sqrt(ss / n)}, {"max_rel_error", worst},
-                      {"median_rel_error", SortedMedian(all)}, {"p95_rel_error", SortedP95(all)},
-                      {"excluded_outlier_corners", e.excluded_outlier_corners}, {"bands", tab}};
+  nlohmann::json j = {{"points", n},
+                      {"rms_rel_error", std::sqrt(ss / n)},
+                      {"max_rel_error", worst},
+                      {"median_rel_error", SortedMedian(all)},
+                      {"p95_rel_error", SortedP95(all)},
+                      {"excluded_outlier_corners", e.excluded_outlier_corners},
+                      {"bands", tab}};
   std::vector<const SparseDepthPoint*> by_error;
   for (const auto& p : e.points) by_error.push_back(&p);
   std::stable_sort(by_error.begin(), by_error.end(), [](const SparseDepthPoint* a, const SparseDepthPoint* b) {
@@ -129,16 +143,20 @@ nlohmann::json SparseDepthJson(const SparseDepthEvaluation& e) {
   j["worst_points"] = Listing(by_error);
   if (!cond.empty()) {
     std::sort(cond.begin(), cond.end());
-    j["conditioned"] = {{"min_angle_to_baseline_deg", kConditionedAngleDeg}, {"points", cond.size()},
-                        {"median_rel_error", SortedMedian(cond)}, {"p95_rel_error", SortedP95(cond)},
-                        {"max_rel_error", cond.back()}, {"worst_points", Listing(cond_worst)}};
+    j["conditioned"] = {{"min_angle_to_baseline_deg", kConditionedAngleDeg},
+                        {"points", cond.size()},
+                        {"median_rel_error", SortedMedian(cond)},
+                        {"p95_rel_error", SortedP95(cond)},
+                        {"max_rel_error", cond.back()},
+                        {"worst_points", Listing(cond_worst)}};
   }
   return j;
 }
 
 std::string SparseDepthCsv(const SparseDepthEvaluation& e) {
-  std::string s = "pair,corner,range_m,angle_to_baseline_deg,rel_error,predicted_sigma_rel_0.1px,ray_gap_mm,"
-                  "left_corner_error_px,right_corner_error_px\n";
+  std::string s =
+      "pair,corner,range_m,angle_to_baseline_deg,rel_error,predicted_sigma_rel_0.1px,ray_gap_mm,"
+      "left_corner_error_px,right_corner_error_px\n";
   char line[256];
   for (const auto& p : e.points) {
     std::snprintf(line, sizeof line, "%s,%d,%.6f,%.4f,%.8f,%.8f,%.5f,%.5f,%.5f\n", p.pair.c_str(), p.corner, p.range_m,
@@ -155,8 +173,8 @@ double DenseBand::WithinFraction(double limit) const {
   return double(std::count_if(rel.begin(), rel.end(), [&](double e) { return e <= limit; })) / std::max(1, pixels);
 }
 
-DenseDepthEvaluation EvaluateDenseDepth(const Rectification& rect, const DenseDepth& d,
-                                        const std::vector<float>& Z, int truth_width) {
+DenseDepthEvaluation EvaluateDenseDepth(const Rectification& rect, const DenseDepth& d, const std::vector<float>& Z,
+                                        int truth_width) {
   DenseDepthEvaluation e;
   std::vector<float> mx, my;
   rect.left.DecodeView(0, &mx, &my);
@@ -186,7 +204,9 @@ DenseDepthEvaluation EvaluateDenseDepth(const Rectification& rect, const DenseDe
 nlohmann::json DenseBandsJson(const DenseDepthEvaluation& e) {
   nlohmann::json rows = nlohmann::json::array();
   for (const auto& b : e.bands)
-    rows.push_back({{"band_m", {b.lo, b.hi}}, {"pixels", b.pixels}, {"valid_fraction", b.ValidFraction()},
+    rows.push_back({{"band_m", {b.lo, b.hi}},
+                    {"pixels", b.pixels},
+                    {"valid_fraction", b.ValidFraction()},
                     {"median_relative_error", b.rel.empty() ? nlohmann::json() : nlohmann::json(b.Median())},
                     {"within_5_percent_fraction", b.WithinFraction(0.05)}});
   return rows;

@@ -15,7 +15,7 @@ namespace hovs::depth {
 
 struct PoseError {
   double true_baseline_m = 0;
-  double baseline_error_mm = 0;      // calibrated minus true
+  double baseline_error_mm = 0;  // calibrated minus true
   double translation_error_mm = 0;
   double rotation_error_deg = 0;
 };
@@ -28,10 +28,10 @@ PoseError CompareWithTruth(const Rigid3d& right_from_left, double baseline, cons
 struct SparseDepthPoint {
   std::string pair;
   int corner = 0;
-  double rel_error = 0;              // (triangulated - true) / true range, signed
+  double rel_error = 0;  // (triangulated - true) / true range, signed
   double range_m = 0, angle_to_baseline_deg = 0;
   double predicted_sigma_rel = 0, ray_gap_mm = 0;
-  double left_corner_error_px = -1, right_corner_error_px = -1;   // -1: the model cannot project the point
+  double left_corner_error_px = -1, right_corner_error_px = -1;  // -1: the model cannot project the point
   bool left_from_edges = false, right_from_edges = false;
 };
 
@@ -60,11 +60,11 @@ std::string SparseDepthCsv(const SparseDepthEvaluation& evaluation);
 // rectified pixel's true range read at its source pixel, by distance band (1-2, 2-4, 4-8, 8-16, 16-64 m).
 struct DenseBand {
   double lo = 0, hi = 0;
-  int pixels = 0;                    // with ground truth in the band
-  std::vector<double> rel;           // sorted |relative error| of the valid ones
+  int pixels = 0;           // with ground truth in the band
+  std::vector<double> rel;  // sorted |relative error| of the valid ones
   double ValidFraction() const { return double(rel.size()) / std::max(1, pixels); }
-  double Median() const;             // NaN without valid pixels
-  double WithinFraction(double limit) const;   // of all pixels in the band
+  double Median() const;                      // NaN without valid pixels
+  double WithinFraction(double limit) const;  // of all pixels in the band
 };
 
 struct DenseDepthEvaluation {
@@ -77,7 +77,7 @@ struct DenseDepthEvaluation {
 DenseDepthEvaluation EvaluateDenseDepth(const Rectification& rect, const DenseDepth& depth,
                                         const std::vector<float>& truth_range, int truth_width);
 nlohmann::json DenseBandsJson(const DenseDepthEvaluation& evaluation);
-std::string DenseBandsTable(const DenseDepthEvaluation& evaluation);   // the text table hovs depth prints
+std::string DenseBandsTable(const DenseDepthEvaluation& evaluation);  // the text table hovs depth prints
 
 // At most max_points valid pixels, evenly spaced in raster order, as coloured points (left mirror frame) and
 // their range sigmas.

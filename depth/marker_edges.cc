@@ -39,15 +39,15 @@ std::array<bool, 4> RefineMarkerCornersByEdges(const cv::Mat& grey, std::array<V
   if (grey.empty() || grey.type() != CV_8UC1) return refined;
   const auto& c = *corners;
   const Vec2d centroid = 0.25 * (c[0] + c[1] + c[2] + c[3]);
-  std::array<std::optional<EdgeCurve>, 4> sides;   // side k: corner k -> corner k + 1
+  std::array<std::optional<EdgeCurve>, 4> sides;  // side k: corner k -> corner k + 1
   for (int k = 0; k < 4; ++k) {
     const double across = 0.5 * ((c[(k + 1) % 4] - c[(k + 2) % 4]).norm() + (c[(k + 3) % 4] - c[k]).norm()) / o.cells;
     sides[k] = MeasureSide(grey, c[k], c[(k + 1) % 4], centroid, across, o);
   }
   std::array<Vec2d, 4> out = c;
   for (int k = 0; k < 4; ++k) {
-    const auto& a = sides[(k + 3) % 4];   // ends at corner k
-    const auto& b = sides[k];             // starts at corner k
+    const auto& a = sides[(k + 3) % 4];  // ends at corner k
+    const auto& b = sides[k];            // starts at corner k
     if (!a || !b) continue;
     const auto p = calib::IntersectEdgeCurves(*a, a->len, *b, 0);
     if (!p) continue;

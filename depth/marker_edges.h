@@ -25,10 +25,10 @@
 namespace hovs::depth {
 
 struct MarkerEdgeOptions {
-  int cells = 8;                  // cells across the marker (bits + 2 for the black border), e.g. 8 for 6 x 6
-  double min_cell_px = 2.5;       // smaller markers keep their corners as they were
-  double min_contrast = 20;       // grey levels between the dark border and the surround
-  double max_fit_rms_px = 0.35;   // a side whose edge points scatter more is not used
+  int cells = 8;                 // cells across the marker (bits + 2 for the black border), e.g. 8 for 6 x 6
+  double min_cell_px = 2.5;      // smaller markers keep their corners as they were
+  double min_contrast = 20;      // grey levels between the dark border and the surround
+  double max_fit_rms_px = 0.35;  // a side whose edge points scatter more is not used
 };
 
 // corners: the marker's four corners (any consistent order around the marker) in the 8-bit grey image;

@@ -88,9 +88,7 @@ void RectifyOptions::Check(const std::string& where) const {
   HOVS_REQUIRE(phi_min_deg < phi_max_deg && phi_max_deg - phi_min_deg <= 360, where, "bad phi range");
 }
 
-double Rectification::ThetaAt(double u) const {
-  return options.theta_max_deg * kDeg - (u + 0.5) * dtheta;
-}
+double Rectification::ThetaAt(double u) const { return options.theta_max_deg * kDeg - (u + 0.5) * dtheta; }
 
 Vec3d Rectification::LeftBearing(double u, double v) const {
   Vec3d b;
@@ -147,7 +145,8 @@ void DenseOptions::Check(const std::string& where) const {
                "max_relative_sigma must be in (0, 10] (got ", max_relative_sigma, ")");
   HOVS_REQUIRE(std::isfinite(min_theta_deg) && min_theta_deg >= 0 && min_theta_deg < 90, where,
                "min_theta_deg must be in [0, 90) (got ", min_theta_deg, ")");
-  HOVS_REQUIRE(refine_radius >= 2 && refine_radius <= 16, where, "refine_radius must be in 2..16 (got ", refine_radius, ")");
+  HOVS_REQUIRE(refine_radius >= 2 && refine_radius <= 16, where, "refine_radius must be in 2..16 (got ", refine_radius,
+               ")");
 }
 
 namespace {
@@ -175,7 +174,7 @@ cv::Mat MatchCoarseToFine(const cv::Mat& gl, const cv::Mat& gr, const DenseOptio
   cv::pyrDown(gl, hl);
   cv::pyrDown(gr, hr);
   const int nd_half = std::max(16, ((o.num_disparities / 2 + 15) / 16) * 16);
-  const cv::Mat coarse = MatchSgbm(hl, hr, nd_half, o.block_size, 25);   // speckle window: 100 full-res pixels
+  const cv::Mat coarse = MatchSgbm(hl, hr, nd_half, o.block_size, 25);  // speckle window: 100 full-res pixels
   // The coarse disparity at full resolution (bilinear between the half-resolution samples where all four have
   // one, else the nearest), rounded to whole columns (-1: none). Half-resolution pixel (x, y) covers full
   // resolution (2x + 0.5, 2y + 0.5).
@@ -283,12 +282,15 @@ DenseDepth ComputeDenseDepth(const Rectification& r, const unwrap::Image8& left_
   const auto to_grey = [](const unwrap::Image8& im) {
     cv::Mat m(im.height, im.width, im.channels == 3 ? CV_8UC3 : CV_8UC1, const_cast<uint8_t*>(im.data.data()));
     cv::Mat g;
-    if (im.channels == 3) cv::cvtColor(m, g, cv::COLOR_RGB2GRAY); else g = m.clone();
+    if (im.channels == 3)
+      cv::cvtColor(m, g, cv::COLOR_RGB2GRAY);
+    else
+      g = m.clone();
     return g;
   };
   const cv::Mat gl = to_grey(left_rect), gr = to_grey(right_rect);
   const auto m0 = std::chrono::steady_clock::now();
-  cv::Mat disp;   // columns, float; <= 0: no match (OpenCV marks those negative) or infinitely far
+  cv::Mat disp;  // columns, float; <= 0: no match (OpenCV marks those negative) or infinitely far
   if (o.coarse_to_fine) {
     disp = MatchCoarseToFine(gl, gr, o);
   } else {
@@ -310,7 +312,7 @@ DenseDepth ComputeDenseDepth(const Rectification& r, const unwrap::Image8& left_
       d.disparity[k] = static_cast<float>(dcol);
       const double theta_l = r.ThetaAt(u), delta = dcol * r.dtheta;
       const double theta_r = theta_l + delta;
-      if (theta_l < min_theta || theta_r > M_PI - min_theta) continue;   // near the baseline direction
+      if (theta_l < min_theta || theta_r > M_PI - min_theta) continue;  // near the baseline direction
       const double range = RangeFromDisparity(r.baseline, theta_l, delta);
       const double sigma = RangeSigma(r.baseline, theta_l, delta, o.sigma_disparity_px * r.dtheta);
       if (!(range > 0) || sigma > o.max_relative_sigma * range) continue;

@@ -31,7 +31,7 @@ namespace hovs::depth {
 
 struct StereoRig {
   AnyModel left, right;
-  Rigid3d right_from_left;   // mirror frame of the left unit -> mirror frame of the right unit
+  Rigid3d right_from_left;  // mirror frame of the left unit -> mirror frame of the right unit
   Vec3d RightCentreInLeft() const { return right_from_left.Inverse().translation; }
   double Baseline() const { return RightCentreInLeft().norm(); }
 };
@@ -39,10 +39,10 @@ struct StereoRig {
 // ---- sparse ----------------------------------------------------------------------------------------------
 struct Triangulation {
   bool ok = false;
-  Vec3d point_left = Vec3d::Zero();   // left mirror frame
-  double range_left = 0;              // from the left viewpoint, m
-  double sigma_range = 0;             // m, from the angular noise
-  double gap = 0;                     // distance between the two rays at their closest points, m
+  Vec3d point_left = Vec3d::Zero();  // left mirror frame
+  double range_left = 0;             // from the left viewpoint, m
+  double sigma_range = 0;            // m, from the angular noise
+  double gap = 0;                    // distance between the two rays at their closest points, m
 };
 // Bearings in each unit's mirror frame (any length), from its viewpoint F1. Fails for (near-)parallel rays or a
 // point behind a unit.
@@ -60,18 +60,18 @@ double LawOfSinesRange(double baseline, double theta_left, double theta_right);
 // ---- rectification -------------------------------------------------------------------------------------
 struct RectifyOptions {
   int width = 2048, height = 512;
-  double theta_min_deg = 5, theta_max_deg = 175;   // angle from the baseline (columns)
-  double phi_min_deg = -180, phi_max_deg = 0;      // angle around the baseline (rows): the lower half-space
+  double theta_min_deg = 5, theta_max_deg = 175;  // angle from the baseline (columns)
+  double phi_min_deg = -180, phi_max_deg = 0;     // angle around the baseline (rows): the lower half-space
   void Check(const std::string& where) const;
 };
 
 struct Rectification {
   RectifyOptions options;
   double baseline = 0;
-  Eigen::Quaterniond left_from_rect, right_from_rect;   // the shared epipolar frame (x = baseline)
-  unwrap::RemapTable left, right;                        // one epipolar view each
-  double dtheta = 0;                                     // radians per column
-  double ThetaAt(double u) const;                        // angle from the baseline of column u
+  Eigen::Quaterniond left_from_rect, right_from_rect;  // the shared epipolar frame (x = baseline)
+  unwrap::RemapTable left, right;                      // one epipolar view each
+  double dtheta = 0;                                   // radians per column
+  double ThetaAt(double u) const;                      // angle from the baseline of column u
   // Left mirror-frame bearing of a rectified pixel.
   Vec3d LeftBearing(double u, double v) const;
 };
@@ -79,11 +79,11 @@ Rectification Rectify(const StereoRig& rig, const RectifyOptions& options);
 
 // ---- dense ------------------------------------------------------------------------------------------------
 struct DenseOptions {
-  int num_disparities = 320;          // columns, multiple of 16 (at 0.088 deg per column: ranges down to 1.3 m)
-  int block_size = 5;                 // odd
-  double sigma_disparity_px = 0.5;    // matching noise assumed for sigma
-  double min_theta_deg = 12;          // mask rays closer than this to the baseline direction
-  double max_relative_sigma = 0.05;   // mask where sigma_r / r exceeds this
+  int num_disparities = 320;         // columns, multiple of 16 (at 0.088 deg per column: ranges down to 1.3 m)
+  int block_size = 5;                // odd
+  double sigma_disparity_px = 0.5;   // matching noise assumed for sigma
+  double min_theta_deg = 12;         // mask rays closer than this to the baseline direction
+  double max_relative_sigma = 0.05;  // mask where sigma_r / r exceeds this
   // Coarse to fine: SGBM on both images at half resolution (half the disparities: an eighth of the full cost),
   // then each pixel refined at full resolution by a block search (SAD of the block_size window on intensity
   // and horizontal gradient) over refine_radius columns around twice its coarse disparity, with a parabola
@@ -96,10 +96,10 @@ struct DenseOptions {
 
 struct DenseDepth {
   int width = 0, height = 0;
-  std::vector<float> disparity;   // columns (left reference); < 0 where no match
-  std::vector<float> range;       // m from the left viewpoint; NaN where masked
-  std::vector<float> sigma;       // m; NaN where masked
-  std::vector<uint8_t> valid;     // 1 where range is given
+  std::vector<float> disparity;  // columns (left reference); < 0 where no match
+  std::vector<float> range;      // m from the left viewpoint; NaN where masked
+  std::vector<float> sigma;      // m; NaN where masked
+  std::vector<uint8_t> valid;    // 1 where range is given
   double match_ms = 0, total_ms = 0;
 };
 // left_rect and right_rect: the two rectified views (grey or RGB, 8-bit).

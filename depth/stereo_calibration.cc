@@ -19,7 +19,6 @@ namespace {
 
 constexpr double kDeg = M_PI / 180;
 
-
 // Pose parameters: Eigen quaternion storage (x, y, z, w) and a translation.
 struct PoseParams {
   double q[4], t[3];
@@ -78,7 +77,8 @@ double Rms(const AnyModel& model, const Rigid3d& mirror_from_board, const std::v
 }  // namespace
 
 void MarkerDetectOptions::Check(const std::string& where) const {
-  HOVS_REQUIRE(calib::ArucoDictionaryId(dictionary) >= 0, where, "unknown ArUco dictionary '", dictionary, "' (known: ", calib::ArucoDictionaryNames(), ")");
+  HOVS_REQUIRE(calib::ArucoDictionaryId(dictionary) >= 0, where, "unknown ArUco dictionary '", dictionary,
+               "' (known: ", calib::ArucoDictionaryNames(), ")");
   HOVS_REQUIRE(views >= 1 && views <= 64, where, "views must be 1..64");
   HOVS_REQUIRE(hfov_deg > 0 && hfov_deg < 170 && width >= 64 && height >= 64, where, "bad view size or field");
   HOVS_REQUIRE(corner_refinement == "edges" || corner_refinement == "subpix", where + ".corner_refinement",
@@ -142,7 +142,10 @@ std::vector<CornerObservation> MarkerDetector::Detect(const unwrap::Image8& imag
   for (size_t v = 0; v < views.size(); ++v) {
     cv::Mat m(views[v].height, views[v].width, views[v].channels == 3 ? CV_8UC3 : CV_8UC1, views[v].data.data());
     cv::Mat grey;
-    if (views[v].channels == 3) cv::cvtColor(m, grey, cv::COLOR_RGB2GRAY); else grey = m;
+    if (views[v].channels == 3)
+      cv::cvtColor(m, grey, cv::COLOR_RGB2GRAY);
+    else
+      grey = m;
     std::vector<std::vector<cv::Point2f>> corners;
     std::vector<int> ids;
     cv::aruco::detectMarkers(grey, dict, corners, ids, params);
@@ -164,9 +167,13 @@ std::vector<CornerObservation> MarkerDetector::Detect(const unwrap::Image8& imag
     }
   }
   // Sub-pixel refinement in the catadioptric image itself (the views are resampled; the corner is not).
-  cv::Mat src(image.height, image.width, image.channels == 3 ? CV_8UC3 : CV_8UC1, const_cast<uint8_t*>(image.data.data()));
+  cv::Mat src(image.height, image.width, image.channels == 3 ? CV_8UC3 : CV_8UC1,
+              const_cast<uint8_t*>(image.data.data()));
   cv::Mat grey;
-  if (image.channels == 3) cv::cvtColor(src, grey, cv::COLOR_RGB2GRAY); else grey = src;
+  if (image.channels == 3)
+    cv::cvtColor(src, grey, cv::COLOR_RGB2GRAY);
+  else
+    grey = src;
   std::vector<cv::Point2f> pts;
   std::vector<int> ids;
   for (const auto& [id, b] : best)
@@ -214,9 +221,9 @@ std::vector<CornerObservation> MarkerDetector::Detect(const unwrap::Image8& imag
       for (int j = 0; j < 4; ++j) side += 0.25 * (c[j] - c[(j + 1) % 4]).norm();
       const double limit = std::max(options_.max_refine_shift_px, 0.5 * side / eo.cells);
       for (int j = 0; j < 4; ++j) {
-        if (!ok[j]) continue;   // not measurable: the corner window's result stands
+        if (!ok[j]) continue;  // not measurable: the corner window's result stands
         if (moved[j] > 0.1 || (c[j] - Vec2d(pts[m + j].x, pts[m + j].y)).norm() > limit) {
-          guide_ok[m + j] = 0;   // measured but unstable, or far from the detection: dropped
+          guide_ok[m + j] = 0;  // measured but unstable, or far from the detection: dropped
           continue;
         }
         guide[m + j] = c[j], by_edges[m + j] = 1;
@@ -252,7 +259,7 @@ bool BoardPose(const AnyModel& model, const std::vector<CornerObservation>& corn
   const Vec3d x = (std::abs(z.z()) < 0.9 ? Vec3d::UnitZ() : Vec3d::UnitX()).cross(z).normalized();
   const Vec3d y = z.cross(x);
   Mat3<double> R;
-  R.col(0) = x, R.col(1) = y, R.col(2) = z;   // mirror_from_virtual
+  R.col(0) = x, R.col(1) = y, R.col(2) = z;  // mirror_from_virtual
   std::vector<cv::Point3f> op;
   std::vector<cv::Point2f> ip;
   for (size_t i = 0; i < bearings.size(); ++i) {
@@ -273,7 +280,8 @@ bool BoardPose(const AnyModel& model, const std::vector<CornerObservation>& corn
   PoseParams p = PoseParams::From(pose);
   ceres::Problem problem;
   for (size_t i = 0; i < pts.size(); ++i) {
-    auto* cost = new ceres::NumericDiffCostFunction<LeftCost, ceres::CENTRAL, 2, 4, 3>(new LeftCost{&model, pts[i], obs[i]});
+    auto* cost =
+        new ceres::NumericDiffCostFunction<LeftCost, ceres::CENTRAL, 2, 4, 3>(new LeftCost{&model, pts[i], obs[i]});
     problem.AddResidualBlock(cost, new ceres::HuberLoss(1.0), p.q, p.t);
   }
   problem.SetManifold(p.q, new ceres::EigenQuaternionManifold);
@@ -408,8 +416,8 @@ StereoCalibration CalibrateStereo(const AnyModel& left, const AnyModel& right,
     so.linear_solver_type = ceres::DENSE_SCHUR;
     so.function_tolerance = 1e-12, so.parameter_tolerance = 1e-12, so.gradient_tolerance = 1e-12;
     ceres::Solve(so, problem.get(), &summary);
-    HOVS_REQUIRE(summary.termination_type != ceres::FAILURE, "stereo calibration", "the solver failed: ",
-                 summary.message);
+    HOVS_REQUIRE(summary.termination_type != ceres::FAILURE, "stereo calibration",
+                 "the solver failed: ", summary.message);
     if (pass == 1 || !(o.outlier_px > 0)) break;
     size_t dropped = 0;
     const Rigid3d R = ToPose(rl.q, rl.t);
@@ -423,7 +431,9 @@ StereoCalibration CalibrateStereo(const AnyModel& left, const AnyModel& right,
         for (const auto& c : cs) {
           const auto it = board.find(c.id);
           Vec2d uv;
-          const double e = it != board.end() && model.ImgFromPointUnbounded(pose * it->second, &uv) ? (uv - c.pixel).norm() : HUGE_VAL;
+          const double e = it != board.end() && model.ImgFromPointUnbounded(pose * it->second, &uv)
+                               ? (uv - c.pixel).norm()
+                               : HUGE_VAL;
           if (e > o.outlier_px) {
             outliers.push_back({obs[k].name, side == 0 ? "left" : "right", c.id, e});
             ++dropped;
@@ -468,7 +478,7 @@ StereoCalibration CalibrateStereo(const AnyModel& left, const AnyModel& right,
   std::vector<std::pair<const double*, const double*>> blocks = {{rl.q, rl.q}, {rl.t, rl.t}};
   if (cov.Compute(blocks, problem.get())) {
     const double dof = std::max(1.0, double(summary.num_residuals - summary.num_effective_parameters));
-    const double scale = 2 * summary.final_cost / dof;   // residual variance
+    const double scale = 2 * summary.final_cost / dof;  // residual variance
     double cq[9], ct[9];
     cov.GetCovarianceMatrixInTangentSpace({rl.q}, cq);
     cov.GetCovarianceBlock(rl.t, rl.t, ct);
@@ -500,11 +510,12 @@ std::vector<int> RejectInconsistentMarkers(const AnyModel& model, std::vector<Co
     for (const auto& c : *corners) {
       const auto it = board.find(c.id);
       Vec2d uv;
-      const double e = it != board.end() && model.ImgFromPointUnbounded(pose * it->second, &uv) ? (uv - c.pixel).norm() : HUGE_VAL;
+      const double e =
+          it != board.end() && model.ImgFromPointUnbounded(pose * it->second, &uv) ? (uv - c.pixel).norm() : HUGE_VAL;
       worst[c.id / 4] = std::max(worst[c.id / 4], e);
     }
-    const auto w = std::max_element(worst.begin(), worst.end(),
-                                     [](const auto& a, const auto& b) { return a.second < b.second; });
+    const auto w =
+        std::max_element(worst.begin(), worst.end(), [](const auto& a, const auto& b) { return a.second < b.second; });
     if (w->second <= max_px) return removed;
     removed.push_back(w->first);
     corners->erase(std::remove_if(corners->begin(), corners->end(),

@@ -18,16 +18,16 @@
 namespace hovs::depth {
 
 struct StereoFrame {
-  std::string name;                                  // "frame<id>"
+  std::string name;  // "frame<id>"
   std::filesystem::path left_image, right_image;
-  std::optional<Rigid3d> world_from_board;           // synthetic datasets
+  std::optional<Rigid3d> world_from_board;  // synthetic datasets
 };
 
 struct StereoDataset {
   std::filesystem::path manifest;
   raytrace::CatadioptricUnit left_unit, right_unit;  // the first two units
   scenes::BoardSpec board_spec;
-  std::map<int, Vec3d> board;                        // corner id -> board frame, metres
+  std::map<int, Vec3d> board;  // corner id -> board frame, metres
   std::vector<StereoFrame> frames;
   // The true right_from_left of the units' mirror frames (exact for a synthetic dataset).
   Rigid3d TrueRightFromLeft() const;
@@ -37,15 +37,15 @@ struct StereoDataset {
 StereoDataset LoadStereoDataset(const std::filesystem::path& manifest);
 
 struct StereoDetectOptions {
-  MarkerDetectOptions markers;                       // its dictionary is the board's
-  double marker_check_px = 2.0;                      // RejectInconsistentMarkers; 0: keep every marker
+  MarkerDetectOptions markers;   // its dictionary is the board's
+  double marker_check_px = 2.0;  // RejectInconsistentMarkers; 0: keep every marker
 };
 
 // What the detector found in one pair.
 struct PairDetection {
   std::string pair;
   int left_corners = 0, right_corners = 0, left_from_edges = 0, right_from_edges = 0;
-  std::vector<int> inconsistent_left, inconsistent_right;   // markers dropped
+  std::vector<int> inconsistent_left, inconsistent_right;  // markers dropped
 };
 
 // Every frame's markers in both images, through each unit's model. `progress` receives each pair's record.

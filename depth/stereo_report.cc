@@ -74,7 +74,8 @@ void WriteOpenCvYaml(const fs::path& path, const StereoCalibration& c) {
     Tm.at<double>(r) = c.right_from_left.translation(r);
   }
   fs << "R" << Rm << "T" << Tm << "baseline" << c.baseline << "sigma_baseline" << c.sigma_baseline << "rms_px"
-     << c.rms_px << "frames" << "right mirror frame from left mirror frame, metres";
+     << c.rms_px << "frames"
+     << "right mirror frame from left mirror frame, metres";
 }
 
 // |relative depth error| (%) of every sparse point against its range and against its angle to the baseline, the
@@ -84,8 +85,8 @@ void SparseDepthPlots(const SparseDepthEvaluation& e, const fs::path& folder) {
   results::Series near{"within 15 deg of the baseline", {}, {}, {0.85, 0.2, 0.1}, 1.0, true, 4.0};
   results::Series cond_a = cond, near_a = near;
   for (const auto& p : e.points) {
-    const bool ok = p.angle_to_baseline_deg >= kConditionedAngleDeg &&
-                    p.angle_to_baseline_deg <= 180 - kConditionedAngleDeg;
+    const bool ok =
+        p.angle_to_baseline_deg >= kConditionedAngleDeg && p.angle_to_baseline_deg <= 180 - kConditionedAngleDeg;
     auto& by_range = ok ? cond : near;
     auto& by_angle = ok ? cond_a : near_a;
     by_range.x.push_back(p.range_m), by_range.y.push_back(100 * std::abs(p.rel_error));
@@ -101,8 +102,8 @@ void SparseDepthPlots(const SparseDepthEvaluation& e, const fs::path& folder) {
   };
   plot("Sparse depth error against range", "true range from the left viewpoint (m)", cond, near,
        folder / "depth_error_vs_range.png");
-  plot("Sparse depth error against the angle to the baseline", "angle between the point and the baseline (deg)",
-       cond_a, near_a, folder / "depth_error_vs_angle.png");
+  plot("Sparse depth error against the angle to the baseline", "angle between the point and the baseline (deg)", cond_a,
+       near_a, folder / "depth_error_vs_angle.png");
 }
 
 }  // namespace
@@ -128,7 +129,8 @@ StereoRun RunStereoCalibration(const StereoDataset& dataset, const AnyModel& lef
   // these units coincide with the mirror frames up to the calibration's error.
   const Rigid3d truth = dataset.TrueRightFromLeft();
   r.pose_error = CompareWithTruth(r.calibration.right_from_left, r.calibration.baseline, truth);
-  if (r.article_3d) r.article_3d_pose_error = CompareWithTruth(r.article_3d->right_from_left, r.article_3d->baseline, truth);
+  if (r.article_3d)
+    r.article_3d_pose_error = CompareWithTruth(r.article_3d->right_from_left, r.article_3d->baseline, truth);
   r.sparse = EvaluateSparseDepth(dataset, left, right, r.calibration, r.pairs);
   return r;
 }
@@ -137,38 +139,52 @@ nlohmann::json StereoRunJson(const StereoRun& r) {
   const StereoCalibration& c = r.calibration;
   nlohmann::json per = nlohmann::json::array();
   for (size_t k = 0; k < c.pair_names.size(); ++k)
-    per.push_back({{"pair", c.pair_names[k]}, {"rms_left_px", c.pair_rms_left_px[k]},
-                   {"rms_right_px", c.pair_rms_right_px[k]}, {"corners_left", c.pair_corners_left[k]},
+    per.push_back({{"pair", c.pair_names[k]},
+                   {"rms_left_px", c.pair_rms_left_px[k]},
+                   {"rms_right_px", c.pair_rms_right_px[k]},
+                   {"corners_left", c.pair_corners_left[k]},
                    {"corners_right", c.pair_corners_right[k]},
                    {"above_10px", std::max(c.pair_rms_left_px[k], c.pair_rms_right_px[k]) > 10}});
   nlohmann::json det = nlohmann::json::array();
   for (const auto& d : r.detections)
-    det.push_back({{"pair", d.pair}, {"left_corners", d.left_corners}, {"right_corners", d.right_corners},
-                   {"left_from_edges", d.left_from_edges}, {"right_from_edges", d.right_from_edges},
+    det.push_back({{"pair", d.pair},
+                   {"left_corners", d.left_corners},
+                   {"right_corners", d.right_corners},
+                   {"left_from_edges", d.left_from_edges},
+                   {"right_from_edges", d.right_from_edges},
                    {"inconsistent_markers_left", d.inconsistent_left},
                    {"inconsistent_markers_right", d.inconsistent_right}});
-  nlohmann::json j = {{"models", {r.left->KindName(), r.right->KindName()}},
-                      {"right_from_left", PoseJson(c.right_from_left)},
-                      {"baseline_m", c.baseline}, {"sigma_baseline_m", c.sigma_baseline},
-                      {"sigma_translation_m", {c.sigma_translation.x(), c.sigma_translation.y(), c.sigma_translation.z()}},
-                      {"sigma_rotation_deg", {c.sigma_rotation_deg.x(), c.sigma_rotation_deg.y(), c.sigma_rotation_deg.z()}},
-                      {"rms_px", c.rms_px}, {"converged", c.converged}, {"solver", c.solver_report},
-                      {"pairs", per}, {"detections", det}};
+  nlohmann::json j = {
+      {"models", {r.left->KindName(), r.right->KindName()}},
+      {"right_from_left", PoseJson(c.right_from_left)},
+      {"baseline_m", c.baseline},
+      {"sigma_baseline_m", c.sigma_baseline},
+      {"sigma_translation_m", {c.sigma_translation.x(), c.sigma_translation.y(), c.sigma_translation.z()}},
+      {"sigma_rotation_deg", {c.sigma_rotation_deg.x(), c.sigma_rotation_deg.y(), c.sigma_rotation_deg.z()}},
+      {"rms_px", c.rms_px},
+      {"converged", c.converged},
+      {"solver", c.solver_report},
+      {"pairs", per},
+      {"detections", det}};
   nlohmann::json outl = nlohmann::json::array();
   for (const auto& x : c.outliers)
     outl.push_back({{"pair", x.pair}, {"unit", x.unit}, {"corner", x.corner}, {"residual_px", x.residual_px}});
   j["outliers"] = {{"threshold_px", r.options.outlier_px}, {"dropped", outl}};
   j["corner_refinement"] = r.corner_refinement;
   const auto pose_error = [](const PoseError& e) {
-    return nlohmann::json{{"baseline_error_mm", e.baseline_error_mm}, {"translation_error_mm", e.translation_error_mm},
+    return nlohmann::json{{"baseline_error_mm", e.baseline_error_mm},
+                          {"translation_error_mm", e.translation_error_mm},
                           {"rotation_error_deg", e.rotation_error_deg}};
   };
   if (r.article_3d) {
     j["article_3d_residual"] = {
         {"method", "per-unit board poses, then right_from_left from T P_left - P_right (the article's 3.2.2)"},
-        {"right_from_left", PoseJson(r.article_3d->right_from_left)}, {"baseline_m", r.article_3d->baseline},
-        {"rms_3d_mm", 1e3 * r.article_3d->rms_3d_m}, {"rms_px", r.article_3d->rms_px},
-        {"converged", r.article_3d->converged}, {"ground_truth", pose_error(r.article_3d_pose_error)}};
+        {"right_from_left", PoseJson(r.article_3d->right_from_left)},
+        {"baseline_m", r.article_3d->baseline},
+        {"rms_3d_mm", 1e3 * r.article_3d->rms_3d_m},
+        {"rms_px", r.article_3d->rms_px},
+        {"converged", r.article_3d->converged},
+        {"ground_truth", pose_error(r.article_3d_pose_error)}};
   } else {
     j["article_3d_residual"] = {{"error", r.article_3d_error}};
   }
@@ -231,8 +247,10 @@ void WriteStereoReport(const fs::path& folder, const StereoRun& r, const nlohman
     if (results::CanRender()) {
       SparseDepthPlots(r.sparse, folder / "figures");
       page.Figure("figures/depth_error_vs_range.png", "|relative error| against range", 640);
-      page.Figure("figures/depth_error_vs_angle.png", "|relative error| against the angle to the baseline: near "
-                  "0 and 180 deg a pixel of disparity is a large part of the range", 640);
+      page.Figure("figures/depth_error_vs_angle.png",
+                  "|relative error| against the angle to the baseline: near "
+                  "0 and 180 deg a pixel of disparity is a large part of the range",
+                  640);
     } else {
       page.Paragraph("No plots: no X display (run under xvfb-run -a). The points are in sparse_depth.csv.");
     }

@@ -26,8 +26,8 @@ struct StereoRun {
   StereoCalibrationOptions options;
   std::string corner_refinement;
   StereoCalibration calibration;
-  std::optional<StereoCalibration> article_3d;      // the article's 3-D residual method on the same corners
-  std::string article_3d_error;                     // why it failed, when it did
+  std::optional<StereoCalibration> article_3d;  // the article's 3-D residual method on the same corners
+  std::string article_3d_error;                 // why it failed, when it did
   PoseError pose_error, article_3d_pose_error;
   SparseDepthEvaluation sparse;
 };

@@ -25,8 +25,9 @@ DesignConfig ParseDesignConfigUnguarded(const std::string& text, const std::stri
   const YamlReader r(source);
   const YAML::Node root = r.Load(text);
   HOVS_REQUIRE(root.IsMap(), source, "expected a YAML mapping at the top level");
-  r.OnlyKeys(root, "", {"name", "camera", "mirror", "mounting_height", "constraints", "objective", "search",
-                        "marked_design", "resolution_samples"});
+  r.OnlyKeys(root, "",
+             {"name", "camera", "mirror", "mounting_height", "constraints", "objective", "search", "marked_design",
+              "resolution_samples"});
   DesignConfig cfg;
   cfg.source = source;
   cfg.text = text;
@@ -54,12 +55,15 @@ DesignConfig ParseDesignConfigUnguarded(const std::string& text, const std::stri
   if (root["mounting_height"]) p.mounting_height = r.Number(root["mounting_height"], "mounting_height");
   if (root["constraints"]) {
     const YAML::Node k = root["constraints"];
-    r.OnlyKeys(k, "constraints", {"max_upper_elevation_deg", "rim_margin_px", "min_vertical_field_deg",
-                                  "min_rim_radius_px", "max_system_length"});
+    r.OnlyKeys(k, "constraints",
+               {"max_upper_elevation_deg", "rim_margin_px", "min_vertical_field_deg", "min_rim_radius_px",
+                "max_system_length"});
     Constraints& c = p.constraints;
-    if (k["max_upper_elevation_deg"]) c.max_upper_elevation_deg = r.Number(k["max_upper_elevation_deg"], "constraints.max_upper_elevation_deg");
+    if (k["max_upper_elevation_deg"])
+      c.max_upper_elevation_deg = r.Number(k["max_upper_elevation_deg"], "constraints.max_upper_elevation_deg");
     if (k["rim_margin_px"]) c.rim_margin_px = r.Number(k["rim_margin_px"], "constraints.rim_margin_px");
-    if (k["min_vertical_field_deg"]) c.min_vertical_field_deg = r.Number(k["min_vertical_field_deg"], "constraints.min_vertical_field_deg");
+    if (k["min_vertical_field_deg"])
+      c.min_vertical_field_deg = r.Number(k["min_vertical_field_deg"], "constraints.min_vertical_field_deg");
     if (k["min_rim_radius_px"]) c.min_rim_radius_px = r.Number(k["min_rim_radius_px"], "constraints.min_rim_radius_px");
     if (k["max_system_length"]) c.max_system_length = r.Number(k["max_system_length"], "constraints.max_system_length");
   }

@@ -15,10 +15,10 @@ struct DesignConfig {
   DesignProblem problem;
   SweepSpec sweep;
   bool integer_mm = true;
-  std::optional<DesignPoint> marked;   // a design to mark on the figures (e.g. the article's a = 48, b = 44)
+  std::optional<DesignPoint> marked;  // a design to mark on the figures (e.g. the article's a = 48, b = 44)
   int resolution_samples = 200;
-  std::string source;                  // the file it came from
-  std::string text;                    // its text, echoed into reports
+  std::string source;  // the file it came from
+  std::string text;    // its text, echoed into reports
 };
 
 DesignConfig ParseDesignConfig(const std::string& yaml_text, const std::string& source);

@@ -79,9 +79,12 @@ std::vector<ConstraintValue> DescribeConstraints(const std::vector<double>& v, c
 template <class T>
 T ObjectiveOf(const Geometry<T>& g, Objective o) {
   switch (o) {
-    case Objective::kSmallestSystem: return T(2) * g.c;
-    case Objective::kWidestField: return -(g.upper - g.lower) / T(kDeg);
-    case Objective::kLargestRim: return -g.rim_px;
+    case Objective::kSmallestSystem:
+      return T(2) * g.c;
+    case Objective::kWidestField:
+      return -(g.upper - g.lower) / T(kDeg);
+    case Objective::kLargestRim:
+      return -g.rim_px;
   }
   return T(0);
 }
@@ -95,7 +98,9 @@ std::vector<double> ConstraintScales(const DesignProblem& p) {
   return s;
 }
 
-double ObjectiveScale(Objective o) { return o == Objective::kSmallestSystem ? 0.001 : o == Objective::kWidestField ? 1.0 : 10.0; }
+double ObjectiveScale(Objective o) {
+  return o == Objective::kSmallestSystem ? 0.001 : o == Objective::kWidestField ? 1.0 : 10.0;
+}
 
 void CheckFinitePositive(double v, const std::string& where, const std::string& what) {
   HOVS_REQUIRE(std::isfinite(v), where, what, " must be a finite number");
@@ -106,9 +111,12 @@ void CheckFinitePositive(double v, const std::string& where, const std::string& 
 
 const char* ToString(Objective o) {
   switch (o) {
-    case Objective::kSmallestSystem: return "smallest_system";
-    case Objective::kWidestField: return "widest_field";
-    case Objective::kLargestRim: return "largest_rim";
+    case Objective::kSmallestSystem:
+      return "smallest_system";
+    case Objective::kWidestField:
+      return "widest_field";
+    case Objective::kLargestRim:
+      return "largest_rim";
   }
   return "?";
 }
@@ -182,8 +190,8 @@ Metrics Evaluate(const DesignPoint& p, const DesignProblem& problem) {
   m.rim_radius_px = g.rim_px;
   m.reflection_radius_px = g.reflection_px;
   m.ground_radius_inner = problem.mounting_height / std::tan(-g.lower);
-  m.ground_radius_outer = g.upper < 0 ? problem.mounting_height / std::tan(-g.upper)
-                                      : std::numeric_limits<double>::infinity();
+  m.ground_radius_outer =
+      g.upper < 0 ? problem.mounting_height / std::tan(-g.upper) : std::numeric_limits<double>::infinity();
   return m;
 }
 
@@ -200,9 +208,12 @@ double MaxViolation(const std::vector<ConstraintValue>& g) {
 
 double ObjectiveValue(const Metrics& m, Objective o) {
   switch (o) {
-    case Objective::kSmallestSystem: return m.system_length;
-    case Objective::kWidestField: return -m.field_deg;
-    case Objective::kLargestRim: return -m.rim_radius_px;
+    case Objective::kSmallestSystem:
+      return m.system_length;
+    case Objective::kWidestField:
+      return -m.field_deg;
+    case Objective::kLargestRim:
+      return -m.rim_radius_px;
   }
   return 0;
 }
@@ -247,25 +258,25 @@ SweepResult Sweep(const DesignProblem& problem, const SweepSpec& spec) {
   r.violated.resize(n);
   tbb::parallel_for(tbb::blocked_range<size_t>(0, static_cast<size_t>(spec.nb) * spec.nd),
                     [&](const tbb::blocked_range<size_t>& rows) {
-    for (size_t row = rows.begin(); row != rows.end(); ++row) {
-      const int ib = static_cast<int>(row % spec.nb), id = static_cast<int>(row / spec.nb);
-      for (int ia = 0; ia < spec.na; ++ia) {
-        const size_t k = r.Index(ia, ib, id);
-        const Geometry<double> g = ComputeGeometry(r.A(ia), r.B(ib), r.D(id), problem.camera);
-        r.upper_deg[k] = g.upper / kDeg;
-        r.lower_deg[k] = g.lower / kDeg;
-        r.field_deg[k] = (g.upper - g.lower) / kDeg;
-        r.rim_px[k] = g.rim_px;
-        r.system_length[k] = 2 * g.c;
-        r.objective[k] = ObjectiveOf(g, problem.objective);
-        const std::vector<double> cv = ConstraintVector(g, problem);
-        uint32_t bits = 0;
-        for (size_t j = 0; j < cv.size(); ++j)
-          if (!(cv[j] <= 0)) bits |= 1u << j;
-        r.violated[k] = bits;
-      }
-    }
-  });
+                      for (size_t row = rows.begin(); row != rows.end(); ++row) {
+                        const int ib = static_cast<int>(row % spec.nb), id = static_cast<int>(row / spec.nb);
+                        for (int ia = 0; ia < spec.na; ++ia) {
+                          const size_t k = r.Index(ia, ib, id);
+                          const Geometry<double> g = ComputeGeometry(r.A(ia), r.B(ib), r.D(id), problem.camera);
+                          r.upper_deg[k] = g.upper / kDeg;
+                          r.lower_deg[k] = g.lower / kDeg;
+                          r.field_deg[k] = (g.upper - g.lower) / kDeg;
+                          r.rim_px[k] = g.rim_px;
+                          r.system_length[k] = 2 * g.c;
+                          r.objective[k] = ObjectiveOf(g, problem.objective);
+                          const std::vector<double> cv = ConstraintVector(g, problem);
+                          uint32_t bits = 0;
+                          for (size_t j = 0; j < cv.size(); ++j)
+                            if (!(cv[j] <= 0)) bits |= 1u << j;
+                          r.violated[k] = bits;
+                        }
+                      }
+                    });
   return r;
 }
 
@@ -276,7 +287,7 @@ struct SolverContext {
   const DesignProblem* problem;
   std::vector<int> free;  // indices into (a, b, d) that the solver moves
   DesignPoint fixed;
-  size_t k = 0;           // constraint index for the constraint callbacks
+  size_t k = 0;  // constraint index for the constraint callbacks
   int evaluations = 0;
 };
 
@@ -344,8 +355,10 @@ DesignPoint Repair(const DesignPoint& bad, const DesignPoint& anchor, const Desi
   };
   for (int i = 0; i < 80; ++i) {
     const double mid = 0.5 * (lo + hi);
-    if (MaxViolation(EvaluateConstraints(Evaluate(at(mid), problem), problem)) <= 0) hi = mid;
-    else lo = mid;
+    if (MaxViolation(EvaluateConstraints(Evaluate(at(mid), problem), problem)) <= 0)
+      hi = mid;
+    else
+      lo = mid;
   }
   return at(hi);
 }
@@ -358,13 +371,20 @@ std::string ShortNumber(double v) {
 
 std::string NloptResultName(nlopt::result r) {
   switch (r) {
-    case nlopt::SUCCESS: return "success";
-    case nlopt::STOPVAL_REACHED: return "stopval reached";
-    case nlopt::FTOL_REACHED: return "ftol reached";
-    case nlopt::XTOL_REACHED: return "xtol reached";
-    case nlopt::MAXEVAL_REACHED: return "maxeval reached";
-    case nlopt::MAXTIME_REACHED: return "maxtime reached";
-    default: return "code " + std::to_string(static_cast<int>(r));
+    case nlopt::SUCCESS:
+      return "success";
+    case nlopt::STOPVAL_REACHED:
+      return "stopval reached";
+    case nlopt::FTOL_REACHED:
+      return "ftol reached";
+    case nlopt::XTOL_REACHED:
+      return "xtol reached";
+    case nlopt::MAXEVAL_REACHED:
+      return "maxeval reached";
+    case nlopt::MAXTIME_REACHED:
+      return "maxtime reached";
+    default:
+      return "code " + std::to_string(static_cast<int>(r));
   }
 }
 
@@ -454,11 +474,12 @@ Optimum OptimizeContinuous(const DesignProblem& problem, const SweepResult& swee
   if (candidates.empty()) {
     std::string why = "no design in the search box satisfies the constraints";
     if (!start_feasible) why += " (no feasible point on the sweep grid either)";
-    throw Error("design optimisation", why + "; solver log: " + [&] {
-      std::string s;
-      for (const auto& l : log) s += "[" + l + "] ";
-      return s;
-    }());
+    throw Error(
+        "design optimisation", why + "; solver log: " + [&] {
+          std::string s;
+          for (const auto& l : log) s += "[" + l + "] ";
+          return s;
+        }());
   }
   Optimum best_o = *std::min_element(candidates.begin(), candidates.end(),
                                      [](const Optimum& x, const Optimum& y) { return x.objective < y.objective; });
@@ -469,14 +490,17 @@ Optimum OptimizeContinuous(const DesignProblem& problem, const SweepResult& swee
 std::optional<Optimum> OptimizeIntegerMillimetre(const DesignProblem& problem) {
   problem.Check("design");
   const auto mm_range = [](const Range& r) {
-    return std::pair<int, int>(static_cast<int>(std::ceil(r.min * 1000 - 1e-9)), static_cast<int>(std::floor(r.max * 1000 + 1e-9)));
+    return std::pair<int, int>(static_cast<int>(std::ceil(r.min * 1000 - 1e-9)),
+                               static_cast<int>(std::floor(r.max * 1000 + 1e-9)));
   };
   const auto [a0, a1] = mm_range(problem.a);
   const auto [b0, b1] = mm_range(problem.b);
   std::pair<int, int> dr = mm_range(problem.d);
   std::vector<double> ds;
-  if (problem.d.Fixed()) ds.push_back(problem.d.min);
-  else for (int d = dr.first; d <= dr.second; ++d) ds.push_back(d * 1e-3);
+  if (problem.d.Fixed())
+    ds.push_back(problem.d.min);
+  else
+    for (int d = dr.first; d <= dr.second; ++d) ds.push_back(d * 1e-3);
   std::optional<Optimum> best;
   for (double d : ds)
     for (int a = a0; a <= a1; ++a)

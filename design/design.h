@@ -31,7 +31,9 @@ struct CameraSpec {
   int width = 2750, height = 2200;
   double lens_aperture = 0.020;  // m, diameter of the lens (occludes the image centre)
 
-  PinholeCamera<double> Pinhole() const { return PinholeCamera<double>::FromPhysical(focal_length, pixel_pitch, width, height); }
+  PinholeCamera<double> Pinhole() const {
+    return PinholeCamera<double>::FromPhysical(focal_length, pixel_pitch, width, height);
+  }
   void Check(const std::string& where) const;
 };
 
@@ -40,11 +42,11 @@ const char* ToString(Objective o);
 std::optional<Objective> ObjectiveFromString(const std::string& s);
 
 struct Constraints {
-  double max_upper_elevation_deg = 0.0;        // upper bound of the field stays below this
-  double rim_margin_px = 0.0;                  // rim radius <= min(W, H) / 2 - margin
+  double max_upper_elevation_deg = 0.0;  // upper bound of the field stays below this
+  double rim_margin_px = 0.0;            // rim radius <= min(W, H) / 2 - margin
   std::optional<double> min_vertical_field_deg;
   std::optional<double> min_rim_radius_px;
-  std::optional<double> max_system_length;     // m
+  std::optional<double> max_system_length;  // m
 };
 
 struct Range {

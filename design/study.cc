@@ -34,8 +34,8 @@ nlohmann::json ToJson(const Metrics& m) {
   j["upper_bound_deg"] = m.upper_deg, j["lower_bound_deg"] = m.lower_deg, j["vertical_field_deg"] = m.field_deg;
   j["rim_radius_px"] = m.rim_radius_px, j["camera_reflection_radius_px"] = m.reflection_radius_px;
   j["ground_radius_inner"] = m.ground_radius_inner;
-  j["ground_radius_outer"] = std::isfinite(m.ground_radius_outer) ? nlohmann::json(m.ground_radius_outer)
-                                                                  : nlohmann::json("infinite");
+  j["ground_radius_outer"] =
+      std::isfinite(m.ground_radius_outer) ? nlohmann::json(m.ground_radius_outer) : nlohmann::json("infinite");
   return j;
 }
 
@@ -48,7 +48,8 @@ nlohmann::json ToJson(const Optimum& o) {
   j["evaluations"] = o.evaluations;
   nlohmann::json cs = nlohmann::json::array();
   for (const auto& c : o.constraints)
-    cs.push_back({{"name", c.name}, {"value", c.value}, {"limit", c.limit}, {"unit", c.unit}, {"satisfied", c.value <= 0}});
+    cs.push_back(
+        {{"name", c.name}, {"value", c.value}, {"limit", c.limit}, {"unit", c.unit}, {"satisfied", c.value <= 0}});
   j["constraints"] = cs;
   return j;
 }
@@ -58,14 +59,21 @@ nlohmann::json ProblemJson(const DesignConfig& cfg) {
   nlohmann::json j;
   j["name"] = cfg.name;
   j["source"] = cfg.source;
-  j["camera"] = {{"focal_length", p.camera.focal_length}, {"pixel_pitch", p.camera.pixel_pitch},
-                 {"width", p.camera.width}, {"height", p.camera.height}, {"lens_aperture", p.camera.lens_aperture}};
+  j["camera"] = {{"focal_length", p.camera.focal_length},
+                 {"pixel_pitch", p.camera.pixel_pitch},
+                 {"width", p.camera.width},
+                 {"height", p.camera.height},
+                 {"lens_aperture", p.camera.lens_aperture}};
   j["mounting_height"] = p.mounting_height;
   j["objective"] = ToString(p.objective);
-  j["search"] = {{"a", {p.a.min, p.a.max}}, {"b", {p.b.min, p.b.max}}, {"d", {p.d.min, p.d.max}},
-                 {"grid", {cfg.sweep.na, cfg.sweep.nb, cfg.sweep.nd}}, {"integer_mm", cfg.integer_mm}};
+  j["search"] = {{"a", {p.a.min, p.a.max}},
+                 {"b", {p.b.min, p.b.max}},
+                 {"d", {p.d.min, p.d.max}},
+                 {"grid", {cfg.sweep.na, cfg.sweep.nb, cfg.sweep.nd}},
+                 {"integer_mm", cfg.integer_mm}};
   nlohmann::json k = {{"max_upper_elevation_deg", p.constraints.max_upper_elevation_deg},
-                      {"rim_margin_px", p.constraints.rim_margin_px}, {"rim_limit_px", p.RimLimitPx()}};
+                      {"rim_margin_px", p.constraints.rim_margin_px},
+                      {"rim_limit_px", p.RimLimitPx()}};
   if (p.constraints.min_vertical_field_deg) k["min_vertical_field_deg"] = *p.constraints.min_vertical_field_deg;
   if (p.constraints.min_rim_radius_px) k["min_rim_radius_px"] = *p.constraints.min_rim_radius_px;
   if (p.constraints.max_system_length) k["max_system_length"] = *p.constraints.max_system_length;
@@ -110,11 +118,17 @@ std::vector<double> Levels(double lo, double hi, double step) {
 }
 
 void AddMarkers(results::HeatMapFigure* f, const DesignStudy& st) {
-  f->markers.push_back({st.continuous.metrics.p.a * 1e3, st.continuous.metrics.p.b * 1e3, "continuous optimum", {0.85, 0.1, 0.1}, 0});
+  f->markers.push_back(
+      {st.continuous.metrics.p.a * 1e3, st.continuous.metrics.p.b * 1e3, "continuous optimum", {0.85, 0.1, 0.1}, 0});
   if (st.integer_mm)
-    f->markers.push_back({st.integer_mm->metrics.p.a * 1e3, st.integer_mm->metrics.p.b * 1e3, "integer-mm optimum", {1.0, 0.55, 0.0}, 3});
+    f->markers.push_back({st.integer_mm->metrics.p.a * 1e3,
+                          st.integer_mm->metrics.p.b * 1e3,
+                          "integer-mm optimum",
+                          {1.0, 0.55, 0.0},
+                          3});
   if (st.marked)
-    f->markers.push_back({st.marked->metrics.p.a * 1e3, st.marked->metrics.p.b * 1e3, "marked design", {0.0, 0.0, 0.0}, 1});
+    f->markers.push_back(
+        {st.marked->metrics.p.a * 1e3, st.marked->metrics.p.b * 1e3, "marked design", {0.0, 0.0, 0.0}, 1});
 }
 
 std::vector<std::string> MetricsRow(const std::string& label, const Optimum& o) {
@@ -207,8 +221,9 @@ std::string WriteDesignReport(const DesignConfig& cfg, const DesignStudy& st, co
     std::ostringstream csv;
     csv << "design,elevation_deg,rho_px,px_per_deg\n";
     const auto put = [&](const char* name, const std::vector<ResolutionSample>& r) {
-      for (const auto& x : r) csv << name << ',' << Fmt("%.6f", x.elevation_deg) << ',' << Fmt("%.4f", x.rho_px) << ','
-                                  << Fmt("%.5f", x.px_per_deg) << '\n';
+      for (const auto& x : r)
+        csv << name << ',' << Fmt("%.6f", x.elevation_deg) << ',' << Fmt("%.4f", x.rho_px) << ','
+            << Fmt("%.5f", x.px_per_deg) << '\n';
     };
     put("continuous_optimum", st.resolution_continuous);
     put("marked", st.resolution_marked);
@@ -263,12 +278,14 @@ std::string WriteDesignReport(const DesignConfig& cfg, const DesignStudy& st, co
         rim[i] = z.rim_px[i];
       }
       const char* label = cfg.problem.objective == Objective::kSmallestSystem ? "2c (mm)"
-                          : cfg.problem.objective == Objective::kWidestField ? "field (deg)" : "rim (px)";
+                          : cfg.problem.objective == Objective::kWidestField  ? "field (deg)"
+                                                                              : "rim (px)";
       auto f = SliceFigure(z, 0, objective, "Feasible region near the optimum", label);
       const double lo = *std::min_element(objective.begin(), objective.end());
       const double hi = *std::max_element(objective.begin(), objective.end());
       f.contour_levels = Levels(lo, hi, (hi - lo) > 20 ? 2.0 : 1.0);
-      f.overlays.push_back({upper, cfg.problem.constraints.max_upper_elevation_deg, "upper bound limit", {0.9, 0.1, 0.1}, 3.0});
+      f.overlays.push_back(
+          {upper, cfg.problem.constraints.max_upper_elevation_deg, "upper bound limit", {0.9, 0.1, 0.1}, 3.0});
       f.overlays.push_back({rim, cfg.problem.RimLimitPx(), "rim radius limit", {1.0, 0.55, 0.0}, 3.0});
       results::PointSet ok{{}, {}, "feasible integer-mm design", {0, 0, 0}, 0, 5};
       results::PointSet bad{{}, {}, "infeasible integer-mm design", {0.45, 0.45, 0.45}, 1, 6};
@@ -297,7 +314,8 @@ std::string WriteDesignReport(const DesignConfig& cfg, const DesignStudy& st, co
       return x;
     };
     f.series.push_back(series("continuous optimum", st.resolution_continuous, {0.85, 0.1, 0.1}));
-    if (!st.resolution_marked.empty()) f.series.push_back(series("marked design", st.resolution_marked, {0.1, 0.1, 0.1}));
+    if (!st.resolution_marked.empty())
+      f.series.push_back(series("marked design", st.resolution_marked, {0.1, 0.1, 0.1}));
     results::WritePng(f, dir / "figures" / "radial_resolution.png");
   }
 
@@ -322,23 +340,28 @@ std::string WriteDesignReport(const DesignConfig& cfg, const DesignStudy& st, co
   std::ostringstream sum;
   sum << "hovs design: " << cfg.name << " (objective " << ToString(cfg.problem.objective) << ")\n";
   const auto line = [&](const std::string& label, const Optimum& o) {
-    sum << "  " << label << std::string(label.size() < 20 ? 20 - label.size() : 0, ' ') << " a = " << Fmt("%.4f", o.metrics.p.a * 1e3) << " mm, b = "
-        << Fmt("%.4f", o.metrics.p.b * 1e3) << " mm, d = " << Fmt("%.1f", o.metrics.p.d * 1e3) << " mm, 2c = "
-        << Fmt("%.3f", o.metrics.system_length * 1e3) << " mm, field " << Fmt("%.3f", o.metrics.lower_deg) << " .. "
-        << Fmt("%.3f", o.metrics.upper_deg) << " deg, rim " << Fmt("%.1f", o.metrics.rim_radius_px) << " px"
+    sum << "  " << label << std::string(label.size() < 20 ? 20 - label.size() : 0, ' ')
+        << " a = " << Fmt("%.4f", o.metrics.p.a * 1e3) << " mm, b = " << Fmt("%.4f", o.metrics.p.b * 1e3)
+        << " mm, d = " << Fmt("%.1f", o.metrics.p.d * 1e3) << " mm, 2c = " << Fmt("%.3f", o.metrics.system_length * 1e3)
+        << " mm, field " << Fmt("%.3f", o.metrics.lower_deg) << " .. " << Fmt("%.3f", o.metrics.upper_deg)
+        << " deg, rim " << Fmt("%.1f", o.metrics.rim_radius_px) << " px"
         << (o.max_violation <= 0 ? "" : "  [INFEASIBLE]") << "\n";
   };
   line("continuous optimum", st.continuous);
-  if (st.integer_mm) line("integer-mm optimum", *st.integer_mm);
-  else if (cfg.integer_mm) sum << "  integer-mm optimum   none: no integer-millimetre design is feasible\n";
+  if (st.integer_mm)
+    line("integer-mm optimum", *st.integer_mm);
+  else if (cfg.integer_mm)
+    sum << "  integer-mm optimum   none: no integer-millimetre design is feasible\n";
   if (st.marked) line("marked design", *st.marked);
   sum << "  sweep: " << s.size() << " designs, " << feasible << " feasible; report in " << out_dir.string() << "\n";
   WriteFileAtomic(dir / "summary.txt", sum.str());
 
   results::HtmlPage page("hovs design study: " + cfg.name);
-  page.Paragraph("Mirror design of a hyperboloid catadioptric unit with the camera pinhole at the second focus, after "
-                 "the article's section 3.1. Objective: " + std::string(ToString(cfg.problem.objective)) +
-                 ". Every quantity is computed by hovs' core mirror and camera models.");
+  page.Paragraph(
+      "Mirror design of a hyperboloid catadioptric unit with the camera pinhole at the second focus, after "
+      "the article's section 3.1. Objective: " +
+      std::string(ToString(cfg.problem.objective)) +
+      ". Every quantity is computed by hovs' core mirror and camera models.");
   page.Heading("Designs");
   std::vector<std::vector<std::string>> rows = {MetricsRow("continuous optimum", st.continuous)};
   if (st.integer_mm) rows.push_back(MetricsRow("integer-mm optimum", *st.integer_mm));
@@ -365,8 +388,10 @@ std::string WriteDesignReport(const DesignConfig& cfg, const DesignStudy& st, co
   page.Figure("figures/upper_bound.png", "Upper bound of the field; the 0 deg contour is the horizon constraint", 540);
   page.Figure("figures/rim_radius.png", "Rim radius in the image (the article's Fig. 4-5)", 540);
   page.Figure("figures/system_length.png", "System length 2c", 540);
-  page.Figure("figures/feasible_region.png",
-              "Feasible region near the optimum: constraint boundaries, integer-millimetre designs (the article's Fig. 4)", 540);
+  page.Figure(
+      "figures/feasible_region.png",
+      "Feasible region near the optimum: constraint boundaries, integer-millimetre designs (the article's Fig. 4)",
+      540);
   page.Figure("figures/radial_resolution.png", "Radial resolution over the vertical field", 540);
   page.Heading("Solver log");
   std::string log;

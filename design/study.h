@@ -25,7 +25,8 @@ DesignStudy RunDesignStudy(const DesignConfig& config);
 
 // Writes out_dir/ atomically: config.yaml, sweep.csv, design.json, radial_resolution.csv, figures/*.png,
 // index.html, summary.txt. Nothing is left behind if anything fails. Returns the summary text.
-std::string WriteDesignReport(const DesignConfig& config, const DesignStudy& study, const std::filesystem::path& out_dir);
+std::string WriteDesignReport(const DesignConfig& config, const DesignStudy& study,
+                              const std::filesystem::path& out_dir);
 
 // Versions of every library the design layer uses.
 std::map<std::string, std::string> DesignVersions();

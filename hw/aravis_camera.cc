@@ -28,16 +28,17 @@ void CaptureSettings::Check(const std::string& where) const {
 }
 
 nlohmann::json StreamStats::ToJson() const {
-  return {{"completed", completed}, {"failures", failures}, {"underruns", underruns},
-          {"missing_packets", missing_packets}, {"resent_packets", resent_packets},
-          {"incomplete_seen", incomplete_seen}};
+  return {{"completed", completed},           {"failures", failures},
+          {"underruns", underruns},           {"missing_packets", missing_packets},
+          {"resent_packets", resent_packets}, {"incomplete_seen", incomplete_seen}};
 }
 
 namespace {
 
 uint64_t MonotonicNs() {
   return static_cast<uint64_t>(
-      std::chrono::duration_cast<std::chrono::nanoseconds>(std::chrono::steady_clock::now().time_since_epoch()).count());
+      std::chrono::duration_cast<std::chrono::nanoseconds>(std::chrono::steady_clock::now().time_since_epoch())
+          .count());
 }
 
 // Throws when err is set, with the camera and the step in the message; frees err.
@@ -80,15 +81,24 @@ int PresizeStreamSocket(uint16_t port, int bytes) {
 
 const char* StatusName(ArvBufferStatus s) {
   switch (s) {
-    case ARV_BUFFER_STATUS_SUCCESS: return "success";
-    case ARV_BUFFER_STATUS_CLEARED: return "cleared";
-    case ARV_BUFFER_STATUS_TIMEOUT: return "timeout";
-    case ARV_BUFFER_STATUS_MISSING_PACKETS: return "missing packets";
-    case ARV_BUFFER_STATUS_WRONG_PACKET_ID: return "wrong packet id";
-    case ARV_BUFFER_STATUS_SIZE_MISMATCH: return "size mismatch";
-    case ARV_BUFFER_STATUS_FILLING: return "filling";
-    case ARV_BUFFER_STATUS_ABORTED: return "aborted";
-    default: return "unknown";
+    case ARV_BUFFER_STATUS_SUCCESS:
+      return "success";
+    case ARV_BUFFER_STATUS_CLEARED:
+      return "cleared";
+    case ARV_BUFFER_STATUS_TIMEOUT:
+      return "timeout";
+    case ARV_BUFFER_STATUS_MISSING_PACKETS:
+      return "missing packets";
+    case ARV_BUFFER_STATUS_WRONG_PACKET_ID:
+      return "wrong packet id";
+    case ARV_BUFFER_STATUS_SIZE_MISMATCH:
+      return "size mismatch";
+    case ARV_BUFFER_STATUS_FILLING:
+      return "filling";
+    case ARV_BUFFER_STATUS_ABORTED:
+      return "aborted";
+    default:
+      return "unknown";
   }
 }
 
@@ -119,8 +129,8 @@ class AravisCamera : public CameraSource {
     Check(err, id, "open");
     const bool gv = arv_camera_is_gv_device(camera_);
     if (gv) {
-      arv_camera_gv_set_stream_options(camera_, s.packet_socket ? ARV_GV_STREAM_OPTION_NONE
-                                                                : ARV_GV_STREAM_OPTION_PACKET_SOCKET_DISABLED);
+      arv_camera_gv_set_stream_options(
+          camera_, s.packet_socket ? ARV_GV_STREAM_OPTION_NONE : ARV_GV_STREAM_OPTION_PACKET_SOCKET_DISABLED);
       if (s.packet_size > 0) {
         arv_camera_gv_set_packet_size(camera_, s.packet_size, &err);
         Check(err, id, "packet size " + std::to_string(s.packet_size));
@@ -141,7 +151,8 @@ class AravisCamera : public CameraSource {
       list += std::string(k ? ", " : "") + formats[k];
     }
     g_free(formats);
-    HOVS_REQUIRE(offered, "camera " + id, "pixel format ", s.pixel_format, " is not offered (the camera has: ", list, ")");
+    HOVS_REQUIRE(offered, "camera " + id, "pixel format ", s.pixel_format, " is not offered (the camera has: ", list,
+                 ")");
     arv_camera_set_pixel_format_from_string(camera_, s.pixel_format.c_str(), &err);
     Check(err, id, "pixel format " + s.pixel_format);
     if (s.width > 0 || s.height > 0 || s.offset_x > 0 || s.offset_y > 0) {
@@ -149,8 +160,8 @@ class AravisCamera : public CameraSource {
       arv_camera_get_sensor_size(camera_, &sw, &sh, &err);
       Check(err, id, "sensor size");
       const int w = s.width > 0 ? s.width : sw - s.offset_x, h = s.height > 0 ? s.height : sh - s.offset_y;
-      HOVS_REQUIRE(s.offset_x + w <= sw && s.offset_y + h <= sh, "camera " + id, "region ", w, "x", h, "+",
-                   s.offset_x, "+", s.offset_y, " exceeds the ", sw, "x", sh, " sensor");
+      HOVS_REQUIRE(s.offset_x + w <= sw && s.offset_y + h <= sh, "camera " + id, "region ", w, "x", h, "+", s.offset_x,
+                   "+", s.offset_y, " exceeds the ", sw, "x", sh, " sensor");
       arv_camera_set_region(camera_, s.offset_x, s.offset_y, w, h, &err);
       Check(err, id, "region");
     }
@@ -211,18 +222,26 @@ class AravisCamera : public CameraSource {
     if (err) g_error_free(err), err = nullptr;
     gint x = 0, y = 0, w = 0, h = 0;
     arv_camera_get_region(camera_, &x, &y, &w, &h, &err);
-    if (!err) j["region"] = {x, y, w, h};
-    else g_error_free(err), err = nullptr;
+    if (!err)
+      j["region"] = {x, y, w, h};
+    else
+      g_error_free(err), err = nullptr;
     const double exposure = arv_camera_get_exposure_time(camera_, &err);
-    if (!err) j["exposure_us"] = exposure;
-    else g_error_free(err), err = nullptr;
+    if (!err)
+      j["exposure_us"] = exposure;
+    else
+      g_error_free(err), err = nullptr;
     const double gain = arv_camera_get_gain(camera_, &err);
-    if (!err) j["gain"] = gain;
-    else g_error_free(err), err = nullptr;
+    if (!err)
+      j["gain"] = gain;
+    else
+      g_error_free(err), err = nullptr;
     if (arv_camera_is_gv_device(camera_)) {
       const int ps = arv_camera_gv_get_packet_size(camera_, &err);
-      if (!err) j["packet_size"] = ps;
-      else g_error_free(err), err = nullptr;
+      if (!err)
+        j["packet_size"] = ps;
+      else
+        g_error_free(err), err = nullptr;
     }
     j["features"] = applied_features_;
     if (stream_ && ARV_IS_GV_STREAM(stream_)) j["stream_socket_presized"] = socket_presized_;
@@ -278,8 +297,10 @@ class AravisCamera : public CameraSource {
       size_t size = 0;
       const auto* data = static_cast<const uint8_t*>(arv_buffer_get_data(b, &size));
       const size_t need = size_t(f.width) * f.height * f.BytesPerPixel();
-      if (size >= need) f.data.assign(data, data + need);
-      else f.complete = false, f.status = "short image payload";
+      if (size >= need)
+        f.data.assign(data, data + need);
+      else
+        f.complete = false, f.status = "short image payload";
     } else if (f.complete) {
       f.complete = false, f.status = "not an image payload";
     }
@@ -324,7 +345,7 @@ class AravisCamera : public CameraSource {
   ArvCamera* camera_ = nullptr;
   ArvStream* stream_ = nullptr;
   bool running_ = false;
-  bool socket_presized_ = false;   // the stream socket sized before the first frame (PresizeStreamSocket)
+  bool socket_presized_ = false;  // the stream socket sized before the first frame (PresizeStreamSocket)
   uint64_t incomplete_ = 0;
   std::map<std::string, std::string> applied_features_;
 };

@@ -19,18 +19,18 @@
 namespace hovs::hw {
 
 struct CaptureSettings {
-  std::string pixel_format = "Mono8";   // Mono8 | BayerRG8 | Mono16
-  double exposure_us = -1;               // < 0: leave the camera's value
-  double gain = -1;                      // < 0: leave
-  double frame_rate = -1;                // < 0: leave
-  int width = 0, height = 0;             // region; 0: the full sensor
+  std::string pixel_format = "Mono8";  // Mono8 | BayerRG8 | Mono16
+  double exposure_us = -1;             // < 0: leave the camera's value
+  double gain = -1;                    // < 0: leave
+  double frame_rate = -1;              // < 0: leave
+  int width = 0, height = 0;           // region; 0: the full sensor
   int offset_x = 0, offset_y = 0;
-  int packet_size = 0;                   // GigE Vision packet size, bytes; 0: leave
-  int64_t packet_delay_ns = -1;          // inter-packet delay; < 0: leave
-  int socket_buffer_bytes = 16 << 20;    // receive socket buffer (capped by net.core.rmem_max); 0: Aravis' automatic size
-  int buffers = 8;                       // the stream's buffer pool
-  std::string trigger = "free";          // free | software | Line0 (hardware line)
-  bool packet_socket = false;            // Aravis' packet socket (needs capabilities; fails in containers)
+  int packet_size = 0;                 // GigE Vision packet size, bytes; 0: leave
+  int64_t packet_delay_ns = -1;        // inter-packet delay; < 0: leave
+  int socket_buffer_bytes = 16 << 20;  // receive socket buffer (capped by net.core.rmem_max); 0: Aravis' automatic size
+  int buffers = 8;                     // the stream's buffer pool
+  std::string trigger = "free";        // free | software | Line0 (hardware line)
+  bool packet_socket = false;          // Aravis' packet socket (needs capabilities; fails in containers)
   bool packet_resend = true;
   std::vector<std::pair<std::string, std::string>> features;  // generic GenICam features, set in order (PTP...)
   void Check(const std::string& where) const;
@@ -42,26 +42,26 @@ struct Frame {
   std::string pixel_format;
   uint64_t frame_id = 0;
   uint64_t device_ns = 0, system_ns = 0;
-  bool complete = false;       // false: the stream reported an incomplete / failed buffer (never written as good)
-  std::string status;          // "success" or Aravis' reason
+  bool complete = false;  // false: the stream reported an incomplete / failed buffer (never written as good)
+  std::string status;     // "success" or Aravis' reason
   size_t BytesPerPixel() const { return pixel_format == "Mono16" ? 2 : 1; }
 };
 
 struct StreamStats {
-  uint64_t completed = 0, failures = 0, underruns = 0;   // buffers
-  uint64_t missing_packets = 0, resent_packets = 0;      // GigE Vision
-  uint64_t incomplete_seen = 0;                          // incomplete frames handed out by Grab
+  uint64_t completed = 0, failures = 0, underruns = 0;  // buffers
+  uint64_t missing_packets = 0, resent_packets = 0;     // GigE Vision
+  uint64_t incomplete_seen = 0;                         // incomplete frames handed out by Grab
   nlohmann::json ToJson() const;
 };
 
 class CameraSource {
  public:
   virtual ~CameraSource() = default;
-  virtual nlohmann::json Info() const = 0;     // vendor, model, serial, address, settings actually applied
+  virtual nlohmann::json Info() const = 0;  // vendor, model, serial, address, settings actually applied
   virtual void Start() = 0;
   // The next frame, or nothing after timeout_s. An incomplete frame is returned with complete = false.
   virtual std::optional<Frame> Grab(double timeout_s) = 0;
-  virtual void SoftwareTrigger() = 0;          // throws if the source is not in software-trigger mode
+  virtual void SoftwareTrigger() = 0;  // throws if the source is not in software-trigger mode
   virtual void Stop() = 0;
   virtual StreamStats Stats() const = 0;
 };

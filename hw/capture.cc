@@ -20,12 +20,13 @@ namespace fs = std::filesystem;
 void CaptureOptions::Check(size_t sources, const std::string& where) const {
   HOVS_REQUIRE(sources == 1 || sources == 2, where, "capture takes one or two cameras (got ", sources, ")");
   HOVS_REQUIRE(frames >= 1, where, "frames must be at least 1 (got ", frames, ")");
-  HOVS_REQUIRE(max_seconds >= 0 && std::isfinite(max_seconds), where + ".max_seconds (--seconds)",
-               "must be >= 0 (got ", max_seconds, ")");
+  HOVS_REQUIRE(max_seconds >= 0 && std::isfinite(max_seconds), where + ".max_seconds (--seconds)", "must be >= 0 (got ",
+               max_seconds, ")");
   HOVS_REQUIRE(std::isfinite(grab_timeout_s) && grab_timeout_s > 0 && grab_timeout_s <= 3600,
                where + ".grab_timeout_s (--timeout)", "must be in (0, 3600] seconds (got ", grab_timeout_s, ")");
   HOVS_REQUIRE(unit_names.empty() || unit_names.size() == sources, where, "one unit name per camera");
-  HOVS_REQUIRE(write_queue >= 1 && write_queue <= 4096, where, "write_queue must be in 1..4096 (got ", write_queue, ")");
+  HOVS_REQUIRE(write_queue >= 1 && write_queue <= 4096, where, "write_queue must be in 1..4096 (got ", write_queue,
+               ")");
   HOVS_REQUIRE(image_format == "png" || image_format == "pgm", where + ".image_format", "expected png or pgm (got '",
                image_format, "')");
 }
@@ -36,11 +37,13 @@ namespace {
 void WriteFramePgm(const fs::path& path, const Frame& f) {
   const bool wide = f.pixel_format == "Mono16";
   const size_t n = size_t(f.width) * f.height;
-  std::string text = "P5\n" + std::to_string(f.width) + " " + std::to_string(f.height) + "\n" + (wide ? "65535" : "255") + "\n";
+  std::string text =
+      "P5\n" + std::to_string(f.width) + " " + std::to_string(f.height) + "\n" + (wide ? "65535" : "255") + "\n";
   const size_t head = text.size();
   text.resize(head + n * (wide ? 2 : 1));
   if (wide) {
-    for (size_t k = 0; k < n; ++k) text[head + 2 * k] = char(f.data[2 * k + 1]), text[head + 2 * k + 1] = char(f.data[2 * k]);
+    for (size_t k = 0; k < n; ++k)
+      text[head + 2 * k] = char(f.data[2 * k + 1]), text[head + 2 * k + 1] = char(f.data[2 * k]);
   } else {
     std::memcpy(&text[head], f.data.data(), n);
   }
@@ -72,9 +75,16 @@ CaptureResult CaptureDataset(const std::vector<CameraSource*>& sources, const Ca
   nlohmann::json units = nlohmann::json::array();
   for (size_t k = 0; k < sources.size(); ++k) units.push_back({{"name", names[k]}, {"camera", sources[k]->Info()}});
   nlohmann::json& m = r.manifest;
-  m = {{"format", "hovs-dataset"}, {"version", 1}, {"kind", "capture"}, {"name", "capture"},
-       {"generator", "hovs capture"}, {"versions", versions}, {"units", units}, {"frames", nlohmann::json::array()},
-       {"incomplete_frames", nlohmann::json::array()}, {"status", "capturing"},
+  m = {{"format", "hovs-dataset"},
+       {"version", 1},
+       {"kind", "capture"},
+       {"name", "capture"},
+       {"generator", "hovs capture"},
+       {"versions", versions},
+       {"units", units},
+       {"frames", nlohmann::json::array()},
+       {"incomplete_frames", nlohmann::json::array()},
+       {"status", "capturing"},
        {"note", "real capture: no ground truth; images are raw sensor data (Mono8, BayerRG8 mosaic or Mono16)"}};
   // m, the statistics snapshot and r.written are shared by the grab loop and the writer thread: guarded by mu.
   std::mutex mu;
@@ -102,9 +112,15 @@ CaptureResult CaptureDataset(const std::vector<CameraSource*>& sources, const Ca
   pairer.tolerance_ns = o.pair_tolerance_ns;
   auto view_json = [&](size_t unit, const Frame& f, const std::string& rel) {
     const auto info = sources[unit]->Info();
-    nlohmann::json v = {{"unit", names[unit]}, {"image", rel}, {"frame_id", f.frame_id}, {"device_ns", f.device_ns},
-                        {"system_ns", f.system_ns}, {"pixel_format", f.pixel_format}, {"width", f.width},
-                        {"height", f.height}, {"serial", info.value("serial", "")}};
+    nlohmann::json v = {{"unit", names[unit]},
+                        {"image", rel},
+                        {"frame_id", f.frame_id},
+                        {"device_ns", f.device_ns},
+                        {"system_ns", f.system_ns},
+                        {"pixel_format", f.pixel_format},
+                        {"width", f.width},
+                        {"height", f.height},
+                        {"serial", info.value("serial", "")}};
     if (info.contains("exposure_us")) v["exposure_us"] = info["exposure_us"];
     if (info.contains("gain")) v["gain"] = info["gain"];
     return v;
@@ -187,14 +203,14 @@ CaptureResult CaptureDataset(const std::vector<CameraSource*>& sources, const Ca
       std::vector<std::vector<Frame>> got(sources.size());
       for (size_t k = 0; k < sources.size(); ++k) {
         auto f = sources[k]->Grab(o.grab_timeout_s);
-        HOVS_REQUIRE(f.has_value() || (stop && stop->load()), "capture",
-                     "camera ", names[k], " delivered no frame within ", o.grab_timeout_s, " s (timeout)");
+        HOVS_REQUIRE(f.has_value() || (stop && stop->load()), "capture", "camera ", names[k],
+                     " delivered no frame within ", o.grab_timeout_s, " s (timeout)");
         if (!f) break;
         if (!f->complete) {
           ++r.incomplete;
           std::lock_guard<std::mutex> lock(mu);
-          m["incomplete_frames"].push_back({{"unit", names[k]}, {"frame_id", f->frame_id}, {"status", f->status},
-                                            {"device_ns", f->device_ns}});
+          m["incomplete_frames"].push_back(
+              {{"unit", names[k]}, {"frame_id", f->frame_id}, {"status", f->status}, {"device_ns", f->device_ns}});
           continue;
         }
         got[k].push_back(std::move(*f));

@@ -18,11 +18,11 @@
 namespace hovs::hw {
 
 struct CaptureOptions {
-  int frames = 10;                    // frames (pairs) to write
-  double max_seconds = 0;             // 0: no limit
-  double grab_timeout_s = 3;          // per frame; a camera silent this long stops the capture with an error
+  int frames = 10;            // frames (pairs) to write
+  double max_seconds = 0;     // 0: no limit
+  double grab_timeout_s = 3;  // per frame; a camera silent this long stops the capture with an error
   uint64_t pair_tolerance_ns = 2'000'000;
-  bool software_trigger = false;      // trigger every camera before each frame
+  bool software_trigger = false;        // trigger every camera before each frame
   std::vector<std::string> unit_names;  // one per source (default unit0, unit1)
   // Frames (pairs) grabbed but not yet written: a writer thread compresses and writes them while the grab loop
   // keeps draining the cameras' buffers; when it is full the grab loop waits (the cameras' buffer pools then
@@ -40,7 +40,7 @@ struct CaptureResult {
   int incomplete = 0;     // frames the stream delivered incomplete (not written)
   uint64_t unpaired = 0;  // two cameras: frames without a partner within the tolerance
   bool interrupted = false;
-  int max_queue_depth = 0;   // the writer queue's high-water mark
+  int max_queue_depth = 0;  // the writer queue's high-water mark
   nlohmann::json manifest;
 };
 

@@ -28,8 +28,9 @@ FakeGigECamera::FakeGigECamera(const std::string& interface, const std::string& 
     impl_->gv = nullptr;
     // Linux answers 127.0.0.2 on the loopback only once it is added there (the second unit of a stereo simulation).
     const std::string hint = interface.rfind("127.", 0) == 0 && interface != "127.0.0.1"
-                                 ? "; add it with `ip addr add " + interface + "/8 dev lo` (as root), or run in a private "
-                                   "network namespace as tests/hw/run_in_netns.sh does"
+                                 ? "; add it with `ip addr add " + interface +
+                                       "/8 dev lo` (as root), or run in a private "
+                                       "network namespace as tests/hw/run_in_netns.sh does"
                                  : "";
     throw Error("camera simulator",
                 "cannot serve on '" + interface + "' (address not configured or port in use)" + hint);
@@ -70,7 +71,8 @@ void FakeGigECamera::Fill(void* buffer, void* self_ptr, uint32_t, uint32_t, uint
   auto* b = static_cast<ArvBuffer*>(buffer);
   // The received size is set after this callback: the image's own geometry gives the bytes to fill.
   auto* dst = static_cast<uint8_t*>(const_cast<void*>(arv_buffer_get_data(b, nullptr)));
-  const size_t size = size_t(std::max(0, arv_buffer_get_image_width(b))) * size_t(std::max(0, arv_buffer_get_image_height(b)));
+  const size_t size =
+      size_t(std::max(0, arv_buffer_get_image_width(b))) * size_t(std::max(0, arv_buffer_get_image_height(b)));
   const uint64_t k = self->served_.fetch_add(1);
   const FakeFrame& f = self->frames_[k % self->frames_.size()];
   const size_t n = std::min(size, f.data.size());

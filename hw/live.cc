@@ -73,8 +73,8 @@ void Loop(CameraSource& cam, const unwrap::RemapTable& table, const LiveOptions&
 
 }  // namespace
 
-LiveRun RunLive(CameraSource& cam, const unwrap::RemapTable& table, const LiveOptions& options,
-                std::atomic<bool>* stop, const std::function<void(const std::vector<unwrap::Image8>&)>& display) {
+LiveRun RunLive(CameraSource& cam, const unwrap::RemapTable& table, const LiveOptions& options, std::atomic<bool>* stop,
+                const std::function<void(const std::vector<unwrap::Image8>&)>& display) {
   LiveRun r;
   cam.Start();
   try {

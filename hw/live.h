@@ -16,14 +16,14 @@
 namespace hovs::hw {
 
 struct LiveOptions {
-  int frames = 100;                  // 0: until stopped or `seconds`
-  double seconds = 0;                // 0: no limit
-  double timeout = 3;                // s: a complete frame must arrive within this of the previous one
-  int write_every = 0;               // write the views of every Nth frame into out_dir (0: never)
+  int frames = 100;     // 0: until stopped or `seconds`
+  double seconds = 0;   // 0: no limit
+  double timeout = 3;   // s: a complete frame must arrive within this of the previous one
+  int write_every = 0;  // write the views of every Nth frame into out_dir (0: never)
   std::filesystem::path out_dir;
   bool software_trigger = false;
-  bool replay = false;               // the source ends (a replay): no frame is the end, not a timeout
-  std::string source_name, mapping_name;   // named in errors
+  bool replay = false;                    // the source ends (a replay): no frame is the end, not a timeout
+  std::string source_name, mapping_name;  // named in errors
   unwrap::PixelFormat format = unwrap::PixelFormat::kGray8;
   unwrap::Interpolation interpolation = unwrap::Interpolation::kBilinear;
 };
@@ -40,7 +40,6 @@ struct LiveRun {
 // may set it too). Starts and stops the camera; throws hovs::Error naming the source when no complete frame
 // arrives in time or a frame does not match the mapping's size.
 LiveRun RunLive(CameraSource& camera, const unwrap::RemapTable& table, const LiveOptions& options,
-                std::atomic<bool>* stop,
-                const std::function<void(const std::vector<unwrap::Image8>&)>& display = {});
+                std::atomic<bool>* stop, const std::function<void(const std::vector<unwrap::Image8>&)>& display = {});
 
 }  // namespace hovs::hw

@@ -29,8 +29,8 @@ class Replay : public CameraSource {
     HOVS_REQUIRE(!items_.empty(), source_, "no frames to replay");
   }
   nlohmann::json Info() const override {
-    return {{"id", "replay:" + source_}, {"vendor", "hovs"}, {"model", "replay"}, {"serial", source_},
-            {"pixel_format", format_}, {"frames", items_.size()}};
+    return {{"id", "replay:" + source_}, {"vendor", "hovs"},        {"model", "replay"},
+            {"serial", source_},         {"pixel_format", format_}, {"frames", items_.size()}};
   }
   void Start() override { running_ = true; }
   void Stop() override { running_ = false; }
@@ -51,8 +51,8 @@ class Replay : public CameraSource {
     f.frame_id = next_;
     f.device_ns = it.device_ns + (next_ / items_.size()) * items_.size() * 100'000'000ull;
     f.system_ns = static_cast<uint64_t>(std::chrono::steady_clock::now().time_since_epoch().count());
-    HOVS_REQUIRE(format_ == "Mono8" || c == 1, it.image.string(), "BayerRG8 replay needs a one-channel mosaic (the file has ",
-                 c, " channels)");
+    HOVS_REQUIRE(format_ == "Mono8" || c == 1, it.image.string(),
+                 "BayerRG8 replay needs a one-channel mosaic (the file has ", c, " channels)");
     f.data.resize(size_t(w) * h);
     for (size_t k = 0; k < f.data.size(); ++k) {
       double v = px[k * c];
@@ -124,8 +124,10 @@ std::vector<std::pair<Frame, Frame>> FramePairer::Add(int stream, Frame frame) {
   // Frames of this stream still waiting are older than this one: they lost their chance.
   dropped += mine.size();
   mine.clear();
-  if (stream == 0) out.emplace_back(std::move(frame), std::move(match));
-  else out.emplace_back(std::move(match), std::move(frame));
+  if (stream == 0)
+    out.emplace_back(std::move(frame), std::move(match));
+  else
+    out.emplace_back(std::move(match), std::move(frame));
   return out;
 }
 

@@ -16,8 +16,8 @@ namespace {
 
 // ------------------------------------------------------------------------------------------------- PNG
 // libpng reports errors through a callback that must not return: it records the message and longjmps back to
-// the setjmp of the function that called libpng (PngInfo, PngTransforms, PngPixels; they hold no C++ objects). Warnings are
-// ignored: libpng raises errors for what damages the pixels (a short or corrupt IDAT stream, a bad checksum).
+// the setjmp of the function that called libpng (PngInfo, PngTransforms, PngPixels; they hold no C++ objects). Warnings
+// are ignored: libpng raises errors for what damages the pixels (a short or corrupt IDAT stream, a bad checksum).
 
 struct PngSource {
   const std::string* bytes;
@@ -53,7 +53,7 @@ bool PngTransforms(png_structp png, png_infop info) {
   if (type == PNG_COLOR_TYPE_PALETTE) png_set_palette_to_rgb(png);
   if (type == PNG_COLOR_TYPE_GRAY && depth < 8) png_set_expand_gray_1_2_4_to_8(png);
   if (png_get_valid(png, info, PNG_INFO_tRNS)) png_set_tRNS_to_alpha(png);
-  if (depth == 16) png_set_swap(png);   // native (little-endian) 16-bit samples
+  if (depth == 16) png_set_swap(png);  // native (little-endian) 16-bit samples
   png_set_interlace_handling(png);
   png_read_update_info(png, info);
   return true;
@@ -66,7 +66,7 @@ void PngOutputFormat(png_structp png, png_infop info, int* channels, int* bits) 
   *channels = type == PNG_COLOR_TYPE_GRAY         ? 1 + trns
               : type == PNG_COLOR_TYPE_GRAY_ALPHA ? 2
               : type == PNG_COLOR_TYPE_RGB_ALPHA  ? 4
-                                                  : 3 + trns;   // RGB, palette
+                                                  : 3 + trns;  // RGB, palette
   *bits = png_get_bit_depth(png, info) == 16 ? 16 : 8;
 }
 
@@ -111,7 +111,7 @@ void JpegErrorExit(j_common_ptr cinfo) {
 }
 
 void JpegEmit(j_common_ptr cinfo, int level) {
-  if (level >= 0) return;   // trace messages
+  if (level >= 0) return;  // trace messages
   const int code = cinfo->err->msg_code;
   if (code == JWRN_EXTRANEOUS_DATA || code == JWRN_JFIF_MAJOR || code == JWRN_ADOBE_XFORM || code == JWRN_BOGUS_ICC)
     return;
@@ -142,7 +142,9 @@ bool JpegPixels(jpeg_decompress_struct* cinfo, unsigned char* out, size_t row_by
 
 }  // namespace
 
-bool IsPng(const std::string& b) { return b.size() >= 8 && png_sig_cmp(reinterpret_cast<png_const_bytep>(b.data()), 0, 8) == 0; }
+bool IsPng(const std::string& b) {
+  return b.size() >= 8 && png_sig_cmp(reinterpret_cast<png_const_bytep>(b.data()), 0, 8) == 0;
+}
 
 bool IsJpeg(const std::string& b) {
   return b.size() >= 3 && uint8_t(b[0]) == 0xFF && uint8_t(b[1]) == 0xD8 && uint8_t(b[2]) == 0xFF;

@@ -241,8 +241,9 @@ void WriteExr(const fs::path& path, int width, int height, const std::vector<std
 
 std::map<std::string, std::string> IoVersions() {
   std::map<std::string, std::string> v;
-  const int oiio = OIIO::openimageio_version();   // 10000 * major + 100 * minor + patch
-  v["openimageio"] = std::to_string(oiio / 10000) + "." + std::to_string(oiio / 100 % 100) + "." + std::to_string(oiio % 100);
+  const int oiio = OIIO::openimageio_version();  // 10000 * major + 100 * minor + patch
+  v["openimageio"] =
+      std::to_string(oiio / 10000) + "." + std::to_string(oiio / 100 % 100) + "." + std::to_string(oiio % 100);
   // "openexr:OpenEXR 3.1.5;tiff:LIBTIFF Version 4.5.0;...": the entry's last word.
   std::string list;
   if (OIIO::getattribute("library_list", list)) {

@@ -28,8 +28,8 @@ inline constexpr int64_t kMaxImagePixels = int64_t(1) << 28;
 
 struct ImageHeader {
   int width = 0, height = 0, channels = 0;
-  int bits = 8;              // per channel as stored: 8, 16 or 32 (float)
-  std::string format;        // "png", "jpeg", or OpenImageIO's format name
+  int bits = 8;        // per channel as stored: 8, 16 or 32 (float)
+  std::string format;  // "png", "jpeg", or OpenImageIO's format name
 };
 
 // The header of an image file, checked (size within the limits above, 1 to 4 channels). Throws hovs::Error
@@ -43,7 +43,7 @@ PixelBuffer ReadImage(const std::filesystem::path& path, int* width, int* height
 // An 8-bit image: one channel (grey) or three (RGB; a fourth, alpha, is dropped).
 struct Image8Bits {
   int width = 0, height = 0, channels = 0;
-  std::vector<uint8_t> data;   // interleaved, row-major
+  std::vector<uint8_t> data;  // interleaved, row-major
 };
 
 // ReadImage rounded to 8 bits (values clamped to [0, 1]). Throws as ReadImage, and for 2 channels.
@@ -64,7 +64,7 @@ struct ExrChannels {
   int width = 0, height = 0;
   std::map<std::string, std::vector<float>> channels;
   std::map<std::string, std::string> attributes;  // string attributes, e.g. "hovs:unit"
-  std::string source;                              // the file, for errors
+  std::string source;                             // the file, for errors
   // The channel, or an error naming the file and the channel.
   const std::vector<float>& at(const std::string& name) const;
 };

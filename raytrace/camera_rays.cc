@@ -57,7 +57,7 @@ __attribute__((always_inline)) inline void UnitRaysOf(
       from_camera[i] = unit;
       const T w = vz[i] != 0 ? vz[i] : one;
       const T t = dzr / w, px = cx + t * vx[i], py = cy + t * vy[i], r2 = px * px + py * py;
-      const bool ring = vz[i] != 0 && t > near && r2 >= r02 && r2 <= r12;   // v is unit: t is the distance
+      const bool ring = vz[i] != 0 && t > near && r2 >= r02 && r2 <= r12;  // v is unit: t is the distance
       mount_t[i] = no_ring > half ? -one : ring ? t : zero;
       const T sx = vx[i], sy = vy[i], sz = vz[i];
       dx[i] = R0 * sx + R3 * sy + R6 * sz;
@@ -75,8 +75,8 @@ __attribute__((always_inline)) inline void UnitRaysOf(
     from_camera[i] = via > half ? -1 : unit;
     const T w = vz[i] != 0 ? vz[i] : one;
     const T t = dzr / w, px = cx + t * vx[i], py = cy + t * vy[i], r2 = px * px + py * py;
-    const bool ring = vz[i] != 0 && t > near && r2 >= r02 && r2 <= r12;   // v is unit: t is the distance
-    const T off = via + no_ring;   // > 0: no ring distance
+    const bool ring = vz[i] != 0 && t > near && r2 >= r02 && r2 <= r12;  // v is unit: t is the distance
+    const T off = via + no_ring;                                         // > 0: no ring distance
     mount_t[i] = off > half ? -one : ring ? t : zero;
     const T sx = via > half ? dx[i] : vx[i], sy = via > half ? dy[i] : vy[i], sz = via > half ? dz[i] : vz[i];
     dx[i] = R0 * sx + R3 * sy + R6 * sz;
@@ -100,14 +100,14 @@ HOVS_VECTOR_CLONES void UnitRays(int n, int on, const unsigned char* __restrict 
                                  float* __restrict tnear_out, int* __restrict from_mirror, int* __restrict from_camera,
                                  T* __restrict mount_t) {
   if (on == n) {
-    UnitRaysOf<T, 1>(n, on_mirror, unit, tnear, ring_test, f, vx, vy, vz, Mx, My, Mz, dx, dy, dz, ox, oy, oz,
-                     tnear_out, from_mirror, from_camera, mount_t);
+    UnitRaysOf<T, 1>(n, on_mirror, unit, tnear, ring_test, f, vx, vy, vz, Mx, My, Mz, dx, dy, dz, ox, oy, oz, tnear_out,
+                     from_mirror, from_camera, mount_t);
   } else if (on == 0) {
-    UnitRaysOf<T, 2>(n, on_mirror, unit, tnear, ring_test, f, vx, vy, vz, Mx, My, Mz, dx, dy, dz, ox, oy, oz,
-                     tnear_out, from_mirror, from_camera, mount_t);
+    UnitRaysOf<T, 2>(n, on_mirror, unit, tnear, ring_test, f, vx, vy, vz, Mx, My, Mz, dx, dy, dz, ox, oy, oz, tnear_out,
+                     from_mirror, from_camera, mount_t);
   } else {
-    UnitRaysOf<T, 0>(n, on_mirror, unit, tnear, ring_test, f, vx, vy, vz, Mx, My, Mz, dx, dy, dz, ox, oy, oz,
-                     tnear_out, from_mirror, from_camera, mount_t);
+    UnitRaysOf<T, 0>(n, on_mirror, unit, tnear, ring_test, f, vx, vy, vz, Mx, My, Mz, dx, dy, dz, ox, oy, oz, tnear_out,
+                     from_mirror, from_camera, mount_t);
   }
 }
 
@@ -179,8 +179,8 @@ HOVS_VECTOR_CLONES
 void ThinLensRays(int n, double ifx, double ify, double cx, double cy, double lens_radius, double focus_distance,
                   int thin, const double* __restrict R, const double* __restrict t, const double* __restrict u,
                   const double* __restrict v, const double* __restrict disc_x, const double* __restrict disc_y,
-                  double* __restrict omx, double* __restrict omy, double* __restrict omz,
-                  double* __restrict vmx, double* __restrict vmy, double* __restrict vmz) {
+                  double* __restrict omx, double* __restrict omy, double* __restrict omz, double* __restrict vmx,
+                  double* __restrict vmy, double* __restrict vmz) {
   const double f = thin ? focus_distance : 1.0, r = thin ? lens_radius : 0.0;
   for (int i = 0; i < n; ++i) {
     const double x = (u[i] - cx) * ifx, y = (v[i] - cy) * ify;
@@ -207,11 +207,11 @@ __attribute__((always_inline)) inline void ThinLensWorldRaysOf(
     int n, const unsigned char* __restrict on_mirror, int unit, const double* __restrict R, const double* __restrict t,
     const UnitMotion& motion, const LensRayRing& ring, const double* __restrict tau, const double* __restrict Mx,
     const double* __restrict My, const double* __restrict Mz, const double* __restrict mdx,
-    const double* __restrict mdy, const double* __restrict mdz, const double* __restrict omx, const double* __restrict omy,
-    const double* __restrict omz, const double* __restrict vmx, const double* __restrict vmy,
-    const double* __restrict vmz, double* __restrict ox, double* __restrict oy, double* __restrict oz,
-    double* __restrict dx, double* __restrict dy, double* __restrict dz, int* __restrict from_mirror,
-    int* __restrict from_camera, double* __restrict mount_t) {
+    const double* __restrict mdy, const double* __restrict mdz, const double* __restrict omx,
+    const double* __restrict omy, const double* __restrict omz, const double* __restrict vmx,
+    const double* __restrict vmy, const double* __restrict vmz, double* __restrict ox, double* __restrict oy,
+    double* __restrict oz, double* __restrict dx, double* __restrict dy, double* __restrict dz,
+    int* __restrict from_mirror, int* __restrict from_camera, double* __restrict mount_t) {
   const double zr = ring.zr, r02 = ring.r02, r12 = ring.r12;
   const int own_unit = ring.own ? unit : -1, ring_test = ring.own & ring.ring;
   const double a0 = motion.axis[0], a1 = motion.axis[1], a2 = motion.axis[2], turns = motion.rate / (2 * M_PI);
@@ -257,19 +257,18 @@ HOVS_VECTOR_CLONES
 void ThinLensWorldRays(int n, const unsigned char* __restrict on_mirror, int unit, const double* __restrict R,
                        const double* __restrict t, const UnitMotion& motion, const LensRayRing& ring,
                        const double* __restrict tau, const double* __restrict Mx, const double* __restrict My,
-                       const double* __restrict Mz,
-                       const double* __restrict mdx, const double* __restrict mdy, const double* __restrict mdz,
-                       const double* __restrict omx, const double* __restrict omy, const double* __restrict omz,
-                       const double* __restrict vmx, const double* __restrict vmy, const double* __restrict vmz,
-                       double* __restrict ox, double* __restrict oy, double* __restrict oz, double* __restrict dx,
-                       double* __restrict dy, double* __restrict dz, int* __restrict from_mirror,
-                       int* __restrict from_camera, double* __restrict mount_t) {
+                       const double* __restrict Mz, const double* __restrict mdx, const double* __restrict mdy,
+                       const double* __restrict mdz, const double* __restrict omx, const double* __restrict omy,
+                       const double* __restrict omz, const double* __restrict vmx, const double* __restrict vmy,
+                       const double* __restrict vmz, double* __restrict ox, double* __restrict oy,
+                       double* __restrict oz, double* __restrict dx, double* __restrict dy, double* __restrict dz,
+                       int* __restrict from_mirror, int* __restrict from_camera, double* __restrict mount_t) {
   if (tau) {
     ThinLensWorldRaysOf<true>(n, on_mirror, unit, R, t, motion, ring, tau, Mx, My, Mz, mdx, mdy, mdz, omx, omy, omz,
                               vmx, vmy, vmz, ox, oy, oz, dx, dy, dz, from_mirror, from_camera, mount_t);
   } else {
-    ThinLensWorldRaysOf<false>(n, on_mirror, unit, R, t, motion, ring, tau, Mx, My, Mz, mdx, mdy, mdz, omx, omy,
-                               omz, vmx, vmy, vmz, ox, oy, oz, dx, dy, dz, from_mirror, from_camera, mount_t);
+    ThinLensWorldRaysOf<false>(n, on_mirror, unit, R, t, motion, ring, tau, Mx, My, Mz, mdx, mdy, mdz, omx, omy, omz,
+                               vmx, vmy, vmz, ox, oy, oz, dx, dy, dz, from_mirror, from_camera, mount_t);
   }
 }
 
@@ -291,14 +290,15 @@ void RayMaker::SetFrame(UnitRayFrame<T>* f) const {
 RayMaker::RayMaker(const RayScene& scene, const ViewCamera& cam, const RenderOptions& o)
     : scene_(scene), cam_(cam), lens_radius_(o.lens_radius), focus_distance_(o.focus_distance) {
   if (cam.unit >= 0) {
-    HOVS_REQUIRE(cam.unit < static_cast<int>(scene.description().units.size()), "render",
-                 "the scene has no unit ", cam.unit);
+    HOVS_REQUIRE(cam.unit < static_cast<int>(scene.description().units.size()), "render", "the scene has no unit ",
+                 cam.unit);
     unit_ = &scene.description().units[cam.unit];
     reflector_.emplace(unit_->rig.mirror);
     mirror_from_cam_ = unit_->rig.cam_from_mirror.Inverse();
     world_from_cam_ = unit_->world_from_mirror * mirror_from_cam_;
     // Rotation matrices for the per-sample transforms (a quaternion rotation costs twice as much).
-    R_mirror_from_cam_ = mirror_from_cam_.rotation.toRotationMatrix(), t_mirror_from_cam_ = mirror_from_cam_.translation;
+    R_mirror_from_cam_ = mirror_from_cam_.rotation.toRotationMatrix(),
+    t_mirror_from_cam_ = mirror_from_cam_.translation;
     R_world_from_mirror_ = unit_->world_from_mirror.rotation.toRotationMatrix();
     t_world_from_mirror_ = unit_->world_from_mirror.translation;
     viewpoint_ = unit_->world_from_mirror.translation;
@@ -343,7 +343,8 @@ void RayMaker::MakeBatchF(int n, const double* u, const double* v, RayBatchF* b)
   std::fill(b->valid, b->valid + n, 1);
 #pragma GCC diagnostic push
 #pragma GCC diagnostic ignored "-Wmaybe-uninitialized"
-  const int on = reflector_->ReflectBatch(t_mirror_from_cam_, n, vx, vy, vz, Mx, My, Mz, b->dx, b->dy, b->dz, on_mirror);
+  const int on =
+      reflector_->ReflectBatch(t_mirror_from_cam_, n, vx, vy, vz, Mx, My, Mz, b->dx, b->dy, b->dz, on_mirror);
   // (A batch whose rays all meet the mirror, most of them, has no straight ray: no ring test.)
   UnitRays<float>(n, on, on_mirror, cam_.unit, 1e-5f, unit_->mount_outer_radius > 0 && on < n, &frame_f_, vx, vy, vz,
                   Mx, My, Mz, b->dx, b->dy, b->dz, b->ox, b->oy, b->oz, b->tnear, b->from_mirror, b->from_camera,
@@ -352,16 +353,17 @@ void RayMaker::MakeBatchF(int n, const double* u, const double* v, RayBatchF* b)
 }
 
 void RayMaker::MakeBatch(int n, const double* u, const double* v, const double* lens_x, const double* lens_y,
-               const double* tau, RayBatch* b, double* Mx, double* My, double* Mz, const double* nx, const double* ny) const {
+                         const double* tau, RayBatch* b, double* Mx, double* My, double* Mz, const double* nx,
+                         const double* ny) const {
   b->n = n;
   b->timed = false, b->mirror_frame = false, b->mount_paths_clear = true;
   if ((lens_x || tau) && unit_) {
     MakeLensBatch(n, u, v, lens_x, lens_y, tau, b, Mx, My, Mz);
     return;
   }
-  if (lens_x || tau) {   // a pinhole view through a thin lens (pinhole views do not move)
+  if (lens_x || tau) {  // a pinhole view through a thin lens (pinhole views do not move)
     MakePinholeLensBatch(n, u, v, lens_x, lens_y, b);
-    std::fill(Mx, Mx + n, 0.0), std::fill(My, My + n, 0.0), std::fill(Mz, Mz + n, 0.0);   // no mirror
+    std::fill(Mx, Mx + n, 0.0), std::fill(My, My + n, 0.0), std::fill(Mz, Mz + n, 0.0);  // no mirror
     return;
   }
   const PinholeCamera<double>& cam = unit_ ? unit_->rig.camera : cam_.pinhole;
@@ -391,9 +393,9 @@ void RayMaker::MakeBatch(int n, const double* u, const double* v, const double* 
     // RayScene traces them only up to it. tnear 1e-5: off the mirror, or off the lens face.
     // (A batch whose rays all meet the mirror, most of them, has no straight ray: no ring test.) Both kinds of
     // ray from the mirror frame to the world in one rotation.
-    UnitRays<double>(n, on, on_mirror, cam_.unit, 1e-5f, unit_->mount_outer_radius > 0 && on < n, &frame_d_, vx, vy,
-                     vz, Mx, My, Mz, b->dx, b->dy, b->dz, b->ox, b->oy, b->oz, b->tnear, b->from_mirror,
-                     b->from_camera, b->mount_t);
+    UnitRays<double>(n, on, on_mirror, cam_.unit, 1e-5f, unit_->mount_outer_radius > 0 && on < n, &frame_d_, vx, vy, vz,
+                     Mx, My, Mz, b->dx, b->dy, b->dz, b->ox, b->oy, b->oz, b->tnear, b->from_mirror, b->from_camera,
+                     b->mount_t);
   } else {
     std::fill(on_mirror, on_mirror + n, 0);
     double via[RayBatch::kMax];  // on_mirror as 0 / 1 (the pinhole camera has no mirror: all 0)
@@ -408,7 +410,7 @@ void RayMaker::MakeBatch(int n, const double* u, const double* v, const double* 
 }
 
 void RayMaker::MakeLensBatch(int n, const double* u, const double* v, const double* lens_x, const double* lens_y,
-                   const double* tau, RayBatch* b, double* Mx, double* My, double* Mz) const {
+                             const double* tau, RayBatch* b, double* Mx, double* My, double* Mz) const {
   alignas(64) double omx[RayBatch::kMax], omy[RayBatch::kMax], omz[RayBatch::kMax], vmx[RayBatch::kMax],
       vmy[RayBatch::kMax], vmz[RayBatch::kMax];
   alignas(64) double mdx[RayBatch::kMax], mdy[RayBatch::kMax], mdz[RayBatch::kMax];
@@ -435,7 +437,7 @@ void RayMaker::MakeLensBatch(int n, const double* u, const double* v, const doub
 }
 
 void RayMaker::MakePinholeLensBatch(int n, const double* u, const double* v, const double* lens_x, const double* lens_y,
-                          RayBatch* b) const {
+                                    RayBatch* b) const {
   CameraLensRays(cam_.pinhole, R_world_from_cam_.data(), world_from_cam_.translation.data(), n, u, v, lens_x, lens_y,
                  b->valid, b->ox, b->oy, b->oz, b->dx, b->dy, b->dz);
   std::fill(b->tnear, b->tnear + n, 0.0f);
@@ -444,9 +446,10 @@ void RayMaker::MakePinholeLensBatch(int n, const double* u, const double* v, con
   std::fill(b->mount_t, b->mount_t + n, -1.0);
 }
 
-void RayMaker::CameraLensRays(const PinholeCamera<double>& cam, const double* R, const double* t, int n, const double* u,
-                    const double* v, const double* lens_x, const double* lens_y, unsigned char* valid, double* ox,
-                    double* oy, double* oz, double* dx, double* dy, double* dz) const {
+void RayMaker::CameraLensRays(const PinholeCamera<double>& cam, const double* R, const double* t, int n,
+                              const double* u, const double* v, const double* lens_x, const double* lens_y,
+                              unsigned char* valid, double* ox, double* oy, double* oz, double* dx, double* dy,
+                              double* dz) const {
   const bool thin = lens_x && lens_radius_ > 0, distorted = !cam.distortion.IsZero();
   alignas(64) double zeros[RayBatch::kMax], xn[RayBatch::kMax], yn[RayBatch::kMax];
   if (!thin) std::fill(zeros, zeros + n, 0.0);

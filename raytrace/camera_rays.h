@@ -60,8 +60,8 @@ class RayMaker {
   //
   // nx, ny (with u, v still given): the points' normalised coordinates ((u - cx) / fx, (v - cy) / fy), already
   // computed (pixel centres: one division per column and per row of a tile), for a camera without distortion.
-  void MakeBatch(int n, const double* u, const double* v, const double* lens_x, const double* lens_y,
-                 const double* tau, RayBatch* b, double* Mx, double* My, double* Mz, const double* nx = nullptr,
+  void MakeBatch(int n, const double* u, const double* v, const double* lens_x, const double* lens_y, const double* tau,
+                 RayBatch* b, double* Mx, double* My, double* Mz, const double* nx = nullptr,
                  const double* ny = nullptr) const;
 
  private:
@@ -95,7 +95,7 @@ class RayMaker {
   const ViewCamera& cam_;
   double lens_radius_ = 0, focus_distance_ = 1;
   const CatadioptricUnit* unit_ = nullptr;
-  std::optional<MirrorReflector> reflector_;   // the unit's mirror (same law as rig.ReflectCameraRay)
+  std::optional<MirrorReflector> reflector_;  // the unit's mirror (same law as rig.ReflectCameraRay)
   Rigid3d world_from_cam_, mirror_from_cam_;
   Eigen::Matrix3d R_mirror_from_cam_ = Eigen::Matrix3d::Identity(), R_world_from_mirror_ = Eigen::Matrix3d::Identity();
   Vec3d t_mirror_from_cam_ = Vec3d::Zero(), t_world_from_mirror_ = Vec3d::Zero();

@@ -10,8 +10,7 @@
 
 namespace hovs::raytrace {
 
-
-const char* const GroundTruth::kNames[GroundTruth::kChannels] = {"Z",   "P.X", "P.Y", "P.Z", "N.X", "N.Y",
+const char* const GroundTruth::kNames[GroundTruth::kChannels] = {"Z",   "P.X", "P.Y",  "P.Z", "N.X", "N.Y",
                                                                  "N.Z", "id",  "mask", "M.X", "M.Y", "M.Z"};
 
 HOVS_VECTOR_CLONES
@@ -42,11 +41,11 @@ void SumSamples(int len, int samples, int row, float weight, const float* __rest
 
 HOVS_VECTOR_CLONES
 void GroundTruthLanes(int m, const unsigned char* __restrict valid, const int* __restrict from_mirror,
-                      const unsigned char* __restrict hit, const int* __restrict object_id,
-                      const double* __restrict c, const double* __restrict px, const double* __restrict py,
-                      const double* __restrict pz, const double* __restrict nx, const double* __restrict ny,
-                      const double* __restrict nz, const double* __restrict Mx, const double* __restrict My,
-                      const double* __restrict Mz, float* __restrict out) {
+                      const unsigned char* __restrict hit, const int* __restrict object_id, const double* __restrict c,
+                      const double* __restrict px, const double* __restrict py, const double* __restrict pz,
+                      const double* __restrict nx, const double* __restrict ny, const double* __restrict nz,
+                      const double* __restrict Mx, const double* __restrict My, const double* __restrict Mz,
+                      float* __restrict out) {
   constexpr int K = RayBatch::kMax;
   const float inf = std::numeric_limits<float>::infinity();
   const double c0 = c[0], c1 = c[1], c2 = c[2];

@@ -39,5 +39,4 @@ inline void StoreGroundTruthPixel(const float* t, float* v) {
 #endif
 }
 
-
 }  // namespace hovs::raytrace

@@ -79,8 +79,10 @@ void PrepareFrame(const RayScene& scene, const ViewCamera& camera, const RenderO
     const Vec3d end = u.WorldFromMirrorAt(options.exposure_time).translation;
     HOVS_REQUIRE(end.allFinite() && end.cwiseAbs().maxCoeff() <= kWorldExtent, "render.exposure_time", "unit ", u.name,
                  " moves beyond ", kWorldExtent, " m of the world origin during the exposure");
-    HOVS_REQUIRE(options.exposure_time <= scene.MotionHorizon(), "render.exposure_time", "the scene's units turn so "
-                 "fast that motion blur covers at most ", scene.MotionHorizon(), " s (got ", options.exposure_time, ")");
+    HOVS_REQUIRE(options.exposure_time <= scene.MotionHorizon(), "render.exposure_time",
+                 "the scene's units turn so "
+                 "fast that motion blur covers at most ",
+                 scene.MotionHorizon(), " s (got ", options.exposure_time, ")");
   }
   Frame& f = *frame;
   CheckFrameMemory(camera.unit >= 0 ? "render (unit " + scene.description().units[camera.unit].name + "'s camera)"
@@ -92,14 +94,15 @@ void PrepareFrame(const RayScene& scene, const ViewCamera& camera, const RenderO
   const size_t npx = static_cast<size_t>(f.width) * f.height;
   f.rgb.resize(npx * 3);
   if (options.ground_truth) f.truth.data.resize(npx * GroundTruth::kChannels);
-  const bool whole = options.region.Empty() ||
-                     (options.region.x0 <= 0 && options.region.y0 <= 0 && options.region.x1 >= f.width &&
-                      options.region.y1 >= f.height);
+  const bool whole = options.region.Empty() || (options.region.x0 <= 0 && options.region.y0 <= 0 &&
+                                                options.region.x1 >= f.width && options.region.y1 >= f.height);
   if (whole) return;
-  for (PixelBuffer* b : {&f.rgb, &f.truth.data}) {   // zeroed in parallel (up to ~360 MB at full resolution)
-    tbb::parallel_for(tbb::blocked_range<size_t>(0, b->size(), size_t(1) << 20), [&](const tbb::blocked_range<size_t>& r) {
-      std::fill(b->begin() + static_cast<std::ptrdiff_t>(r.begin()), b->begin() + static_cast<std::ptrdiff_t>(r.end()), 0.0f);
-    });
+  for (PixelBuffer* b : {&f.rgb, &f.truth.data}) {  // zeroed in parallel (up to ~360 MB at full resolution)
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, b->size(), size_t(1) << 20),
+                      [&](const tbb::blocked_range<size_t>& r) {
+                        std::fill(b->begin() + static_cast<std::ptrdiff_t>(r.begin()),
+                                  b->begin() + static_cast<std::ptrdiff_t>(r.end()), 0.0f);
+                      });
   }
 }
 
@@ -125,7 +128,7 @@ class Progress {
   Progress(bool on, int total) : on_(on), total_(total) {}
   void TileDone() {
     if (!on_) return;
-    const int d = ++done_;   // (only here: an atomic shared by all threads costs about 0.6 % of a frame)
+    const int d = ++done_;  // (only here: an atomic shared by all threads costs about 0.6 % of a frame)
     const int percent = static_cast<int>(100.0 * d / total_);
     if (percent % 5 != 0) return;
     int last = printed_.load();
@@ -152,8 +155,13 @@ class TileRenderer {
 
   // blur: the samples get times in the exposure (a unit's camera with an exposure time).
   TileRenderer(const RayScene& scene, const RayMaker& maker, const RenderOptions& options, bool blur, Frame* frame)
-      : scene_(scene), maker_(maker), o_(options), f_(*frame), batch_(std::make_unique<RayBatch>()),
-        batch_f_(maker.single() ? std::make_unique<RayBatchF>() : nullptr), sc_(std::make_unique<Scratch>()) {
+      : scene_(scene),
+        maker_(maker),
+        o_(options),
+        f_(*frame),
+        batch_(std::make_unique<RayBatch>()),
+        batch_f_(maker.single() ? std::make_unique<RayBatchF>() : nullptr),
+        sc_(std::make_unique<Scratch>()) {
     n_ = options.samples;
     grid_ = static_cast<int>(std::lround(std::sqrt(n_)));
     stratified_ = grid_ * grid_ == n_;
@@ -176,16 +184,16 @@ class TileRenderer {
  private:
   struct Scratch {
     double u[kMax], v[kMax], Mx[kMax], My[kMax], Mz[kMax], tau[kMax];
-    double nx[kMax], ny[kMax], col_x[kMax], row_y[kMax];   // pixel centres' normalised coordinates
-    double disc_x[kMax], disc_y[kMax];   // thin-lens aperture points (unit disc)
+    double nx[kMax], ny[kMax], col_x[kMax], row_y[kMax];  // pixel centres' normalised coordinates
+    double disc_x[kMax], disc_y[kMax];                    // thin-lens aperture points (unit disc)
     int px[kMax];
     // The chunk's pixels: index in the frame, centre.
     int pixel[kMax];
-    int run_at[kMax], run_len[kMax];   // runs of neighbouring pixels (along a tile row) in the chunk
+    int run_at[kMax], run_len[kMax];  // runs of neighbouring pixels (along a tile row) in the chunk
     int pixel_x[kMax], pixel_y[kMax];
     float rgb[3 * kMax];
-    HitBatch hits;            // the ground-truth rays' hits
-    alignas(64) float truth[GroundTruth::kChannels * kMax];   // their ground truth, channel by channel
+    HitBatch hits;                                           // the ground-truth rays' hits
+    alignas(64) float truth[GroundTruth::kChannels * kMax];  // their ground truth, channel by channel
   };
 
   // The samples of the tile in chunks of P whole pixels (or of part of one pixel, P = 1, when it has more
@@ -200,7 +208,7 @@ class TileRenderer {
       const int pixels = std::min(per_chunk_, tile_px - p0), count = std::min(n_ - s0, kMax);
       const int P = per_chunk_ > 0 ? pixels : 1, m = per_chunk_ > 0 ? pixels * n_ : count;
       const int s_begin = per_chunk_ > 0 ? 0 : s0, s_end = per_chunk_ > 0 ? n_ : s0 + count;
-      int xq = x, yq = y;   // the chunk's pixels, in runs along the tile's rows (run r: run_at[r] .. + run_len[r])
+      int xq = x, yq = y;  // the chunk's pixels, in runs along the tile's rows (run r: run_at[r] .. + run_len[r])
       int runs = 0;
       for (int q = 0; q < P;) {
         const int len = std::min(x1 - xq, P - q), base = yq * f_.width + xq;
@@ -234,13 +242,13 @@ class TileRenderer {
   // The colours of a chunk's m samples (samples s_begin .. s_end - 1 of its P pixels) into sc.rgb.
   void TraceChunk(int P, int m, int s_begin, int s_end) {
     Scratch& sc = *sc_;
-    JitteredSamples(P, s_begin, s_end, grid_, seed_mix_, stratified_, inv_grid_, sc.pixel, sc.pixel_x, sc.pixel_y,
-                    sc.u, sc.v);
-    if (lens_ || blur_) {   // aperture points (uniform on the unit disc) and exposure times
-      LensSamples(P, s_begin, s_end, seed_mix_, lens_, blur_ ? o_.exposure_time : 0.0, sc.pixel, sc.disc_x,
-                  sc.disc_y, sc.tau);
+    JitteredSamples(P, s_begin, s_end, grid_, seed_mix_, stratified_, inv_grid_, sc.pixel, sc.pixel_x, sc.pixel_y, sc.u,
+                    sc.v);
+    if (lens_ || blur_) {  // aperture points (uniform on the unit disc) and exposure times
+      LensSamples(P, s_begin, s_end, seed_mix_, lens_, blur_ ? o_.exposure_time : 0.0, sc.pixel, sc.disc_x, sc.disc_y,
+                  sc.tau);
     }
-    if (batch_f_) {   // (every ray of this path is valid: MakeBatchF has no domain limit)
+    if (batch_f_) {  // (every ray of this path is valid: MakeBatchF has no domain limit)
       maker_.MakeBatchF(m, sc.u, sc.v, batch_f_.get());
       embree_rays_ += static_cast<uint64_t>(scene_.Colours(*batch_f_, sc.rgb));
       rays_ += static_cast<uint64_t>(m);
@@ -267,7 +275,7 @@ class TileRenderer {
     for (int p0 = 0; p0 < tile_px; p0 += kMax) {
       const int m = std::min(kMax, tile_px - p0);
       int runs = 0;
-      for (int k = 0; k < m;) {   // in runs along the tile's rows
+      for (int k = 0; k < m;) {  // in runs along the tile's rows
         const int len = std::min(x1 - gx, m - k), base = gy * f_.width + gx;
         sc.run_at[runs] = k, sc.run_len[runs++] = len;
         for (int i = 0; i < len; ++i) sc.px[k + i] = base + i;
@@ -332,7 +340,7 @@ void RenderInto(const RayScene& scene, const ViewCamera& camera, const RenderOpt
       progress.TileDone();
     }
 #if defined(__SSE__)
-    _mm_sfence();   // the streamed ground truth, ordered before the task ends
+    _mm_sfence();  // the streamed ground truth, ordered before the task ends
 #endif
     rays += task.rays();
     embree_rays += task.embree_rays();

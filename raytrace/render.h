@@ -19,19 +19,19 @@
 namespace hovs::raytrace {
 
 struct SensorOptions {
-  double gain = 1.0;             // linear scale before quantisation
-  double vignetting = 0.0;       // 0: none; v: brightness (1 - v) at the image corner, cos^4-shaped
-  double full_well = 0.0;        // electrons at white; > 0 enables shot noise
-  double read_noise = 0.0;       // electrons (standard deviation); needs full_well > 0
-  bool bayer = false;            // write one RGGB mosaic channel instead of RGB
-  int bit_depth = 8;             // 8 or 16
+  double gain = 1.0;        // linear scale before quantisation
+  double vignetting = 0.0;  // 0: none; v: brightness (1 - v) at the image corner, cos^4-shaped
+  double full_well = 0.0;   // electrons at white; > 0 enables shot noise
+  double read_noise = 0.0;  // electrons (standard deviation); needs full_well > 0
+  bool bayer = false;       // write one RGGB mosaic channel instead of RGB
+  int bit_depth = 8;        // 8 or 16
   void Check(const std::string& where) const;
 };
 
 struct RenderOptions {
-  int samples = 4;               // per pixel; a perfect square gives a stratified grid, otherwise jittered
-  uint64_t seed = 1;             // sample jitter and sensor noise
-  bool ground_truth = true;      // per-pixel ground truth from the pixel-centre ray (pinhole, time 0)
+  int samples = 4;           // per pixel; a perfect square gives a stratified grid, otherwise jittered
+  uint64_t seed = 1;         // sample jitter and sensor noise
+  bool ground_truth = true;  // per-pixel ground truth from the pixel-centre ray (pinhole, time 0)
   // Thin-lens defocus of the camera (catadioptric or pinhole): lens radius in metres (0: pinhole) and the
   // distance from the lens along its optical axis to the plane in focus (for a catadioptric camera, the mirror's
   // virtual image lies a little beyond the mirror: about 2c).
@@ -41,7 +41,7 @@ struct RenderOptions {
   // with the unit's velocity and angular velocity. Every moving unit's parts (its camera body, lens face, mirror
   // and mount, as seen in its own mirror or by another unit) are met where they are at that time.
   double exposure_time = 0.0;
-  bool progress = false;         // progress bar on stderr
+  bool progress = false;  // progress bar on stderr
   // Render only pixels with x0 <= x < x1, y0 <= y < y1 (others stay black, ground truth zero). Empty: all.
   struct Region {
     int x0 = 0, y0 = 0, x1 = 0, y1 = 0;
@@ -53,9 +53,9 @@ struct RenderOptions {
 
 // What looks: a catadioptric unit of the scene, or a plain pinhole camera anywhere.
 struct ViewCamera {
-  int unit = 0;                       // >= 0: the scene's unit
-  PinholeCamera<double> pinhole;      // used when unit < 0
-  Rigid3d world_from_cam;             // used when unit < 0
+  int unit = 0;                   // >= 0: the scene's unit
+  PinholeCamera<double> pinhole;  // used when unit < 0
+  Rigid3d world_from_cam;         // used when unit < 0
   static ViewCamera Unit(int u) { return ViewCamera{u, {}, {}}; }
   static ViewCamera Pinhole(const PinholeCamera<double>& cam, const Rigid3d& world_from_cam) {
     return ViewCamera{-1, cam, world_from_cam};
@@ -81,8 +81,8 @@ struct GroundTruth {
 
 struct Frame {
   int width = 0, height = 0;
-  PixelBuffer rgb;   // linear radiance, 3 per pixel, before the sensor model
-  GroundTruth truth;        // empty if not requested
+  PixelBuffer rgb;    // linear radiance, 3 per pixel, before the sensor model
+  GroundTruth truth;  // empty if not requested
   // Rays traced: one per valid sample and per ground-truth pixel, each the camera ray and, where it meets the
   // mirror, its reflection; Embree or an analytic surface (the unit's own mount ring) ends it.
   uint64_t rays = 0;

@@ -48,8 +48,8 @@ __attribute__((always_inline)) inline double UniformOf(uint64_t h) {
 // becomes a double exactly, as the conversion in Uniform: kDirect, by the 64-bit integer conversion (an AVX-512DQ
 // instruction; without it GCC does not vectorise the loop), else through its bits (the same value).
 template <bool kDirect>
-__attribute__((always_inline)) inline void JitteredSamplesOf(int P, int s_begin, int s_end, int grid,
-                                                             uint64_t seed_mix, bool stratified, double inv_grid,
+__attribute__((always_inline)) inline void JitteredSamplesOf(int P, int s_begin, int s_end, int grid, uint64_t seed_mix,
+                                                             bool stratified, double inv_grid,
                                                              const int* __restrict pixel, const int* __restrict x,
                                                              const int* __restrict y, double* __restrict u,
                                                              double* __restrict v) {
@@ -76,10 +76,11 @@ void JitteredSamplesBits(int P, int s_begin, int s_end, int grid, uint64_t seed_
 }
 
 #if defined(HOVS_VECTOR_CLONES_ENABLED)
-__attribute__((target("arch=x86-64-v4"))) void JitteredSamplesDirect(
-    int P, int s_begin, int s_end, int grid, uint64_t seed_mix, bool stratified, double inv_grid,
-    const int* __restrict pixel, const int* __restrict x, const int* __restrict y, double* __restrict u,
-    double* __restrict v) {
+__attribute__((target("arch=x86-64-v4"))) void JitteredSamplesDirect(int P, int s_begin, int s_end, int grid,
+                                                                     uint64_t seed_mix, bool stratified,
+                                                                     double inv_grid, const int* __restrict pixel,
+                                                                     const int* __restrict x, const int* __restrict y,
+                                                                     double* __restrict u, double* __restrict v) {
   JitteredSamplesOf<true>(P, s_begin, s_end, grid, seed_mix, stratified, inv_grid, pixel, x, y, u, v);
 }
 #endif
@@ -136,8 +137,7 @@ void LensSamplesBits(int P, int s_begin, int s_end, uint64_t seed_mix, bool lens
 #if defined(HOVS_VECTOR_CLONES_ENABLED)
 __attribute__((target("arch=x86-64-v4"))) void LensSamplesDirect(int P, int s_begin, int s_end, uint64_t seed_mix,
                                                                  bool lens, double exposure,
-                                                                 const int* __restrict pixel,
-                                                                 double* __restrict disc_x,
+                                                                 const int* __restrict pixel, double* __restrict disc_x,
                                                                  double* __restrict disc_y, double* __restrict tau) {
   LensSamplesOf<true>(P, s_begin, s_end, seed_mix, lens, exposure, pixel, disc_x, disc_y, tau);
 }

@@ -23,7 +23,6 @@ Rgb Sky::Eval(const Vec3d& d) const {
   return z >= 0 ? mix(horizon, zenith, std::sqrt(z)) : mix(horizon, nadir, std::sqrt(-z));
 }
 
-
 std::vector<Rect> MakeBox(const Rigid3d& world_from_base, const Vec3d& s, const Texture& texture, int object_id,
                           bool double_sided) {
   const double pi = M_PI;
@@ -63,8 +62,9 @@ void CheckWorldExtent(const SceneDescription& d) {
   for (const Rect& r : d.rects) {
     const double hw = 0.5 * r.width, hh = 0.5 * r.height;
     for (const Vec3d& corner : {Vec3d(-hw, -hh, 0), Vec3d(hw, -hh, 0), Vec3d(hw, hh, 0), Vec3d(-hw, hh, 0)})
-      HOVS_REQUIRE(inside(r.world_from_rect * corner), "scene object " + name_of(r.object_id),
-                   "reaches beyond ", kWorldExtent, " m from the world origin along an axis: the renderer traces in "
+      HOVS_REQUIRE(inside(r.world_from_rect * corner), "scene object " + name_of(r.object_id), "reaches beyond ",
+                   kWorldExtent,
+                   " m from the world origin along an axis: the renderer traces in "
                    "single precision (1 mm there); give the scene in local coordinates");
   }
   for (const CatadioptricUnit& u : d.units) {
@@ -86,7 +86,8 @@ RayScene::RayScene(SceneDescription description) : desc_(std::move(description))
   // Before any Embree object exists: an error here leaves nothing to release.
   CheckWorldExtent(desc_);
   device_ = rtcNewDevice(nullptr);
-  HOVS_REQUIRE(device_ != nullptr, "embree", "cannot create a device (error ", static_cast<int>(rtcGetDeviceError(nullptr)), ")");
+  HOVS_REQUIRE(device_ != nullptr, "embree", "cannot create a device (error ",
+               static_cast<int>(rtcGetDeviceError(nullptr)), ")");
   scene_ = rtcNewScene(device_);
   native16_ = rtcGetDeviceProperty(device_, RTC_DEVICE_PROPERTY_NATIVE_RAY16_SUPPORTED) != 0;
   rtcSetSceneBuildQuality(scene_, RTC_BUILD_QUALITY_HIGH);
@@ -108,9 +109,10 @@ RayScene::RayScene(SceneDescription description) : desc_(std::move(description))
   // that its instance would need more time steps than Embree takes.
   for (size_t ui = 0; ui < desc_.units.size(); ++ui) {
     const double rate = desc_.units[ui].angular_velocity.norm();
-    if (moving[ui] && rate > 0) motion_horizon_ = std::min(motion_horizon_, kMaxMotionSegments * kMotionSegmentAngle / rate);
+    if (moving[ui] && rate > 0)
+      motion_horizon_ = std::min(motion_horizon_, kMaxMotionSegments * kMotionSegmentAngle / rate);
   }
-  unsigned next_id = rect_geom_ == RTC_INVALID_GEOMETRY_ID ? 0u : rect_geom_ + 1;   // past the world's ids
+  unsigned next_id = rect_geom_ == RTC_INVALID_GEOMETRY_ID ? 0u : rect_geom_ + 1;  // past the world's ids
   for (size_t ui = 0; ui < desc_.units.size(); ++ui) AddUnitParts(ui, moving[ui] != 0, body_rects[ui], &next_id);
   rtcCommitScene(scene_);
   NumberInstanceShapes(next_id);
@@ -148,7 +150,8 @@ void RayScene::MakeRectFrames() {
     const Eigen::Matrix3d R = r.world_from_rect.rotation.toRotationMatrix();
     RectFrame fr{r.world_from_rect.translation, R.col(2), R.col(0), R.col(1), {}, {}};
     for (int c = 0; c < 3; ++c)
-      fr.flat[c] = fr.centre(c), fr.flat[3 + c] = fr.normal(c), fr.flat[6 + c] = fr.axis_x(c), fr.flat[9 + c] = fr.axis_y(c);
+      fr.flat[c] = fr.centre(c), fr.flat[3 + c] = fr.normal(c), fr.flat[6 + c] = fr.axis_x(c),
+      fr.flat[9 + c] = fr.axis_y(c);
     for (int c = 0; c < 12; ++c) fr.flat_f[c] = static_cast<float>(fr.flat[c]);
     rect_frames_.push_back(fr);
   }
@@ -157,10 +160,10 @@ void RayScene::MakeRectFrames() {
 unsigned RayScene::AttachQuads(RTCScene target, size_t first, size_t last, const Rigid3d* frame_from_world) {
   RTCGeometry g = rtcNewGeometry(device_, RTC_GEOMETRY_TYPE_QUAD);
   const size_t count = last - first;
-  auto* v = static_cast<float*>(rtcSetNewGeometryBuffer(g, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3,
-                                                        3 * sizeof(float), 4 * count));
-  auto* idx = static_cast<unsigned*>(rtcSetNewGeometryBuffer(g, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT4,
-                                                             4 * sizeof(unsigned), count));
+  auto* v = static_cast<float*>(
+      rtcSetNewGeometryBuffer(g, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3, 3 * sizeof(float), 4 * count));
+  auto* idx = static_cast<unsigned*>(
+      rtcSetNewGeometryBuffer(g, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT4, 4 * sizeof(unsigned), count));
   for (size_t i = 0; i < count; ++i) {
     const Rect& r = desc_.rects[first + i];
     HOVS_REQUIRE(r.width > 0 && r.height > 0 && std::isfinite(r.width) && std::isfinite(r.height), "scene object",
@@ -266,7 +269,7 @@ void RayScene::AddUnitParts(size_t ui, bool instanced, const std::pair<size_t, s
     mi.quad_geom = AttachQuads(target, body.first, body.second, &mirror_from_world);
   }
   auto shapes = UnitShapes(u, static_cast<int>(ui));
-  for (size_t k = 0; k < shapes.size(); ++k) {   // mirror, mount ring, lens face
+  for (size_t k = 0; k < shapes.size(); ++k) {  // mirror, mount ring, lens face
     if (instanced) shapes[k]->ray_from_local = mirror_from_world * shapes[k]->world_from_local;
     const auto [slot, id] = AttachShape(std::move(shapes[k]), target, instanced);
     if (!instanced) {
@@ -275,7 +278,7 @@ void RayScene::AddUnitParts(size_t ui, bool instanced, const std::pair<size_t, s
       continue;
     }
     if (mi.geom.size() <= id) mi.geom.resize(id + 1, RTC_INVALID_GEOMETRY_ID);
-    mi.geom[id] = static_cast<unsigned>(slot);   // a slot for now; the scene-wide id in NumberInstanceShapes
+    mi.geom[id] = static_cast<unsigned>(slot);  // a slot for now; the scene-wide id in NumberInstanceShapes
     if (k == 1) mi.mount_inner = id;
     if (k == 2) mi.lens_inner = id;
   }
@@ -283,7 +286,7 @@ void RayScene::AddUnitParts(size_t ui, bool instanced, const std::pair<size_t, s
   rtcCommitScene(target);
   DescribeOwnParts(u, ui < static_cast<size_t>(kMaskUnits), mirror_from_world, &mi.own);
   const unsigned inst = AttachMovingUnit(u, target, mi.own.mask);
-  rtcReleaseScene(target);   // the instance holds it
+  rtcReleaseScene(target);  // the instance holds it
   if (unit_instance_.size() <= ui) unit_instance_.resize(ui + 1, -1);
   unit_instance_[ui] = static_cast<int>(instances_.size());
   *next_id = std::max(*next_id, inst + 1);
@@ -301,7 +304,8 @@ void RayScene::DescribeOwnParts(const CatadioptricUnit& u, bool analytic, const 
   const Eigen::Matrix3d Rw = mirror_from_world.rotation.toRotationMatrix();
   for (int k = 0; k < 9; ++k) own->shape[k] = Rc.data()[k], own->R_mirror_from_world[k] = Rw.data()[k];
   for (int k = 0; k < 3; ++k)
-    own->shape[9 + k] = u.rig.cam_from_mirror.translation(k), own->t_mirror_from_world[k] = mirror_from_world.translation(k);
+    own->shape[9 + k] = u.rig.cam_from_mirror.translation(k),
+                   own->t_mirror_from_world[k] = mirror_from_world.translation(k);
   own->shape[12] = u.rig.occluder_radius * u.rig.occluder_radius;
   own->shape[13] = u.rig.mirror.RimZ();
   own->shape[14] = u.rig.mirror.RimRadius() * u.rig.mirror.RimRadius();
@@ -340,7 +344,7 @@ unsigned RayScene::AttachMovingUnit(const CatadioptricUnit& u, RTCScene unit_sce
   for (int step = 0; step <= segments; ++step) {
     const Rigid3d pose = u.WorldFromMirrorAt(motion_horizon_ * step / segments);
     Eigen::Quaterniond q = pose.rotation.normalized();
-    if (step > 0 && q.dot(previous) < 0) q.coeffs() *= -1;   // the short way round between steps
+    if (step > 0 && q.dot(previous) < 0) q.coeffs() *= -1;  // the short way round between steps
     previous = q;
     RTCQuaternionDecomposition qd;
     rtcInitQuaternionDecomposition(&qd);
@@ -366,7 +370,7 @@ void RayScene::MapInstanceHits(int n, const unsigned* inst, unsigned* geom, unsi
   for (int i = 0; i < n; ++i) {
     if (inst[i] == RTC_INVALID_GEOMETRY_ID || geom[i] == RTC_INVALID_GEOMETRY_ID) continue;
     const int slot = inst[i] < inst_slot_.size() ? inst_slot_[inst[i]] : -1;
-    if (slot < 0) {   // (no other instances exist)
+    if (slot < 0) {  // (no other instances exist)
       geom[i] = RTC_INVALID_GEOMETRY_ID;
       continue;
     }
@@ -419,7 +423,8 @@ bool RayScene::PathClearOver(size_t u, double T) const {
   const Vec3d centre_m = unit.rig.cam_from_mirror.Inverse().translation;
   const double r = m.geometry->r_outer;
   std::vector<Vec3d> corners;
-  for (int k = 0; k < 4; ++k) corners.push_back(m.geometry->world_from_local * Vec3d((k & 1) ? r : -r, (k & 2) ? r : -r, 0));
+  for (int k = 0; k < 4; ++k)
+    corners.push_back(m.geometry->world_from_local * Vec3d((k & 1) ? r : -r, (k & 2) ? r : -r, 0));
   if (!swept) {
     const Vec3d centre = unit.world_from_mirror * centre_m;
     region.extend(centre - Vec3d::Constant(kMaxApertureRadius)).extend(centre + Vec3d::Constant(kMaxApertureRadius));
@@ -441,7 +446,8 @@ bool RayScene::PathClearOver(size_t u, double T) const {
     if (!owner_moves(w)) return at_zero;
     const Rigid3d mirror_from_world = desc_.units[w].world_from_mirror.Inverse();
     std::vector<Vec3d> points;
-    for (int k = 0; k < 8; ++k) points.push_back(mirror_from_world * at_zero.corner(static_cast<Eigen::AlignedBox3d::CornerType>(k)));
+    for (int k = 0; k < 8; ++k)
+      points.push_back(mirror_from_world * at_zero.corner(static_cast<Eigen::AlignedBox3d::CornerType>(k)));
     return SweptBox(desc_.units[w], points, T);
   };
   for (size_t i = 0; i < desc_.rects.size(); ++i) {

@@ -43,10 +43,10 @@ struct Rect {
 
 struct CatadioptricUnit {
   std::string name = "unit0";
-  CatadioptricCamera<double> rig;  // mirror-frame model: mirror, camera, cam_from_mirror, occluder radius
-  Rigid3d world_from_mirror;       // places the viewpoint F1 in the world
-  double mount_outer_radius = 0;   // the mount ring around the rim (0: rim diameter / 2 + 15 mm)
-  double body_length = 0.12;       // camera body behind the lens face
+  CatadioptricCamera<double> rig;          // mirror-frame model: mirror, camera, cam_from_mirror, occluder radius
+  Rigid3d world_from_mirror;               // places the viewpoint F1 in the world
+  double mount_outer_radius = 0;           // the mount ring around the rim (0: rim diameter / 2 + 15 mm)
+  double body_length = 0.12;               // camera body behind the lens face
   Vec3d velocity = Vec3d::Zero();          // m/s, world frame (motion blur)
   Vec3d angular_velocity = Vec3d::Zero();  // rad/s, world frame, about the viewpoint (motion blur)
   bool Moves() const { return velocity != Vec3d::Zero() || angular_velocity != Vec3d::Zero(); }
@@ -89,11 +89,11 @@ struct SceneDescription {
 struct Hit {
   bool hit = false;
   int object_id = kSkyId;
-  double t = 0;       // along the ray (unit direction)
+  double t = 0;  // along the ray (unit direction)
   Vec3d point = Vec3d::Zero();
   Vec3d normal = Vec3d::Zero();  // world, facing the ray
   Rgb colour = {0, 0, 0};
-  int unit = -1;      // for mirror / mount / body hits: which unit
+  int unit = -1;  // for mirror / mount / body hits: which unit
 };
 
 // Rays in structure-of-arrays form: the renderer's per-sample path, traced 16 at a time. T = double: the
@@ -107,12 +107,12 @@ struct RayBatchOf {
   alignas(64) T ox[kMax], oy[kMax], oz[kMax];  // world
   alignas(64) T dx[kMax], dy[kMax], dz[kMax];  // world, unit
   alignas(64) float tnear[kMax];
-  alignas(64) int from_mirror[kMax];                // the unit whose mirror the ray leaves, -1: none
-  alignas(64) int from_camera[kMax];                // the unit whose camera it leaves past the mirror, -1: none
+  alignas(64) int from_mirror[kMax];  // the unit whose mirror the ray leaves, -1: none
+  alignas(64) int from_camera[kMax];  // the unit whose camera it leaves past the mirror, -1: none
   // For rays with from_camera >= 0: where the ray meets that unit's mount ring (t along d), 0 if it does not,
   // < 0 if not computed (RayScene then computes it).
   alignas(64) T mount_t[kMax];
-  alignas(64) unsigned char valid[kMax];            // 0: no ray (outside the camera's domain): black, no hit
+  alignas(64) unsigned char valid[kMax];  // 0: no ray (outside the camera's domain): black, no hit
   // Motion blur: each ray's time in the exposure (s), where timed; else every ray is at time 0. Moving units'
   // parts are met where they are at that time.
   bool timed = false;
@@ -236,7 +236,7 @@ class RayScene {
   // A rectangle's frame for shading: centre, unit normal and in-plane axes in the world.
   struct RectFrame {
     Vec3d centre, normal, axis_x, axis_y;
-    double flat[12];  // the four vectors in this order, as the vectorised plane hits take them
+    double flat[12];   // the four vectors in this order, as the vectorised plane hits take them
     float flat_f[12];  // the same rounded to float (single-precision rays)
   };
   std::vector<RectFrame> rect_frames_;
@@ -245,10 +245,10 @@ class RayScene {
   RTCDevice device_ = nullptr;
   RTCScene scene_ = nullptr;
   unsigned rect_geom_ = RTC_INVALID_GEOMETRY_ID;
-  bool native16_ = false;  // the device traces 16-wide packets natively (AVX-512)
-  std::vector<std::unique_ptr<UserGeometry>> user_;  // index = user geometry slot
-  std::vector<int> geom_to_user_;                    // geomID -> slot in user_, or -1
-  std::vector<OwnMount> own_mount_;  // by unit, for the units with their own Embree mask bits
+  bool native16_ = false;                              // the device traces 16-wide packets natively (AVX-512)
+  std::vector<std::unique_ptr<UserGeometry>> user_;    // index = user geometry slot
+  std::vector<int> geom_to_user_;                      // geomID -> slot in user_, or -1
+  std::vector<OwnMount> own_mount_;                    // by unit, for the units with their own Embree mask bits
   std::vector<std::pair<size_t, size_t>> body_rects_;  // by unit, the range of desc_.rects holding its camera body
 
   // A unit that moves (velocity or angular velocity not zero) has its parts (camera body rectangles, mirror, mount
@@ -261,14 +261,14 @@ class RayScene {
   // at the camera centre, in the camera frame), the mount ring (an annulus in the rim plane) and the camera body
   // (the box of its six rectangles, in the camera frame: x, y in [-half, half], z in [-length, 0]).
   struct OwnPartShapes {
-    bool analytic = false;   // units 0-9 (their own mask bits); the others' rays enter the instance
+    bool analytic = false;  // units 0-9 (their own mask bits); the others' rays enter the instance
     // As OwnPartLanes takes them: R_cam_from_mirror (9, column-major), t_cam_from_mirror (3), then the lens
     // face's radius squared, the rim plane's z, the rim's and the mount's outer radius squared, the body's half
     // width and length.
     double shape[18] = {};
-    unsigned lens_geom = RTC_INVALID_GEOMETRY_ID, mount_geom = RTC_INVALID_GEOMETRY_ID;   // scene-wide ids
-    unsigned mask = 0;   // the instance's mask (the unit's lens-face and mount bits): cleared for own rays
-    double R_mirror_from_world[9] = {}, t_mirror_from_world[3] = {};   // time 0, column-major
+    unsigned lens_geom = RTC_INVALID_GEOMETRY_ID, mount_geom = RTC_INVALID_GEOMETRY_ID;  // scene-wide ids
+    unsigned mask = 0;  // the instance's mask (the unit's lens-face and mount bits): cleared for own rays
+    double R_mirror_from_world[9] = {}, t_mirror_from_world[3] = {};  // time 0, column-major
   };
   struct MotionInstance {
     unsigned quad_geom = RTC_INVALID_GEOMETRY_ID;  // the camera body's quad mesh in the unit's scene
@@ -278,19 +278,19 @@ class RayScene {
     OwnPartShapes own;
   };
   static constexpr int kMaxMotionSegments = RTC_MAX_TIME_STEP_COUNT - 1;
-  static constexpr double kMotionSegmentAngle = 1.5707963267948966;   // rad: a quarter turn per time step at most
+  static constexpr double kMotionSegmentAngle = 1.5707963267948966;  // rad: a quarter turn per time step at most
   unsigned AttachMovingUnit(const CatadioptricUnit& unit, RTCScene unit_scene, unsigned mask);
   // The constructor's steps (scene.cc). The units' camera bodies as rectangles of desc_.rects, by unit its range
   // ([first, last)); *world_rects: where the still units' end (the moving units' go into their instances).
   std::vector<std::pair<size_t, size_t>> AddCameraBodies(const std::vector<char>& moving, size_t* world_rects);
-  void MakeRectFrames();   // rect_frames_ from desc_.rects
+  void MakeRectFrames();  // rect_frames_ from desc_.rects
   // Rectangles [first, last) as one quad mesh (primID = index - first), in the world or (frame_from_world given)
   // in that frame; its id in target.
   unsigned AttachQuads(RTCScene target, size_t first, size_t last, const Rigid3d* frame_from_world);
   // An analytic shape attached to target (the world, or a moving unit's scene: instanced); its slot in user_ and
   // its id in target.
   std::pair<int, unsigned> AttachShape(std::unique_ptr<UserGeometry> shape, RTCScene target, bool instanced);
-  void RecordShape(int slot, unsigned id);   // registers a shape under its scene-wide id
+  void RecordShape(int slot, unsigned id);  // registers a shape under its scene-wide id
   // A unit's mirror, mount ring and lens face, in the world (or, moving, in an instance of their own with its
   // camera body's rectangles body); *next_id: past every id used so far.
   void AddUnitParts(size_t unit, bool moving, const std::pair<size_t, size_t>& body, unsigned* next_id);
@@ -306,8 +306,8 @@ class RayScene {
   // Hits found inside an instance (inst[i] valid) to scene-wide ids (geom, prim).
   void MapInstanceHits(int n, const unsigned* inst, unsigned* geom, unsigned* prim) const;
   std::vector<MotionInstance> instances_;
-  std::vector<int> inst_slot_;   // world geomID of an instance -> index in instances_, or -1
-  std::vector<int> unit_instance_;   // unit -> index in instances_, or -1
+  std::vector<int> inst_slot_;      // world geomID of an instance -> index in instances_, or -1
+  std::vector<int> unit_instance_;  // unit -> index in instances_, or -1
   double motion_horizon_ = kMaxExposureTime;
 };
 

@@ -21,7 +21,7 @@ struct RayScene::UserGeometry {
   enum class Kind { kMirror, kAnnulus } kind = Kind::kMirror;
   int object_id = kMirrorId;
   int unit = -1;
-  Rigid3d world_from_local, local_from_world;   // at time 0
+  Rigid3d world_from_local, local_from_world;  // at time 0
   // The callbacks' frame from the local one: world_from_local, or mirror_from_local for a moving unit's part.
   Rigid3d ray_from_local;
   HyperboloidMirror<double> mirror;  // kMirror: local frame = mirror frame
@@ -36,7 +36,7 @@ struct RayScene::UserGeometry {
     R_local_from_world = local_from_world.rotation.toRotationMatrix();
     R_world_from_local = world_from_local.rotation.toRotationMatrix();
     t_local_from_world = local_from_world.translation;
-    if (!instanced) {   // the callbacks' rays are world rays: the same matrices, to the bit
+    if (!instanced) {  // the callbacks' rays are world rays: the same matrices, to the bit
       ray_from_local = world_from_local;
       R_local_from_ray = R_local_from_world, R_ray_from_local = R_world_from_local;
       t_local_from_ray = t_local_from_world;
@@ -50,12 +50,11 @@ struct RayScene::UserGeometry {
 
   // Ray in world coordinates (the unit at time 0); t along the given (not necessarily unit) direction.
   bool Intersect(const Vec3d& o_w, const Vec3d& d_w, double tnear, double tfar, double* t, Vec3d* n_w) const {
-    return IntersectLocal(R_local_from_world * o_w + t_local_from_world, R_local_from_world * d_w, tnear, tfar, t,
-                          n_w, R_world_from_local);
+    return IntersectLocal(R_local_from_world * o_w + t_local_from_world, R_local_from_world * d_w, tnear, tfar, t, n_w,
+                          R_world_from_local);
   }
   // Ray in the callbacks' frame; the normal in that frame.
-  bool IntersectInRayFrame(const Vec3d& o_r, const Vec3d& d_r, double tnear, double tfar, double* t,
-                           Vec3d* n_r) const {
+  bool IntersectInRayFrame(const Vec3d& o_r, const Vec3d& d_r, double tnear, double tfar, double* t, Vec3d* n_r) const {
     return IntersectLocal(R_local_from_ray * o_r + t_local_from_ray, R_local_from_ray * d_r, tnear, tfar, t, n_r,
                           R_ray_from_local);
   }
@@ -122,7 +121,7 @@ inline unsigned RayMask(int from_mirror, int from_camera = -1) {
   // Selects, not branches (this runs for every ray).
   const unsigned fm = static_cast<unsigned>(from_mirror), fc = static_cast<unsigned>(from_camera);
   const unsigned clear_m = fm < kMaskUnits ? 1u << (1 + 3 * fm) : 0u;
-  const unsigned clear_c = fc < kMaskUnits ? 3u << (1 + 3 * fc) : 0u;   // the mirror's and the lens face's bits
+  const unsigned clear_c = fc < kMaskUnits ? 3u << (1 + 3 * fc) : 0u;  // the mirror's and the lens face's bits
   return ~(clear_m | clear_c);
 }
 
@@ -176,9 +175,9 @@ void TracePacket(RTCScene scene, const int* valid, RayHitW* rh, IntersectW inter
 // nearer still wins, and the ring's callback is not called for them. Where nothing can be in between
 // (OwnMount::path_clear) they do not go to Embree at all; a packet of such rays only gets its hits.
 struct BatchLanes {
-  alignas(64) int valid[RayBatch::kMax];         // -1: traced by Embree, 0: not
-  alignas(64) float tfar[RayBatch::kMax];        // > 0: traced only up to here (the ring's distance)
-  alignas(64) unsigned mask_off[RayBatch::kMax]; // Embree mask bits cleared (the ring's)
+  alignas(64) int valid[RayBatch::kMax];            // -1: traced by Embree, 0: not
+  alignas(64) float tfar[RayBatch::kMax];           // > 0: traced only up to here (the ring's distance)
+  alignas(64) unsigned mask_off[RayBatch::kMax];    // Embree mask bits cleared (the ring's)
   alignas(64) unsigned mount_geom[RayBatch::kMax];  // the ring that ends the ray where Embree finds nothing, or
                                                     // RTC_INVALID_GEOMETRY_ID
 };

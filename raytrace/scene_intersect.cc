@@ -60,13 +60,15 @@ namespace {
 // library memcpy call each).
 template <class T, int W>
 HOVS_VECTOR_CLONES void FillPacket(const T* __restrict ox, const T* __restrict oy, const T* __restrict oz,
-                const T* __restrict dx, const T* __restrict dy, const T* __restrict dz,
-                const float* __restrict tnear, const int* __restrict from_mirror, const int* __restrict from_camera,
-                const float* __restrict tfar_in, const unsigned* __restrict mask_off, float* __restrict org_x,
-                float* __restrict org_y, float* __restrict org_z, float* __restrict dir_x, float* __restrict dir_y,
-                float* __restrict dir_z, float* __restrict tnear_out, float* __restrict tfar, unsigned* __restrict mask,
-                unsigned* __restrict id, unsigned* __restrict flags, float* __restrict time, unsigned* __restrict geom,
-                unsigned* __restrict inst) {
+                                   const T* __restrict dx, const T* __restrict dy, const T* __restrict dz,
+                                   const float* __restrict tnear, const int* __restrict from_mirror,
+                                   const int* __restrict from_camera, const float* __restrict tfar_in,
+                                   const unsigned* __restrict mask_off, float* __restrict org_x,
+                                   float* __restrict org_y, float* __restrict org_z, float* __restrict dir_x,
+                                   float* __restrict dir_y, float* __restrict dir_z, float* __restrict tnear_out,
+                                   float* __restrict tfar, unsigned* __restrict mask, unsigned* __restrict id,
+                                   unsigned* __restrict flags, float* __restrict time, unsigned* __restrict geom,
+                                   unsigned* __restrict inst) {
   for (int i = 0; i < W; ++i) {
     org_x[i] = static_cast<float>(ox[i]), org_y[i] = static_cast<float>(oy[i]), org_z[i] = static_cast<float>(oz[i]);
     dir_x[i] = static_cast<float>(dx[i]), dir_y[i] = static_cast<float>(dy[i]), dir_z[i] = static_cast<float>(dz[i]);
@@ -79,23 +81,23 @@ HOVS_VECTOR_CLONES void FillPacket(const T* __restrict ox, const T* __restrict o
   }
 }
 
-
 // The common case of PrepareLanes without branches: every straight camera ray of the batch leaves unit U's
 // camera with its ring distance computed.
 template <class T>
 HOVS_VECTOR_CLONES void RingLanes(int n, const unsigned char* __restrict bvalid, const int* __restrict from_camera,
-               const T* __restrict mount_t, int U, unsigned bit, int clear, int* __restrict valid,
-               float* __restrict tfar, unsigned* __restrict mask_off, unsigned ring_geom, unsigned* __restrict mount_geom) {
-  const int match = U >= 0 ? U : -1000;   // no unit: no lane is a ring lane
+                                  const T* __restrict mount_t, int U, unsigned bit, int clear, int* __restrict valid,
+                                  float* __restrict tfar, unsigned* __restrict mask_off, unsigned ring_geom,
+                                  unsigned* __restrict mount_geom) {
+  const int match = U >= 0 ? U : -1000;  // no unit: no lane is a ring lane
   // As 0 / 1 arithmetic, not selects: GCC 12 vectorises the selects here only with a branch per vector.
   for (int i = 0; i < n; ++i) {
     const T t = mount_t[i];
     const int live = bvalid[i] != 0;
     const int ring = live & (from_camera[i] == match) & (t > 0);
-    tfar[i] = static_cast<float>(t) * static_cast<float>(ring);   // 0 (or -0) where not a ring lane
+    tfar[i] = static_cast<float>(t) * static_cast<float>(ring);  // 0 (or -0) where not a ring lane
     mask_off[i] = bit & static_cast<unsigned>(-ring);
-    mount_geom[i] = ring_geom | static_cast<unsigned>(ring - 1);   // ring ? ring_geom : RTC_INVALID_GEOMETRY_ID
-    valid[i] = -(live & (1 - (ring & clear)));   // nothing in between: no Embree for this lane
+    mount_geom[i] = ring_geom | static_cast<unsigned>(ring - 1);  // ring ? ring_geom : RTC_INVALID_GEOMETRY_ID
+    valid[i] = -(live & (1 - (ring & clear)));                    // nothing in between: no Embree for this lane
   }
 }
 
@@ -118,7 +120,7 @@ void PrepareLanes(const RayBatchOf<T>& b, const std::vector<RayScene::OwnMount>&
   bool uniform = false;
   const int U = CameraLanes(n, b.from_camera, b.mount_t, &uniform);
   uniform = uniform && U >= 0 && static_cast<size_t>(U) < mounts.size() && mounts[U].geometry != nullptr;
-  if (uniform || U < 0) {   // U < 0: no straight camera ray at all (no lane is a ring lane)
+  if (uniform || U < 0) {  // U < 0: no straight camera ray at all (no lane is a ring lane)
     RingLanes(n, b.valid, b.from_camera, b.mount_t, U, U >= 0 ? MountMaskBit(U) : 0u,
               U >= 0 && mounts[U].path_clear && b.mount_paths_clear ? 1 : 0, L->valid, L->tfar, L->mask_off,
               U >= 0 ? mounts[U].geom_id : RTC_INVALID_GEOMETRY_ID, L->mount_geom);
@@ -150,7 +152,7 @@ void TracePacketOfBatch(RTCScene scene, const RayBatchOf<T>& b, const BatchLanes
                         unsigned* prim_ids, unsigned* inst_ids, float inv_horizon, IntersectW intersect) {
   const int count = std::min(W, b.n - i0);
   int any = 0;
-  if (count == W) {   // (as vectors of four lanes: GCC leaves the plain loop scalar)
+  if (count == W) {  // (as vectors of four lanes: GCC leaves the plain loop scalar)
     typedef int Lanes4 __attribute__((vector_size(16)));
     Lanes4 acc = {0, 0, 0, 0};
     for (int i = 0; i < W; i += 4) {
@@ -162,9 +164,9 @@ void TracePacketOfBatch(RTCScene scene, const RayBatchOf<T>& b, const BatchLanes
   } else {
     for (int i = 0; i < count; ++i) any |= L.valid[i0 + i];
   }
-  if (!any) {   // every lane ends on its ring or is invalid: ResolveMisses gives them the ring
-    if (count == W) {   // (a constant size: vector stores, not library calls)
-      for (int i = 0; i < W; ++i) geom_ids[i] = RTC_INVALID_GEOMETRY_ID;   // (two loops: the arrays may alias)
+  if (!any) {          // every lane ends on its ring or is invalid: ResolveMisses gives them the ring
+    if (count == W) {  // (a constant size: vector stores, not library calls)
+      for (int i = 0; i < W; ++i) geom_ids[i] = RTC_INVALID_GEOMETRY_ID;  // (two loops: the arrays may alias)
       for (int i = 0; i < W; ++i) prim_ids[i] = 0u;
     } else {
       std::fill(geom_ids, geom_ids + count, RTC_INVALID_GEOMETRY_ID);
@@ -175,12 +177,12 @@ void TracePacketOfBatch(RTCScene scene, const RayBatchOf<T>& b, const BatchLanes
   }
   alignas(64) RayHitW rh;
   alignas(64) int partial_valid[W];
-  const int* valid = L.valid + i0;   // 64-byte aligned for W = 16 (i0 a multiple of 16), 32-byte for W = 8
+  const int* valid = L.valid + i0;  // 64-byte aligned for W = 16 (i0 a multiple of 16), 32-byte for W = 8
   if (count == W) {
     FillPacket<T, W>(b.ox + i0, b.oy + i0, b.oz + i0, b.dx + i0, b.dy + i0, b.dz + i0, b.tnear + i0, b.from_mirror + i0,
-               b.from_camera + i0, L.tfar + i0, L.mask_off + i0, rh.ray.org_x, rh.ray.org_y, rh.ray.org_z,
-               rh.ray.dir_x, rh.ray.dir_y, rh.ray.dir_z, rh.ray.tnear, rh.ray.tfar, rh.ray.mask, rh.ray.id,
-               rh.ray.flags, rh.ray.time, rh.hit.geomID, rh.hit.instID[0]);
+                     b.from_camera + i0, L.tfar + i0, L.mask_off + i0, rh.ray.org_x, rh.ray.org_y, rh.ray.org_z,
+                     rh.ray.dir_x, rh.ray.dir_y, rh.ray.dir_z, rh.ray.tnear, rh.ray.tfar, rh.ray.mask, rh.ray.id,
+                     rh.ray.flags, rh.ray.time, rh.hit.geomID, rh.hit.instID[0]);
   } else {
     // Lanes past count repeat the batch's ray i0, masked off.
     for (int i = 0; i < W; ++i) {
@@ -203,12 +205,12 @@ void TracePacketOfBatch(RTCScene scene, const RayBatchOf<T>& b, const BatchLanes
     }
   }
   TracePacket(scene, valid, &rh, intersect);
-  if (inst_ids && count == W) {   // (a constant size: vector moves, not a library call)
+  if (inst_ids && count == W) {  // (a constant size: vector moves, not a library call)
     std::memcpy(inst_ids, rh.hit.instID[0], sizeof(unsigned) * W);
   } else if (inst_ids) {
     std::memcpy(inst_ids, rh.hit.instID[0], sizeof(unsigned) * static_cast<size_t>(count));
   }
-  if (count == W) {   // (a constant size: vector moves, not a library call)
+  if (count == W) {  // (a constant size: vector moves, not a library call)
     std::memcpy(geom_ids, rh.hit.geomID, sizeof(unsigned) * W);
     std::memcpy(prim_ids, rh.hit.primID, sizeof(unsigned) * W);
   } else {
@@ -267,8 +269,8 @@ HOVS_VECTOR_CLONES void OwnPartLanes(int n, const unsigned char* __restrict acti
                                      float* __restrict tout) {
   // In single precision whatever the rays' (Embree, which takes the distance, traces in it; which part a ray
   // meets differs from a double-precision test only within about 1e-7 m of a part's edge).
-  alignas(64) float ox[RayBatch::kMax], oy[RayBatch::kMax], oz[RayBatch::kMax], dx[RayBatch::kMax],
-      dy[RayBatch::kMax], dz[RayBatch::kMax];
+  alignas(64) float ox[RayBatch::kMax], oy[RayBatch::kMax], oz[RayBatch::kMax], dx[RayBatch::kMax], dy[RayBatch::kMax],
+      dz[RayBatch::kMax];
   for (int i = 0; i < n; ++i) {
     ox[i] = static_cast<float>(ox_in[i]), oy[i] = static_cast<float>(oy_in[i]), oz[i] = static_cast<float>(oz_in[i]);
     dx[i] = static_cast<float>(dx_in[i]), dy[i] = static_cast<float>(dy_in[i]), dz[i] = static_cast<float>(dz_in[i]);
@@ -336,9 +338,9 @@ bool RayScene::OwnParts(const RayBatchOf<T>& b, int U, BatchLanes* L, unsigned* 
   }
   alignas(64) T fo[6][RayBatch::kMax];
   const T *mox = b.mox, *moy = b.moy, *moz = b.moz, *mdx = b.mdx, *mdy = b.mdy, *mdz = b.mdz;
-  if (!b.mirror_frame) {   // rays at time 0: the world rays mapped back
-    RaysToFrame<T>(n, sh.R_mirror_from_world, sh.t_mirror_from_world, b.ox, b.oy, b.oz, b.dx, b.dy, b.dz, fo[0],
-                   fo[1], fo[2], fo[3], fo[4], fo[5]);
+  if (!b.mirror_frame) {  // rays at time 0: the world rays mapped back
+    RaysToFrame<T>(n, sh.R_mirror_from_world, sh.t_mirror_from_world, b.ox, b.oy, b.oz, b.dx, b.dy, b.dz, fo[0], fo[1],
+                   fo[2], fo[3], fo[4], fo[5]);
     mox = fo[0], moy = fo[1], moz = fo[2], mdx = fo[3], mdy = fo[4], mdz = fo[5];
   }
   alignas(64) int part[RayBatch::kMax];
@@ -348,7 +350,7 @@ bool RayScene::OwnParts(const RayBatchOf<T>& b, int U, BatchLanes* L, unsigned* 
   for (int i = 0; i < n; ++i) {
     if (!part[i]) continue;
     any = true;
-    L->tfar[i] = t[i];   // the world trace looks only nearer
+    L->tfar[i] = t[i];  // the world trace looks only nearer
     own_geom[i] = part[i] == 1 ? sh.lens_geom : part[i] == 2 ? sh.mount_geom : rect_geom_;
     own_prim[i] = part[i] >= 3 ? m.rect_base + static_cast<unsigned>(part[i] - 3) : 0u;
   }
@@ -370,7 +372,7 @@ int RayScene::IntersectBatch(const RayBatchOf<T>& b, unsigned* geom_ids, unsigne
       own = OwnParts(b, U, &lanes, own_geom, own_prim);
     }
   }
-  int traced = 0;   // lanes Embree traces (valid -1; 0: ended analytically, or invalid)
+  int traced = 0;  // lanes Embree traces (valid -1; 0: ended analytically, or invalid)
   for (int i = 0; i < b.n; ++i) traced -= lanes.valid[i];
   alignas(64) unsigned inst[RayBatch::kMax];
   unsigned* const inst_ids = instances_.empty() ? nullptr : inst;
@@ -388,7 +390,7 @@ int RayScene::IntersectBatch(const RayBatchOf<T>& b, unsigned* geom_ids, unsigne
   }
   if (inst_ids) MapInstanceHits(b.n, inst_ids, geom_ids, prim_ids);
   ResolveMisses(b.n, lanes.mount_geom, geom_ids, prim_ids);
-  if (own) {   // nothing in the world nearer than the unit's own part: the part
+  if (own) {  // nothing in the world nearer than the unit's own part: the part
     for (int i = 0; i < b.n; ++i) {
       if (own_geom[i] == RTC_INVALID_GEOMETRY_ID || geom_ids[i] != RTC_INVALID_GEOMETRY_ID) continue;
       geom_ids[i] = own_geom[i], prim_ids[i] = own_prim[i];
@@ -396,7 +398,6 @@ int RayScene::IntersectBatch(const RayBatchOf<T>& b, unsigned* geom_ids, unsigne
   }
   return traced;
 }
-
 
 // ColoursOf and Geometry (shading.cc) intersect both batch kinds.
 template int RayScene::IntersectBatch<double>(const RayBatchOf<double>&, unsigned*, unsigned*) const;

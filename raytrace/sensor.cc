@@ -39,7 +39,8 @@ double NormalQuantile(double p) {
            (((((b0 * r + b1) * r + b2) * r + b3) * r + b4) * r + 1);
   }
   const double q = std::sqrt(-2 * std::log(p < low ? p : 1 - p));
-  const double x = (((((c0 * q + c1) * q + c2) * q + c3) * q + c4) * q + c5) / ((((d0 * q + d1) * q + d2) * q + d3) * q + 1);
+  const double x =
+      (((((c0 * q + c1) * q + c2) * q + c3) * q + c4) * q + c5) / ((((d0 * q + d1) * q + d2) * q + d3) * q + 1);
   return p < low ? x : -x;
 }
 
@@ -82,12 +83,13 @@ PixelBuffer ApplySensor(const Frame& f, const SensorOptions& s, uint64_t seed, i
               noisy = e + std::sqrt(e + read2) * NormalQuantile(StreamUniform(stream, 2 * i));
             } else {
               int count = 0;
-              if (e > 0) {   // Poisson(e): the smallest count whose cumulative probability reaches u
+              if (e > 0) {  // Poisson(e): the smallest count whose cumulative probability reaches u
                 const double u = StreamUniform(stream, 2 * i);
                 double term = std::exp(-e), cdf = term;
                 while (u > cdf && count < 200) term *= e / ++count, cdf += term;
               }
-              noisy = count + (s.read_noise > 0 ? s.read_noise * NormalQuantile(StreamUniform(stream, 2 * i + 1)) : 0.0);
+              noisy =
+                  count + (s.read_noise > 0 ? s.read_noise * NormalQuantile(StreamUniform(stream, 2 * i + 1)) : 0.0);
             }
             v = noisy / s.full_well;
           }

@@ -60,8 +60,8 @@ namespace {
 // rectangle's centre c, normal, axis_x, axis_y (RectFrame::flat).
 template <class T>
 struct RectPlaneRuns {
-  alignas(64) T denom[RayBatch::kMax], k[RayBatch::kMax], px[RayBatch::kMax], py[RayBatch::kMax],
-      pz[RayBatch::kMax], s[RayBatch::kMax], t[RayBatch::kMax];
+  alignas(64) T denom[RayBatch::kMax], k[RayBatch::kMax], px[RayBatch::kMax], py[RayBatch::kMax], pz[RayBatch::kMax],
+      s[RayBatch::kMax], t[RayBatch::kMax];
 };
 template <class T>
 HOVS_VECTOR_CLONES void RectPlaneHits(int i0, int m, const T* __restrict ox, const T* __restrict oy,
@@ -173,12 +173,16 @@ int RayScene::ColoursOf(const RayBatchOf<T>& b, float* rgb) const {
     // shape have primitive 0).
     const int j = RunEnd(runs, i);
     if (g == RTC_INVALID_GEOMETRY_ID) {
-      SkyColours(j - i, b.dz + i, desc_.sky.horizon.data(), desc_.sky.zenith.data(), desc_.sky.nadir.data(), rgb + 3 * i);
+      SkyColours(j - i, b.dz + i, desc_.sky.horizon.data(), desc_.sky.zenith.data(), desc_.sky.nadir.data(),
+                 rgb + 3 * i);
     } else if (g == rect_geom_) {
       const unsigned p = prim[i];
       const RectFrame& fr = rect_frames_[p];
       const T* flat;
-      if constexpr (std::is_same_v<T, float>) flat = fr.flat_f; else flat = fr.flat;
+      if constexpr (std::is_same_v<T, float>)
+        flat = fr.flat_f;
+      else
+        flat = fr.flat;
       RectPlaneHits<T>(i, j - i, b.ox, b.oy, b.oz, b.dx, b.dy, b.dz, flat, &planes);
       const Rect& r = desc_.rects[p];
       const bool noise = r.front.kind == Texture::Kind::kNoise, double_sided = r.double_sided;
@@ -195,7 +199,7 @@ int RayScene::ColoursOf(const RayBatchOf<T>& b, float* rgb) const {
         r.front.EvalInto(j - i, s_at + i, t_at + i, rgb + 3 * i);
       } else if (noise) {
         int nd = n_deferred;
-        for (int k = i; k < j; ++k) {   // without branches: the lane is kept when seen
+        for (int k = i; k < j; ++k) {  // without branches: the lane is kept when seen
           const int keep = seen(k);
           deferred[nd] = k, nd += keep;
         }
@@ -245,8 +249,8 @@ namespace {
 // Lanes [i0, i1) of a run on one rectangle into the hits, from their plane points (RectPlaneHits): a hit unless
 // the ray is parallel to the plane (denom 0), with the normal facing the ray (as Shade).
 HOVS_VECTOR_CLONES
-void RectHitLanes(int i0, int i1, const RectPlaneRuns<double>* __restrict planes, const double* __restrict normal, int id,
-                  HitBatch* __restrict H) {
+void RectHitLanes(int i0, int i1, const RectPlaneRuns<double>* __restrict planes, const double* __restrict normal,
+                  int id, HitBatch* __restrict H) {
   const double n0 = normal[0], n1 = normal[1], n2 = normal[2];
   for (int k = i0; k < i1; ++k) {
     const bool hit = planes->denom[k] != 0;
@@ -262,10 +266,9 @@ void RectHitLanes(int i0, int i1, const RectPlaneRuns<double>* __restrict planes
 // Lanes [i0, i1) of straight camera rays ending on their mount ring at distance t[k] (the renderer's analytic
 // test): the point o + t d and the ring's normal n facing the ray (as UserHit).
 HOVS_VECTOR_CLONES
-void RingHitLanes(int i0, int i1, const double* __restrict ox, const double* __restrict oy,
-                  const double* __restrict oz, const double* __restrict dx, const double* __restrict dy,
-                  const double* __restrict dz, const double* __restrict t, const double* __restrict normal, int id,
-                  HitBatch* __restrict H) {
+void RingHitLanes(int i0, int i1, const double* __restrict ox, const double* __restrict oy, const double* __restrict oz,
+                  const double* __restrict dx, const double* __restrict dy, const double* __restrict dz,
+                  const double* __restrict t, const double* __restrict normal, int id, HitBatch* __restrict H) {
   const double n0 = normal[0], n1 = normal[1], n2 = normal[2];
   for (int k = i0; k < i1; ++k) {
     const double s = dx[k] * n0 + dy[k] * n1 + dz[k] * n2 < 0 ? 1.0 : -1.0;

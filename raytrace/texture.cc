@@ -121,7 +121,8 @@ Rgb Mix(const Rgb& a, const Rgb& b, double t) {
 
 Rgb Texture::Eval(double s, double t) const {
   switch (kind) {
-    case Kind::kSolid: return colour_a;
+    case Kind::kSolid:
+      return colour_a;
     case Kind::kChecker: {
       // Square (0, 0) is the one at the board's (-x, -y) corner; it is dark.
       const double x = s / square + 0.5 * squares_x, y = t / square + 0.5 * squares_y;
@@ -173,7 +174,8 @@ HOVS_VECTOR_CLONES void CheckerInto(int n, const T* __restrict s, const T* __res
     inside = y >= 0 ? inside : 0;
     inside = x < nx ? inside : 0;
     inside = y < ny ? inside : 0;
-    const int ix = static_cast<int>(std::min(std::max(x, 0.0), nx)), iy = static_cast<int>(std::min(std::max(y, 0.0), ny));
+    const int ix = static_cast<int>(std::min(std::max(x, 0.0), nx)),
+              iy = static_cast<int>(std::min(std::max(y, 0.0), ny));
     const int light = (ix + iy) & 1;
     const float c0 = light ? b0 : a0, c1 = light ? b1 : a1, c2 = light ? b2 : a2;
     out[3 * k] = inside ? c0 : m0, out[3 * k + 1] = inside ? c1 : m1, out[3 * k + 2] = inside ? c2 : m2;

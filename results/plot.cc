@@ -56,8 +56,7 @@ struct TextLabel {
 class HovsLabelPlot : public vtkPlot {
  public:
   static HovsLabelPlot* New();
-  vtkTypeMacro(HovsLabelPlot, vtkPlot)
-  std::vector<TextLabel> labels;
+  vtkTypeMacro(HovsLabelPlot, vtkPlot) std::vector<TextLabel> labels;
 
   bool Paint(vtkContext2D* painter) override {
     for (const TextLabel& l : labels) {
@@ -89,7 +88,7 @@ class HovsLabelPlot : public vtkPlot {
 };
 vtkStandardNewMacro(HovsLabelPlot)
 
-void RequireDisplay(const std::filesystem::path& path) {
+    void RequireDisplay(const std::filesystem::path& path) {
   if (!hovs::results::CanRender())
     throw hovs::Error(path.string(), "cannot draw figures: no X display (DISPLAY is unset); run under `xvfb-run -a`");
 }
@@ -149,7 +148,6 @@ void Viridis(vtkColorTransferFunction* tf, double lo, double hi) {
   for (int i = 0; i < n; ++i) tf->AddRGBPoint(lo + (hi - lo) * i / (n - 1), pts[i][0], pts[i][1], pts[i][2]);
   tf->Build();
 }
-
 
 // Contour lines of `image` at `levels`, as chart lines, each labelled at its middle (with the level formatted,
 // or with a fixed label).
@@ -303,8 +301,8 @@ void WritePng(const HeatMapFigure& f, const std::filesystem::path& path) {
     std::copy(o.values.begin(), o.values.end(), static_cast<double*>(other->GetScalarPointer(0, 0, 0)));
     AddContours(chart, other, {o.level}, o.rgb, o.line_width, "", o.label, labels, oi % 2 == 0 ? 0.12 : 0.88);
   }
-  static const int styles[] = {vtkPlotPoints::CIRCLE, vtkPlotPoints::CROSS, vtkPlotPoints::PLUS,
-                               vtkPlotPoints::SQUARE, vtkPlotPoints::DIAMOND};
+  static const int styles[] = {vtkPlotPoints::CIRCLE, vtkPlotPoints::CROSS, vtkPlotPoints::PLUS, vtkPlotPoints::SQUARE,
+                               vtkPlotPoints::DIAMOND};
   const auto add_points = [&](const std::vector<double>& xs, const std::vector<double>& ys, const std::string& name,
                               const std::array<double, 3>& rgb, int style, double size, double width) {
     vtkNew<vtkTable> table;

@@ -39,13 +39,13 @@ struct PointSet {
 // (e.g. infeasible designs) and markers.
 struct HeatMapFigure {
   std::string title, x_label, y_label, value_label;
-  int nx = 0, ny = 0;                  // grid size
+  int nx = 0, ny = 0;                     // grid size
   double x0 = 0, x1 = 1, y0 = 0, y1 = 1;  // coordinates of the first and last grid nodes
-  std::vector<double> values;          // ny rows of nx values (row j at y = y0 + j (y1 - y0) / (ny - 1))
-  std::vector<double> contour_levels;  // labelled contour lines
+  std::vector<double> values;             // ny rows of nx values (row j at y = y0 + j (y1 - y0) / (ny - 1))
+  std::vector<double> contour_levels;     // labelled contour lines
   std::string contour_format = "%.0f";
-  std::vector<uint8_t> shade;          // optional, nx * ny: 1 = shaded (drawn pale)
-  std::string shade_label;             // what the shading means (shown in the title line)
+  std::vector<uint8_t> shade;  // optional, nx * ny: 1 = shaded (drawn pale)
+  std::string shade_label;     // what the shading means (shown in the title line)
   std::vector<ContourOverlay> overlays;
   std::vector<PointSet> point_sets;
   std::vector<Marker> markers;  // listed in a key in the top-left corner
@@ -57,7 +57,7 @@ struct Series {
   std::vector<double> x, y;
   std::array<double, 3> rgb = {0.1, 0.3, 0.8};
   double line_width = 2.0;
-  bool points = false;   // a scatter of markers (marker_size px) instead of a line
+  bool points = false;  // a scatter of markers (marker_size px) instead of a line
   double marker_size = 4.0;
 };
 
@@ -74,8 +74,8 @@ void WritePng(const LineFigure& figure, const std::filesystem::path& path);
 // Statistics of a PNG file, to check that a figure holds a picture (tests, reports).
 struct ImageStats {
   int width = 0, height = 0, channels = 0;
-  double mean = 0, stddev = 0;      // over all channels, 0..255
-  double non_white_fraction = 0;    // pixels not (near) white
+  double mean = 0, stddev = 0;    // over all channels, 0..255
+  double non_white_fraction = 0;  // pixels not (near) white
 };
 ImageStats PngStats(const std::filesystem::path& path);
 

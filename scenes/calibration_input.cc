@@ -82,8 +82,8 @@ DatasetCalibrationInput LoadDatasetCalibrationInput(const std::filesystem::path&
   if (options.truth_corners)
     in.description.update({{"corners", "ground truth"}, {"corner_noise_px", noise}, {"seed", options.seed}});
   else
-    in.description.update({{"corners", "hovs checkerboard detector"},
-                           {"board", {dopt.board.cols, dopt.board.rows, dopt.board.square}}});
+    in.description.update(
+        {{"corners", "hovs checkerboard detector"}, {"board", {dopt.board.cols, dopt.board.rows, dopt.board.square}}});
   return out;
 }
 

@@ -14,16 +14,16 @@
 namespace hovs::scenes {
 
 struct DatasetCalibrationOptions {
-  std::string unit;                            // the unit's name in the manifest; empty: the first
-  bool truth_corners = false;                  // the exact corners instead of the detector's
-  double corner_noise_px = 0;                  // Gaussian, added to the exact corners
+  std::string unit;            // the unit's name in the manifest; empty: the first
+  bool truth_corners = false;  // the exact corners instead of the detector's
+  double corner_noise_px = 0;  // Gaussian, added to the exact corners
   uint64_t seed = 1;
-  calib::CheckerboardDetectOptions detect;     // its board (square 0) is taken from the manifest when it has one
+  calib::CheckerboardDetectOptions detect;  // its board (square 0) is taken from the manifest when it has one
 };
 
 struct DatasetCalibrationInput {
   calib::CalibrationInput input;
-  std::optional<raytrace::CatadioptricUnit> unit;   // synthetic datasets: the exact unit
+  std::optional<raytrace::CatadioptricUnit> unit;  // synthetic datasets: the exact unit
 };
 
 DatasetCalibrationInput LoadDatasetCalibrationInput(const std::filesystem::path& manifest,

@@ -44,7 +44,8 @@ void DatasetOptions::Check(const std::string& where) const {
   HOVS_REQUIRE(std::isfinite(step_m) && std::abs(step_m) <= 100 && std::isfinite(heading_deg) &&
                    std::isfinite(yaw_step_deg) && std::abs(yaw_step_deg) <= 90,
                where + ".motion", "step must be a finite distance up to 100 m, yaw step up to 90 degrees");
-  HOVS_REQUIRE(min_visible_fraction > 0 && min_visible_fraction <= 1, where + ".min_visible_fraction", "must be in (0, 1]");
+  HOVS_REQUIRE(min_visible_fraction > 0 && min_visible_fraction <= 1, where + ".min_visible_fraction",
+               "must be in (0, 1]");
   HOVS_REQUIRE(count >= 1 && count <= 10000, where + ".count", "must be in 1..10000");
   HOVS_REQUIRE(min_distance > 0 && max_distance >= min_distance, where + ".distance", "needs 0 < min <= max");
   HOVS_REQUIRE(min_elevation_deg < max_elevation_deg && max_elevation_deg < 90 && min_elevation_deg > -90,
@@ -68,7 +69,8 @@ ViewRecord RenderView(const SceneConfig& cfg, const raytrace::RayScene& scene, i
   raytrace::RenderInto(scene, raytrace::ViewCamera::Unit(u), ro, scratch);
   const raytrace::Frame& frame = *scratch;
   int channels = 0;
-  const raytrace::PixelBuffer img = raytrace::ApplySensor(frame, ro.sensor, ro.seed ^ std::hash<std::string>{}(stem), &channels);
+  const raytrace::PixelBuffer img =
+      raytrace::ApplySensor(frame, ro.sensor, ro.seed ^ std::hash<std::string>{}(stem), &channels);
   const std::string unit = scene.description().units[u].name;
   ViewRecord v{unit, "images/" + stem + ".png", "", ""};
   // The image is compressed on its own thread while the ground truth is written (both are single-file,
@@ -85,13 +87,21 @@ ViewRecord RenderView(const SceneConfig& cfg, const raytrace::RayScene& scene, i
   if (ro.ground_truth) {
     v.exr = "truth/" + stem + ".exr";
     v.sidecar = "truth/" + stem + ".json";
-    raytrace::WriteGroundTruthExr(dir / v.exr, frame, {{"scene", cfg.name}, {"unit", unit}, {"frame", stem},
-                                                       {"world_frame", "z up, metres"}, {"sidecar", v.sidecar}});
+    raytrace::WriteGroundTruthExr(dir / v.exr, frame,
+                                  {{"scene", cfg.name},
+                                   {"unit", unit},
+                                   {"frame", stem},
+                                   {"world_frame", "z up, metres"},
+                                   {"sidecar", v.sidecar}});
     nlohmann::json side = FrameSidecar(cfg, scene, u);
     side["image"] = v.image;
-    side["render"] = {{"samples", ro.samples}, {"seed", ro.seed}, {"bit_depth", ro.sensor.bit_depth},
-                      {"bayer", ro.sensor.bayer}, {"vignetting", ro.sensor.vignetting},
-                      {"full_well", ro.sensor.full_well}, {"read_noise", ro.sensor.read_noise}};
+    side["render"] = {{"samples", ro.samples},
+                      {"seed", ro.seed},
+                      {"bit_depth", ro.sensor.bit_depth},
+                      {"bayer", ro.sensor.bayer},
+                      {"vignetting", ro.sensor.vignetting},
+                      {"full_well", ro.sensor.full_well},
+                      {"read_noise", ro.sensor.read_noise}};
     WriteFileAtomic(dir / v.sidecar, side.dump(1) + "\n");
   }
   image_written.get();
@@ -108,21 +118,26 @@ std::string Thumbnail(const fs::path& dir, const std::string& image, int size) {
   HOVS_REQUIRE(src.read(0, 0, true, OIIO::TypeDesc::FLOAT), image, "cannot read for the thumbnail");
   const auto& spec = src.spec();
   const double scale = static_cast<double>(size) / std::max(spec.width, spec.height);
-  const int w = std::max(1, static_cast<int>(spec.width * scale)), h = std::max(1, static_cast<int>(spec.height * scale));
+  const int w = std::max(1, static_cast<int>(spec.width * scale)),
+            h = std::max(1, static_cast<int>(spec.height * scale));
   // Box filter over the source pixels of each thumbnail pixel (fast, no aliasing at this reduction).
   OIIO::ImageBuf dst(OIIO::ImageSpec(w, h, spec.nchannels, OIIO::TypeDesc::FLOAT));
   std::vector<float> in(static_cast<size_t>(spec.width) * spec.height * spec.nchannels);
-  HOVS_REQUIRE(src.get_pixels(OIIO::ROI::All(), OIIO::TypeDesc::FLOAT, in.data()), image, "cannot read for the thumbnail");
+  HOVS_REQUIRE(src.get_pixels(OIIO::ROI::All(), OIIO::TypeDesc::FLOAT, in.data()), image,
+               "cannot read for the thumbnail");
   std::vector<float> out(static_cast<size_t>(w) * h * spec.nchannels, 0.0f);
   const double sx = static_cast<double>(spec.width) / w, sy = static_cast<double>(spec.height) / h;
   for (int y = 0; y < h; ++y) {
-    const int y0 = static_cast<int>(y * sy), y1 = std::max(y0 + 1, std::min(spec.height, static_cast<int>((y + 1) * sy)));
+    const int y0 = static_cast<int>(y * sy),
+              y1 = std::max(y0 + 1, std::min(spec.height, static_cast<int>((y + 1) * sy)));
     for (int x = 0; x < w; ++x) {
-      const int x0 = static_cast<int>(x * sx), x1 = std::max(x0 + 1, std::min(spec.width, static_cast<int>((x + 1) * sx)));
+      const int x0 = static_cast<int>(x * sx),
+                x1 = std::max(x0 + 1, std::min(spec.width, static_cast<int>((x + 1) * sx)));
       float* o = &out[(static_cast<size_t>(y) * w + x) * spec.nchannels];
       for (int yy = y0; yy < y1; ++yy)
         for (int xx = x0; xx < x1; ++xx)
-          for (int c = 0; c < spec.nchannels; ++c) o[c] += in[(static_cast<size_t>(yy) * spec.width + xx) * spec.nchannels + c];
+          for (int c = 0; c < spec.nchannels; ++c)
+            o[c] += in[(static_cast<size_t>(yy) * spec.width + xx) * spec.nchannels + c];
       for (int c = 0; c < spec.nchannels; ++c) o[c] /= static_cast<float>((y1 - y0) * (x1 - x0));
     }
   }
@@ -170,8 +185,8 @@ void RenderSceneFolder(const SceneConfig& cfg, const fs::path& out, bool progres
   raytrace::Frame scratch;
   for (size_t u = 0; u < cfg.description.units.size(); ++u) {
     nlohmann::json s;
-    views.push_back(ViewJson(RenderView(cfg, scene, static_cast<int>(u), stage.staging(),
-                                        cfg.description.units[u].name, progress, &s, &scratch)));
+    views.push_back(ViewJson(RenderView(cfg, scene, static_cast<int>(u), stage.staging(), cfg.description.units[u].name,
+                                        progress, &s, &scratch)));
     stats.push_back(s);
   }
   nlohmann::json boards = nlohmann::json::array();
@@ -228,7 +243,8 @@ std::vector<Rigid3d> DrawBoardPoses(const SceneConfig& base, const DatasetOption
   std::vector<Rigid3d> poses;
   int tries = 0;
   while (static_cast<int>(poses.size()) < o.count) {
-    HOVS_REQUIRE(++tries < 4000 * o.count, "dataset", "cannot place the board visibly often enough; "
+    HOVS_REQUIRE(++tries < 4000 * o.count, "dataset",
+                 "cannot place the board visibly often enough; "
                  "check the distance and elevation ranges against the mirror's field of view");
     const double az = (U(rng) * 2 - 1) * M_PI;
     const double el = (o.min_elevation_deg + U(rng) * (o.max_elevation_deg - o.min_elevation_deg)) * kDeg;
@@ -238,7 +254,8 @@ std::vector<Rigid3d> DrawBoardPoses(const SceneConfig& base, const DatasetOption
     // Face the viewpoints (LookAt's z, the printed face, points at them), then tilt and roll.
     Rigid3d pose = LookAt(board_centre, centre, (U(rng) * 2 - 1) * M_PI);
     const double tilt_axis = U(rng) * 2 * M_PI, tilt = U(rng) * o.max_tilt_deg * kDeg;
-    pose.rotation = pose.rotation * QuaternionFromAngleAxis<double>(Vec3d(std::cos(tilt_axis), std::sin(tilt_axis), 0) * tilt);
+    pose.rotation =
+        pose.rotation * QuaternionFromAngleAxis<double>(Vec3d(std::cos(tilt_axis), std::sin(tilt_axis), 0) * tilt);
     bool ok = BoardClearOf(occluders, o.board, pose);
     for (size_t u = 0; u < n_units && ok; ++u) {
       const auto& unit = units[u];
@@ -273,9 +290,11 @@ void WriteCalibrationDataset(const SceneConfig& base, const DatasetOptions& o, c
   const std::vector<Rigid3d> poses = DrawBoardPoses(base, o);
   StagedDirectory stage(out, "dataset", {base.source});
   nlohmann::json m = ManifestHead(base, o.kind, o.seed, versions);
-  m["generator"] = {{"count", o.count}, {"distance", {o.min_distance, o.max_distance}},
+  m["generator"] = {{"count", o.count},
+                    {"distance", {o.min_distance, o.max_distance}},
                     {"min_visible_fraction", o.min_visible_fraction},
-                    {"elevation_deg", {o.min_elevation_deg, o.max_elevation_deg}}, {"max_tilt_deg", o.max_tilt_deg},
+                    {"elevation_deg", {o.min_elevation_deg, o.max_elevation_deg}},
+                    {"max_tilt_deg", o.max_tilt_deg},
                     {"edge_margin_px", o.edge_margin_px}};
   nlohmann::json frames = nlohmann::json::array();
   nlohmann::json boards = nlohmann::json::array();
@@ -315,8 +334,11 @@ void WriteCalibrationDataset(const SceneConfig& base, const DatasetOptions& o, c
       seconds += stats["seconds"].get<double>();
       rays += stats["rays"].get<uint64_t>();
     }
-    frames.push_back({{"id", i}, {"views", views}, {"world_from_board", PoseToJson(poses[i])},
-                      {"render_seconds", seconds}, {"rays", rays}});
+    frames.push_back({{"id", i},
+                      {"views", views},
+                      {"world_from_board", PoseToJson(poses[i])},
+                      {"render_seconds", seconds},
+                      {"rays", rays}});
     if (i == 0) boards.push_back(BoardToJson(b));
   }
   m["boards"] = boards;
@@ -325,8 +347,11 @@ void WriteCalibrationDataset(const SceneConfig& base, const DatasetOptions& o, c
 
   // A report page: thumbnails and the per-frame facts.
   results::HtmlPage page("hovs dataset: " + base.name + " (" + o.kind + ")");
- page.Paragraph(std::to_string(frames.size()) + " frames (" + o.kind + "), board poses drawn with seed " + std::to_string(o.seed) + " so that every corner is visible; "
-                 "render seed " + std::to_string(base.render.seed) + ", " + std::to_string(base.render.samples) +
+  page.Paragraph(std::to_string(frames.size()) + " frames (" + o.kind + "), board poses drawn with seed " +
+                 std::to_string(o.seed) +
+                 " so that every corner is visible; "
+                 "render seed " +
+                 std::to_string(base.render.seed) + ", " + std::to_string(base.render.samples) +
                  " samples per pixel. " +
                  (base.render.ground_truth ? "Ground truth per frame: truth/*.exr (channels Z, P, N, id, mask, M) and "
                                              "truth/*.json (rig, board pose, exact corner pixels)."
@@ -346,14 +371,15 @@ void WriteCalibrationDataset(const SceneConfig& base, const DatasetOptions& o, c
         visible = std::to_string(side["boards"][0]["visible_corners"].get<int>()) + " / " +
                   std::to_string(side["boards"][0]["corners"].size());
       }
-      rows.push_back({std::to_string(fr["id"].get<int>()), view["unit"].get<std::string>(), view["image"].get<std::string>(),
-                      visible, secs});
+      rows.push_back({std::to_string(fr["id"].get<int>()), view["unit"].get<std::string>(),
+                      view["image"].get<std::string>(), visible, secs});
     }
   }
   page.Table({"frame", "unit", "image", "visible corners", "render of the frame (s)"}, rows);
   page.Heading("Manifest");
-  page.Paragraph("dataset.json lists frames, images, ground truth and the rig; real captures use the same "
-                 "manifest without ground truth.");
+  page.Paragraph(
+      "dataset.json lists frames, images, ground truth and the rig; real captures use the same "
+      "manifest without ground truth.");
   WriteFileAtomic(stage.staging() / "index.html", page.Render());
   stage.Commit();
 }
@@ -383,7 +409,9 @@ void WriteDepthSequence(const SceneConfig& base, const DatasetOptions& o, const 
     }
   StagedDirectory stage(out, "dataset", {base.source});
   nlohmann::json m = ManifestHead(base, o.kind, o.seed, versions);
-  m["generator"] = {{"count", o.count}, {"step_m", o.step_m}, {"heading_deg", o.heading_deg},
+  m["generator"] = {{"count", o.count},
+                    {"step_m", o.step_m},
+                    {"heading_deg", o.heading_deg},
                     {"yaw_step_deg", o.yaw_step_deg},
                     {"note", "units in 'units' are at frame 0; frame k's units are world_from_rig(k) * them"}};
   nlohmann::json boards = nlohmann::json::array();
@@ -393,7 +421,8 @@ void WriteDepthSequence(const SceneConfig& base, const DatasetOptions& o, const 
   results::HtmlPage page("hovs dataset: " + base.name + " (depth_sequence)");
   page.Paragraph(std::to_string(o.count) + " frames, the rig moving " + std::to_string(o.step_m) +
                  " m per frame (heading " + std::to_string(o.heading_deg) + " deg, yaw step " +
-                 std::to_string(o.yaw_step_deg) + " deg); every unit rendered per frame with ground truth "
+                 std::to_string(o.yaw_step_deg) +
+                 " deg); every unit rendered per frame with ground truth "
                  "(truth/*.exr: Z, P, N, id, mask, M; truth/*.json: the rig of that frame).");
   raytrace::Frame scratch;  // reused by every frame's render
   for (int i = 0; i < o.count; ++i) {
@@ -416,8 +445,8 @@ void WriteDepthSequence(const SceneConfig& base, const DatasetOptions& o, const 
       const std::string thumb = Thumbnail(stage.staging(), view["image"].get<std::string>(), 320);
       page.Figure(thumb, "frame " + std::to_string(i) + ", " + view["unit"].get<std::string>(), 320);
     }
-    frames.push_back({{"id", i}, {"views", views}, {"world_from_rig", PoseToJson(world_from_rig)},
-                      {"render_seconds", seconds}});
+    frames.push_back(
+        {{"id", i}, {"views", views}, {"world_from_rig", PoseToJson(world_from_rig)}, {"render_seconds", seconds}});
   }
   m["frames"] = frames;
   WriteFileAtomic(stage.staging() / "dataset.json", m.dump(2) + "\n");

@@ -25,15 +25,15 @@ struct DatasetOptions {
   // step_m per frame along heading_deg (world, from +x towards +y) and turns yaw_step_deg per frame about the
   // vertical through the units' centroid (a vehicle driving through the scene).
   std::string kind = "mono_calibration";
-  int count = 9;                          // frames
-  uint64_t seed = 1;                      // board poses (the render seed comes from the scene's render options)
-  BoardSpec board;                        // the calibration board (default: 8 x 6 squares of 30 mm: 7 x 5 corners)
-  double min_distance = 0.3, max_distance = 0.6;   // board centre from the viewpoint, m
+  int count = 9;      // frames
+  uint64_t seed = 1;  // board poses (the render seed comes from the scene's render options)
+  BoardSpec board;    // the calibration board (default: 8 x 6 squares of 30 mm: 7 x 5 corners)
+  double min_distance = 0.3, max_distance = 0.6;  // board centre from the viewpoint, m
   double min_elevation_deg = -55, max_elevation_deg = -12;
-  double max_tilt_deg = 35;                        // board tilt away from facing the viewpoint
-  double edge_margin_px = 8;                       // corners at least this far inside the valid annulus
-  double min_visible_fraction = 1.0;               // of the board's corners, in every unit that must see it
-  double step_m = 0.5, heading_deg = 0, yaw_step_deg = 0;   // depth_sequence
+  double max_tilt_deg = 35;                                // board tilt away from facing the viewpoint
+  double edge_margin_px = 8;                               // corners at least this far inside the valid annulus
+  double min_visible_fraction = 1.0;                       // of the board's corners, in every unit that must see it
+  double step_m = 0.5, heading_deg = 0, yaw_step_deg = 0;  // depth_sequence
   bool progress = false;
   void Check(const std::string& where) const;
   // Defaults for a kind (board, count, distances, visibility).

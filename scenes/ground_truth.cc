@@ -64,9 +64,15 @@ nlohmann::json UnitToJson(const raytrace::CatadioptricUnit& u) {
   return {{"name", u.name},
           {"model", "hyperboloid"},
           {"mirror", {{"a", u.rig.mirror.a}, {"b", u.rig.mirror.b}, {"rim_diameter", u.rig.mirror.rim_diameter}}},
-          {"camera", {{"model", "pinhole_radtan"}, {"width", c.width}, {"height", c.height}, {"fx", c.fx}, {"fy", c.fy},
-                      {"cx", c.cx}, {"cy", c.cy},
-                      {"distortion", {c.distortion.k1, c.distortion.k2, c.distortion.p1, c.distortion.p2}}}},
+          {"camera",
+           {{"model", "pinhole_radtan"},
+            {"width", c.width},
+            {"height", c.height},
+            {"fx", c.fx},
+            {"fy", c.fy},
+            {"cx", c.cx},
+            {"cy", c.cy},
+            {"distortion", {c.distortion.k1, c.distortion.k2, c.distortion.p1, c.distortion.p2}}}},
           {"cam_from_mirror", PoseToJson(u.rig.cam_from_mirror)},
           {"world_from_mirror", PoseToJson(u.world_from_mirror)},
           {"occluder_radius", u.rig.occluder_radius},
@@ -74,8 +80,13 @@ nlohmann::json UnitToJson(const raytrace::CatadioptricUnit& u) {
 }
 
 raytrace::CatadioptricUnit UnitFromJson(const nlohmann::json& j, const std::string& where) {
-  static const std::set<std::string> kKeys = {"name",          "model",           "mirror",         "camera",
-                                              "cam_from_mirror", "world_from_mirror", "occluder_radius",
+  static const std::set<std::string> kKeys = {"name",
+                                              "model",
+                                              "mirror",
+                                              "camera",
+                                              "cam_from_mirror",
+                                              "world_from_mirror",
+                                              "occluder_radius",
                                               "single_viewpoint"};
   HOVS_REQUIRE(j.is_object(), where, "a unit must be an object");
   for (const auto& [key, value] : j.items())
@@ -106,8 +117,9 @@ raytrace::CatadioptricUnit UnitFromJson(const nlohmann::json& j, const std::stri
 }
 
 nlohmann::json BoardToJson(const BoardInstance& b) {
-  nlohmann::json j = {{"name", b.name}, {"object_id", b.object_id}, {"margin", b.spec.margin},
-                      {"width", b.spec.Width()}, {"height", b.spec.Height()}, {"world_from_board", PoseToJson(b.world_from_board)}};
+  nlohmann::json j = {
+      {"name", b.name},          {"object_id", b.object_id},  {"margin", b.spec.margin},
+      {"width", b.spec.Width()}, {"height", b.spec.Height()}, {"world_from_board", PoseToJson(b.world_from_board)}};
   if (b.spec.kind == BoardSpec::Kind::kChecker) {
     j["type"] = "checker";
     j["squares"] = {b.spec.squares_x, b.spec.squares_y};
@@ -132,18 +144,24 @@ nlohmann::json FrameSidecar(const SceneConfig& cfg, const raytrace::RayScene& sc
   nlohmann::json channels = nlohmann::json::array();
   const char* meaning[raytrace::GroundTruth::kChannels] = {
       "range (m) from the unit's viewpoint F1 to the surface seen; +inf for sky",
-      "world point x (m)", "world point y (m)", "world point z (m)",
-      "surface normal x (world)", "surface normal y (world)", "surface normal z (world)",
+      "world point x (m)",
+      "world point y (m)",
+      "world point z (m)",
+      "surface normal x (world)",
+      "surface normal y (world)",
+      "surface normal z (world)",
       "object id (0 sky, 1 mount, 2 camera body, 3 mirror back, 4.. scene objects)",
       "1 where the pixel sees the scene through the mirror, 0 outside the rim and on the camera's reflection",
-      "mirror reflection point x (mirror frame, m)", "mirror reflection point y (mirror frame, m)",
+      "mirror reflection point x (mirror frame, m)",
+      "mirror reflection point y (mirror frame, m)",
       "mirror reflection point z (mirror frame, m)"};
   for (int c = 0; c < raytrace::GroundTruth::kChannels; ++c)
     channels.push_back({{"name", raytrace::GroundTruth::kNames[c]}, {"meaning", meaning[c]}});
   j["exr_channels"] = channels;
   j["pixel_convention"] = "u = column, v = row, centre of the top-left pixel at (0, 0); ground truth at pixel centres";
   nlohmann::json objects = nlohmann::json::array();
-  for (const auto& o : scene.description().objects) objects.push_back({{"id", o.id}, {"name", o.name}, {"type", o.type}});
+  for (const auto& o : scene.description().objects)
+    objects.push_back({{"id", o.id}, {"name", o.name}, {"type", o.type}});
   j["objects"] = objects;
   nlohmann::json boards = nlohmann::json::array();
   for (const BoardInstance& b : cfg.boards) {
@@ -151,8 +169,10 @@ nlohmann::json FrameSidecar(const SceneConfig& cfg, const raytrace::RayScene& sc
     nlohmann::json corners = nlohmann::json::array();
     int visible = 0;
     for (const CornerTruth& c : BoardCornerTruth(scene, b, unit)) {
-      nlohmann::json cj = {{"id", c.id}, {"board", {c.board_xy.x(), c.board_xy.y()}},
-                           {"world", {c.world.x(), c.world.y(), c.world.z()}}, {"status", c.status}};
+      nlohmann::json cj = {{"id", c.id},
+                           {"board", {c.board_xy.x(), c.board_xy.y()}},
+                           {"world", {c.world.x(), c.world.y(), c.world.z()}},
+                           {"status", c.status}};
       if (c.status == "visible") {
         cj["pixel"] = {c.pixel.x(), c.pixel.y()};
         cj["mirror_point"] = {c.mirror_point.x(), c.mirror_point.y(), c.mirror_point.z()};

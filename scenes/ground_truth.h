@@ -17,9 +17,9 @@ struct CornerTruth {
   int id = 0;
   Vec2d board_xy = Vec2d::Zero();  // board frame, m
   Vec3d world = Vec3d::Zero();
-  Vec2d pixel = Vec2d::Zero();     // valid when status == "visible"
+  Vec2d pixel = Vec2d::Zero();  // valid when status == "visible"
   Vec3d mirror_point = Vec3d::Zero();
-  std::string status;              // visible | facing_away | occluded | <core projection status>
+  std::string status;  // visible | facing_away | occluded | <core projection status>
 };
 
 // Projects every corner of the board into the unit's image and classifies its visibility.

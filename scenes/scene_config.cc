@@ -20,7 +20,6 @@ using raytrace::Texture;
 namespace {
 constexpr double kDeg = M_PI / 180.0;
 
-
 cv::Ptr<cv::aruco::GridBoard> MakeGridBoard(const BoardSpec& s) {
   return cv::aruco::GridBoard::create(s.markers_x, s.markers_y, static_cast<float>(s.marker_length),
                                       static_cast<float>(s.marker_separation),
@@ -62,11 +61,12 @@ void CheckBoard(const BoardSpec& s, const std::string& where) {
   HOVS_REQUIRE(s.margin >= 0 && std::isfinite(s.margin), where, "margin must be >= 0");
   if (s.kind == BoardSpec::Kind::kChecker) {
     HOVS_REQUIRE(s.squares_x >= 2 && s.squares_y >= 2, where, "a checkerboard needs at least 2 x 2 squares");
-    HOVS_REQUIRE(s.squares_x <= 1000 && s.squares_y <= 1000, where, "a checkerboard has at most 1000 x 1000 squares (got ",
-                 s.squares_x, " x ", s.squares_y, ")");
+    HOVS_REQUIRE(s.squares_x <= 1000 && s.squares_y <= 1000, where,
+                 "a checkerboard has at most 1000 x 1000 squares (got ", s.squares_x, " x ", s.squares_y, ")");
     HOVS_REQUIRE(s.square > 0 && std::isfinite(s.square), where, "square size must be positive");
   } else {
-    HOVS_REQUIRE(calib::ArucoDictionaryId(s.dictionary) >= 0, where, "unknown ArUco dictionary '", s.dictionary, "' (known: ", calib::ArucoDictionaryNames(), ")");
+    HOVS_REQUIRE(calib::ArucoDictionaryId(s.dictionary) >= 0, where, "unknown ArUco dictionary '", s.dictionary,
+                 "' (known: ", calib::ArucoDictionaryNames(), ")");
     HOVS_REQUIRE(s.markers_x >= 1 && s.markers_y >= 1, where, "needs at least one marker");
     HOVS_REQUIRE(s.marker_length > 0 && s.marker_separation >= 0, where, "marker sizes must be positive");
   }
@@ -97,13 +97,15 @@ Rect MakeBoardRect(const BoardSpec& s, const Rigid3d& world_from_board, int obje
       break;
     }
   }
-  HOVS_REQUIRE(ppm > 0, "aruco board", "marker length, separation and margin must be whole multiples of 0.05 mm "
+  HOVS_REQUIRE(ppm > 0, "aruco board",
+               "marker length, separation and margin must be whole multiples of 0.05 mm "
                "and the board at most 16000 px at that resolution");
   const int w = static_cast<int>(std::lround(s.Width() * ppm)), h = static_cast<int>(std::lround(s.Height() * ppm));
   const int margin = static_cast<int>(std::lround(s.margin * ppm));
   cv::Mat img;
   MakeGridBoard(s)->draw(cv::Size(w, h), img, margin, 1);
-  auto tex = std::make_shared<raytrace::ImageTexture>(raytrace::ImageTexture::FromGray8(img.data, img.cols, img.rows, "aruco:" + s.dictionary));
+  auto tex = std::make_shared<raytrace::ImageTexture>(
+      raytrace::ImageTexture::FromGray8(img.data, img.cols, img.rows, "aruco:" + s.dictionary));
   // Paper white and ink black, like a print.
   for (float& p : tex->pixels) p = 0.05f + 0.9f * p;
   r.front.kind = Texture::Kind::kImage;
@@ -138,7 +140,8 @@ Rigid3d ReadPose(const YamlReader& r, const YAML::Node& n, const std::string& ke
   const Vec3d p = r.Vector3(r.Require(n, key, "position", &pos), key + ".position");
   const auto within = [&](const Vec3d& v, const YAML::Node& at, const std::string& k) {
     HOVS_REQUIRE(v.cwiseAbs().maxCoeff() <= raytrace::kWorldExtent, r.Where(at, k), "lies more than ",
-                 raytrace::kWorldExtent, " m from the world origin: the renderer traces in single precision (1 mm "
+                 raytrace::kWorldExtent,
+                 " m from the world origin: the renderer traces in single precision (1 mm "
                  "there); give the scene in local coordinates");
   };
   within(p, pos, key + ".position");
@@ -149,11 +152,13 @@ Rigid3d ReadPose(const YamlReader& r, const YAML::Node& n, const std::string& ke
     HOVS_REQUIRE((t - p).norm() > 1e-9, r.Where(n["look_at"], key + ".look_at"), "look_at equals position");
     return LookAt(p, t, n["roll_deg"] ? r.Number(n["roll_deg"], key + ".roll_deg") * kDeg : 0.0);
   }
-  const Vec3d aa = n["rotation_deg"] ? Vec3d(r.Vector3(n["rotation_deg"], key + ".rotation_deg") * kDeg) : Vec3d::Zero();
+  const Vec3d aa =
+      n["rotation_deg"] ? Vec3d(r.Vector3(n["rotation_deg"], key + ".rotation_deg") * kDeg) : Vec3d::Zero();
   return Rigid3d(QuaternionFromAngleAxis<double>(aa), p);
 }
 
-Texture ReadTexture(const YamlReader& r, const YAML::Node& n, const std::string& key, const std::filesystem::path& base) {
+Texture ReadTexture(const YamlReader& r, const YAML::Node& n, const std::string& key,
+                    const std::filesystem::path& base) {
   r.OnlyKeys(n, key, {"solid", "checker", "noise", "image"});
   HOVS_REQUIRE(n.size() == 1, r.Where(n, key), "give exactly one of solid, checker, noise, image");
   Texture t;
@@ -169,8 +174,8 @@ Texture ReadTexture(const YamlReader& r, const YAML::Node& n, const std::string&
     r.Require(c, k, "squares", &sq);
     HOVS_REQUIRE(sq.IsSequence() && sq.size() == 2, r.Where(sq, k + ".squares"), "expected [nx, ny]");
     t.squares_x = r.Integer(sq[0], k + ".squares[0]"), t.squares_y = r.Integer(sq[1], k + ".squares[1]");
-    HOVS_REQUIRE(t.squares_x >= 1 && t.squares_y >= 1, r.Where(sq, k + ".squares"), "needs at least 1 x 1 squares (got ",
-                 t.squares_x, " x ", t.squares_y, ")");
+    HOVS_REQUIRE(t.squares_x >= 1 && t.squares_y >= 1, r.Where(sq, k + ".squares"),
+                 "needs at least 1 x 1 squares (got ", t.squares_x, " x ", t.squares_y, ")");
     YAML::Node s;
     t.square = r.Positive(r.Require(c, k, "square", &s), k + ".square");
     if (c["dark"]) t.colour_a = r.Colour(c["dark"], k + ".dark");
@@ -197,7 +202,8 @@ Texture ReadTexture(const YamlReader& r, const YAML::Node& n, const std::string&
     YAML::Node p;
     std::filesystem::path file = r.String(r.Require(c, k, "path", &p), k + ".path");
     if (file.is_relative()) file = base / file;
-    HOVS_REQUIRE(std::filesystem::is_regular_file(file), r.Where(p, k + ".path"), "texture file not found: ", file.string());
+    HOVS_REQUIRE(std::filesystem::is_regular_file(file), r.Where(p, k + ".path"),
+                 "texture file not found: ", file.string());
     t.kind = Texture::Kind::kImage;
     t.image = std::make_shared<raytrace::ImageTexture>(raytrace::ImageTexture::Load(file.string()));
     YAML::Node w, h;
@@ -210,7 +216,8 @@ Texture ReadTexture(const YamlReader& r, const YAML::Node& n, const std::string&
 }  // namespace
 
 namespace {
-SceneConfig ParseSceneConfigUnguarded(const std::string& text, const std::string& source, const std::filesystem::path& base) {
+SceneConfig ParseSceneConfigUnguarded(const std::string& text, const std::string& source,
+                                      const std::filesystem::path& base) {
   const YamlReader r(source);
   const YAML::Node root = r.Load(text);
   HOVS_REQUIRE(root.IsMap(), source, "expected a YAML mapping at the top level");
@@ -226,8 +233,8 @@ SceneConfig ParseSceneConfigUnguarded(const std::string& text, const std::string
   for (size_t i = 0; i < units.size(); ++i) {
     const YAML::Node u = units[i];
     const std::string k = "units[" + std::to_string(i) + "]";
-    r.OnlyKeys(u, k, {"name", "mirror", "camera", "pose", "misalignment", "body_length", "velocity",
-                      "angular_velocity_deg"});
+    r.OnlyKeys(u, k,
+               {"name", "mirror", "camera", "pose", "misalignment", "body_length", "velocity", "angular_velocity_deg"});
     raytrace::CatadioptricUnit unit;
     unit.name = u["name"] ? r.Name(u["name"], k + ".name") : "unit" + std::to_string(i);
     for (const auto& earlier : desc.units)
@@ -237,12 +244,14 @@ SceneConfig ParseSceneConfigUnguarded(const std::string& text, const std::string
     r.Require(u, k, "mirror", &m);
     r.OnlyKeys(m, k + ".mirror", {"a", "b", "rim_diameter"});
     YAML::Node a, b, d;
-    HyperboloidMirror<double> mirror{r.Positive(r.Require(m, k + ".mirror", "a", &a), k + ".mirror.a"),
-                                     r.Positive(r.Require(m, k + ".mirror", "b", &b), k + ".mirror.b"),
-                                     r.Positive(r.Require(m, k + ".mirror", "rim_diameter", &d), k + ".mirror.rim_diameter")};
+    HyperboloidMirror<double> mirror{
+        r.Positive(r.Require(m, k + ".mirror", "a", &a), k + ".mirror.a"),
+        r.Positive(r.Require(m, k + ".mirror", "b", &b), k + ".mirror.b"),
+        r.Positive(r.Require(m, k + ".mirror", "rim_diameter", &d), k + ".mirror.rim_diameter")};
     r.Require(u, k, "camera", &c);
     const std::string kc = k + ".camera";
-    r.OnlyKeys(c, kc, {"focal_length", "pixel_pitch", "width", "height", "lens_aperture", "distortion", "principal_point"});
+    r.OnlyKeys(c, kc,
+               {"focal_length", "pixel_pitch", "width", "height", "lens_aperture", "distortion", "principal_point"});
     YAML::Node f, pp, w, h, la;
     const double focal = r.Positive(r.Require(c, kc, "focal_length", &f), kc + ".focal_length");
     const double pitch = r.Positive(r.Require(c, kc, "pixel_pitch", &pp), kc + ".pixel_pitch");
@@ -250,7 +259,8 @@ SceneConfig ParseSceneConfigUnguarded(const std::string& text, const std::string
                  "must be in 1e-7 .. 1e-3 m (0.1 um to 1 mm; got ", pitch, ")");
     const int width = r.Integer(r.Require(c, kc, "width", &w), kc + ".width");
     const int height = r.Integer(r.Require(c, kc, "height", &h), kc + ".height");
-    HOVS_REQUIRE(width > 0 && height > 0 && width <= 20000 && height <= 20000, r.Where(c, kc), "image size must be 1..20000");
+    HOVS_REQUIRE(width > 0 && height > 0 && width <= 20000 && height <= 20000, r.Where(c, kc),
+                 "image size must be 1..20000");
     const double lens = r.Positive(r.Require(c, kc, "lens_aperture", &la), kc + ".lens_aperture");
     PinholeCamera<double> cam = PinholeCamera<double>::FromPhysical(focal, pitch, width, height);
     if (c["principal_point"]) {
@@ -278,9 +288,11 @@ SceneConfig ParseSceneConfigUnguarded(const std::string& text, const std::string
     if (u["body_length"]) unit.body_length = r.Positive(u["body_length"], k + ".body_length");
     if (u["velocity"]) {
       unit.velocity = r.Vector3(u["velocity"], k + ".velocity");
-      HOVS_REQUIRE(unit.velocity.norm() <= 1000, r.Where(u["velocity"], k + ".velocity"), "a unit moves at most 1000 m/s");
+      HOVS_REQUIRE(unit.velocity.norm() <= 1000, r.Where(u["velocity"], k + ".velocity"),
+                   "a unit moves at most 1000 m/s");
     }
-    if (u["angular_velocity_deg"]) unit.angular_velocity = r.Vector3(u["angular_velocity_deg"], k + ".angular_velocity_deg") * kDeg;
+    if (u["angular_velocity_deg"])
+      unit.angular_velocity = r.Vector3(u["angular_velocity_deg"], k + ".angular_velocity_deg") * kDeg;
     unit.rig.Check(r.Where(u, k));
     desc.units.push_back(unit);
   }
@@ -312,7 +324,8 @@ SceneConfig ParseSceneConfigUnguarded(const std::string& text, const std::string
       } else if (type == "board") {
         r.OnlyKeys(o, k, {"type", "name", "pose", "checker", "aruco", "margin"});
         BoardSpec spec;
-        HOVS_REQUIRE((o["checker"] ? 1 : 0) + (o["aruco"] ? 1 : 0) == 1, r.Where(o, k), "a board is either checker or aruco");
+        HOVS_REQUIRE((o["checker"] ? 1 : 0) + (o["aruco"] ? 1 : 0) == 1, r.Where(o, k),
+                     "a board is either checker or aruco");
         if (o["checker"]) {
           const YAML::Node c = o["checker"];
           r.OnlyKeys(c, k + ".checker", {"squares", "square"});
@@ -365,7 +378,8 @@ SceneConfig ParseSceneConfigUnguarded(const std::string& text, const std::string
         // The box's pose is at the centre of its bottom face.
         for (const Rect& face : raytrace::MakeBox(world_from_box, s, tex, id)) desc.rects.push_back(face);
       } else {
-        throw Error(r.Where(type_node, k + ".type"), "unknown object type '" + type + "' (known: board, box, ground, plane)");
+        throw Error(r.Where(type_node, k + ".type"),
+                    "unknown object type '" + type + "' (known: board, box, ground, plane)");
       }
     }
   }
@@ -378,7 +392,8 @@ SceneConfig ParseSceneConfigUnguarded(const std::string& text, const std::string
   }
   if (root["render"]) {
     const YAML::Node rn = root["render"];
-    r.OnlyKeys(rn, "render", {"samples", "seed", "ground_truth", "sensor", "lens_radius", "focus_distance", "exposure_time"});
+    r.OnlyKeys(rn, "render",
+               {"samples", "seed", "ground_truth", "sensor", "lens_radius", "focus_distance", "exposure_time"});
     if (rn["lens_radius"]) cfg.render.lens_radius = r.Number(rn["lens_radius"], "render.lens_radius");
     if (rn["focus_distance"]) cfg.render.focus_distance = r.Number(rn["focus_distance"], "render.focus_distance");
     if (rn["exposure_time"]) cfg.render.exposure_time = r.Number(rn["exposure_time"], "render.exposure_time");
@@ -435,9 +450,8 @@ void UnitClearance::Check(const raytrace::CatadioptricUnit& u, const std::string
     Vec3d d = Vec3d::Zero();
     d(k / 2) = k % 2 ? -1.0 : 1.0;
     const raytrace::Hit h = scene_->Trace(C, d);
-    const bool box = h.hit && std::any_of(objects_.begin(), objects_.end(), [&](const auto& o) {
-      return o.id == h.object_id && o.type == "box";
-    });
+    const bool box = h.hit && std::any_of(objects_.begin(), objects_.end(),
+                                          [&](const auto& o) { return o.id == h.object_id && o.type == "box"; });
     inside = box && (inside == -1 || inside == h.object_id) ? h.object_id : -2;
   }
   HOVS_REQUIRE(inside < 0, where, "unit '", u.name, "' is inside box '", name_of(inside), "'");

@@ -22,9 +22,9 @@ struct BoardSpec {
   int markers_x = 5, markers_y = 5;  // aruco grid
   double marker_length = 0.2, marker_separation = 0.04;
   std::string dictionary = "DICT_6X6_250";
-  double margin = 0.02;              // white border around the pattern, m
+  double margin = 0.02;  // white border around the pattern, m
 
-  double Width() const;   // printed pattern plus margins
+  double Width() const;  // printed pattern plus margins
   double Height() const;
   // Corners with ids, in the board frame (z = 0): checker inner corners (id = j * (sx - 1) + i, i along x),
   // or ArUco marker corners (id = 4 * marker id + k, k in OpenCV's corner order).
@@ -34,7 +34,7 @@ struct BoardSpec {
 struct BoardInstance {
   std::string name;
   int object_id = 0;
-  int rect_index = 0;      // in SceneDescription::rects
+  int rect_index = 0;  // in SceneDescription::rects
   BoardSpec spec;
   Rigid3d world_from_board;
 };
@@ -57,13 +57,13 @@ SceneConfig LoadSceneConfig(const std::filesystem::path& path);
 // camera centre is inside a box; `where` names the input (the scene file, a dataset frame).
 class UnitClearance {
  public:
-  explicit UnitClearance(const raytrace::SceneDescription& description);   // its units are ignored
+  explicit UnitClearance(const raytrace::SceneDescription& description);  // its units are ignored
   ~UnitClearance();
   void Check(const raytrace::CatadioptricUnit& unit, const std::string& where) const;
 
  private:
   std::vector<raytrace::SceneObjectInfo> objects_;
-  std::unique_ptr<raytrace::RayScene> scene_;   // the objects alone; null without any
+  std::unique_ptr<raytrace::RayScene> scene_;  // the objects alone; null without any
 };
 // Every unit of the description (ParseSceneConfig calls it on each scene file).
 void CheckUnitsClearOfObjects(const raytrace::SceneDescription& description, const std::string& where);

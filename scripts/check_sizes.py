@@ -21,6 +21,8 @@ ALLOWED = {
     ("design/study.cc", "WriteDesignReport"),
     ("hw/capture.cc", "CaptureDataset"),
 }
+# Files over the limit, named in the README's layout section with the reason.
+FILES_ALLOWED = {"unwrap/remap_kernels.cc"}
 ROOT = pathlib.Path(__file__).resolve().parent.parent
 FOLDERS = ["core", "io", "results", "design", "raytrace", "calib", "scenes",
            "unwrap", "depth", "hw", "apps", "python"]
@@ -56,7 +58,7 @@ def main():
                 continue
             lines = path.read_text(errors="replace").splitlines()
             rel = path.relative_to(ROOT)
-            if len(lines) > FILE_LIMIT:
+            if len(lines) > FILE_LIMIT and str(rel) not in FILES_ALLOWED:
                 bad.append(f"{rel}: {len(lines)} lines (limit {FILE_LIMIT})")
             for start, length, head in functions(lines):
                 if length > FUNCTION_LIMIT and not any(str(rel) == f and n + "(" in head for f, n in ALLOWED):

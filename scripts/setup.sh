@@ -4,7 +4,7 @@
 set -euo pipefail
 
 PACKAGES=(
-  build-essential cmake ninja-build pkg-config git ca-certificates
+  build-essential cmake ninja-build pkg-config git ca-certificates python3
   libeigen3-dev libnlopt-cxx-dev libceres-dev
   libembree-dev libtbb-dev
   libopenimageio-dev openimageio-tools libopenexr-dev libpng-dev libjpeg-dev
@@ -13,7 +13,7 @@ PACKAGES=(
   libaravis-dev aravis-tools libusb-1.0-0-dev iproute2 util-linux
   libcli11-dev nlohmann-json3-dev libyaml-cpp-dev libspdlog-dev libfmt-dev
   libgtest-dev libgmock-dev libbenchmark-dev
-  clang libfuzzer-14-dev libclang-rt-14-dev
+  clang clang-format-14 libfuzzer-14-dev libclang-rt-14-dev
 )
 
 SUDO=""

@@ -31,9 +31,9 @@ VirtualView<double> ViewSpec::View() const {
   if (type == ViewProjection::kPerspective)
     return VirtualView<double>::Perspective(width, height, hfov_deg * kDeg, yaw_deg * kDeg, pitch_deg * kDeg,
                                             roll_deg * kDeg);
-  VirtualView<double> v = VirtualView<double>::Panorama(type, width, height, elevation_min_deg * kDeg,
-                                                        elevation_max_deg * kDeg, azimuth_centre_deg * kDeg,
-                                                        azimuth_span_deg * kDeg);
+  VirtualView<double> v =
+      VirtualView<double>::Panorama(type, width, height, elevation_min_deg * kDeg, elevation_max_deg * kDeg,
+                                    azimuth_centre_deg * kDeg, azimuth_span_deg * kDeg);
   v.mirror_from_view = pole.normalized();
   return v;
 }
@@ -52,7 +52,8 @@ std::vector<std::string> PresetNames() { return {"article", "panorama", "longlat
 std::size_t ViewsMemoryBytes(const std::vector<ViewSpec>& views) {
   std::size_t total = 0, largest = 0;
   for (const ViewSpec& v : views) {
-    const std::size_t px = static_cast<std::size_t>(std::max(v.width, 0)) * static_cast<std::size_t>(std::max(v.height, 0));
+    const std::size_t px =
+        static_cast<std::size_t>(std::max(v.width, 0)) * static_cast<std::size_t>(std::max(v.height, 0));
     total += px, largest = std::max(largest, px);
   }
   return total * (3 + 8) + largest * 12;
@@ -65,8 +66,7 @@ void CheckViewsMemory(const std::string& where, const std::vector<ViewSpec>& vie
   char what[80];
   std::snprintf(what, sizeof what, "a layout of %zu views, %.1f megapixels in all, at worst", views.size(),
                 static_cast<double>(px) * 1e-6);
-  RequireMemory(where, what, ViewsMemoryBytes(views), available,
-                "make the views smaller or fewer, or free memory");
+  RequireMemory(where, what, ViewsMemoryBytes(views), available, "make the views smaller or fewer, or free memory");
 }
 
 Layout PresetLayout(const std::string& name) {
@@ -120,17 +120,22 @@ Layout ParseLayoutUnguarded(const std::string& text, const std::string& source, 
   for (size_t i = 0; i < views.size(); ++i) {
     const YAML::Node& n = views[i];
     const std::string key = "views[" + std::to_string(i) + "]";
-    r.OnlyKeys(n, key, {"name", "type", "width", "height", "yaw", "pitch", "roll", "hfov", "elevation_min",
-                        "elevation_max", "azimuth_centre", "azimuth_span"});
+    r.OnlyKeys(n, key,
+               {"name", "type", "width", "height", "yaw", "pitch", "roll", "hfov", "elevation_min", "elevation_max",
+                "azimuth_centre", "azimuth_span"});
     ViewSpec v;
     YAML::Node t;
     v.name = r.String(r.Require(n, key, "name", &t), key + ".name");
     const std::string type = n["type"] ? r.String(n["type"], key + ".type") : "perspective";
-    if (type == "perspective") v.type = ViewProjection::kPerspective;
-    else if (type == "cylindrical") v.type = ViewProjection::kCylindrical;
-    else if (type == "longlat") v.type = ViewProjection::kLongLat;
-    else throw Error(r.Where(n["type"], key + ".type"), "unknown view type '" + type +
-                                                            "' (known: perspective, cylindrical, longlat)");
+    if (type == "perspective")
+      v.type = ViewProjection::kPerspective;
+    else if (type == "cylindrical")
+      v.type = ViewProjection::kCylindrical;
+    else if (type == "longlat")
+      v.type = ViewProjection::kLongLat;
+    else
+      throw Error(r.Where(n["type"], key + ".type"),
+                  "unknown view type '" + type + "' (known: perspective, cylindrical, longlat)");
     if (v.type == ViewProjection::kLongLat) v.elevation_min_deg = -90, v.elevation_max_deg = 90;
     if (v.type != ViewProjection::kPerspective) v.width = 3600, v.height = 900;
     const auto num = [&](const char* k, double* out) {

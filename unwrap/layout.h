@@ -27,14 +27,14 @@ struct ViewSpec {
   std::string name;
   ViewProjection type = ViewProjection::kPerspective;
   int width = 1200, height = 700;
-  double yaw_deg = 0, pitch_deg = -30, roll_deg = 0, hfov_deg = 65;                  // perspective
-  double elevation_min_deg = -75, elevation_max_deg = -2;                             // panoramas
+  double yaw_deg = 0, pitch_deg = -30, roll_deg = 0, hfov_deg = 65;  // perspective
+  double elevation_min_deg = -75, elevation_max_deg = -2;            // panoramas
   double azimuth_centre_deg = 0, azimuth_span_deg = 360;
   // Panoramas and epipolar views: mirror_from_view (identity: the pole is the mirror axis). Epipolar views
   // (stereo rectification, built by depth/) use azimuth_centre/span for the angle from the baseline and
   // elevation_min/max for the angle around it (virtual_view.h).
   Eigen::Quaterniond pole = Eigen::Quaterniond::Identity();
-  VirtualView<double> View() const;   // throws hovs::Error naming the view when the spec is invalid
+  VirtualView<double> View() const;  // throws hovs::Error naming the view when the spec is invalid
   void Check(const std::string& where) const;
 };
 
@@ -55,8 +55,8 @@ std::size_t ViewsMemoryBytes(const std::vector<ViewSpec>& views);
 void CheckViewsMemory(const std::string& where, const std::vector<ViewSpec>& views,
                       std::optional<std::size_t> available);
 
-Layout PresetLayout(const std::string& name);                 // throws listing the known presets
-Layout LoadLayout(const std::filesystem::path& path);         // YAML, validated (file:line)
+Layout PresetLayout(const std::string& name);          // throws listing the known presets
+Layout LoadLayout(const std::filesystem::path& path);  // YAML, validated (file:line)
 // The same from the file's text; `name` is the layout's name when the text gives none.
 Layout ParseLayout(const std::string& text, const std::string& source, const std::string& name);
 // A preset name or a YAML file.

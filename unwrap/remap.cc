@@ -73,7 +73,7 @@ inline uint8_t Saturate(float v) { return static_cast<uint8_t>(std::clamp(std::l
 // Generic: any format and interpolation, clamped at the borders.
 struct GenericSampler {
   Plane planes[4];
-  int num_planes = 1;    // 1 grey, 3 RGB, 4 Bayer (R, G1, G2, B)
+  int num_planes = 1;  // 1 grey, 3 RGB, 4 Bayer (R, G1, G2, B)
   bool bayer = false;
   Interpolation m;
   void operator()(int32_t xf, int32_t yf, uint8_t* o) const {
@@ -266,7 +266,7 @@ void DownsampleHalf(const ImageView& in, Image8* out) {
       }
       const int n = in.width * Cin;
       AddRows(a, b, n, sums.data());
-      if (in.width % 2) std::copy(sums.data() + n - Cin, sums.data() + n, sums.data() + n);   // last pixel twice
+      if (in.width % 2) std::copy(sums.data() + n - Cin, sums.data() + n, sums.data() + n);  // last pixel twice
       if (Cin == 3) {
         PairSumsRgb(sums.data(), W, o);
       } else {
@@ -299,9 +299,9 @@ Remapper::Remapper(const RemapTable& table) : table_(table) {}
 
 void Remapper::Prepare(const ImageView& src) {
   HOVS_REQUIRE(src.data != nullptr, "remap input", "no image data");
-  HOVS_REQUIRE(src.width == table_.source_width && src.height == table_.source_height, "remap input",
-               "the image is ", src.width, " x ", src.height, " but the mapping was built for ", table_.source_width,
-               " x ", table_.source_height, " (a different camera or model)");
+  HOVS_REQUIRE(src.width == table_.source_width && src.height == table_.source_height, "remap input", "the image is ",
+               src.width, " x ", src.height, " but the mapping was built for ", table_.source_width, " x ",
+               table_.source_height, " (a different camera or model)");
   const int C = src.format == PixelFormat::kRgb8 ? 3 : 1;
   HOVS_REQUIRE(src.stride >= size_t(src.width) * C, "remap input", "row stride ", src.stride,
                " is smaller than a row of ", src.width * C, " bytes");
@@ -309,8 +309,7 @@ void Remapper::Prepare(const ImageView& src) {
                "a Bayer mosaic needs an even width and height");
   const auto start = std::chrono::steady_clock::now();
   pyramid_.resize(std::max(0, table_.levels - 1));
-  for (size_t l = 0; l < pyramid_.size(); ++l)
-    DownsampleHalf(l == 0 ? src : LevelView(pyramid_[l - 1]), &pyramid_[l]);
+  for (size_t l = 0; l < pyramid_.size(); ++l) DownsampleHalf(l == 0 ? src : LevelView(pyramid_[l - 1]), &pyramid_[l]);
   pyramid_ms_ = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
 }
 
@@ -331,8 +330,10 @@ void Remapper::RemapRows(const ImageView& src, Interpolation interp, int view, i
     // predict. Two tiles ahead measured best (article's six views: 1.9-2.1x -> 2.1-2.7x cv::remap in one
     // comparison of distances 0-4).
     if (tx == 0)
-      for (int d = 1; d < kPrefetchTiles && d < vt.tiles_x; ++d) PrefetchTile(src, pyramid_, vt.tiles[tile_row * vt.tiles_x + d]);
-    if (tx + kPrefetchTiles < vt.tiles_x) PrefetchTile(src, pyramid_, vt.tiles[tile_row * vt.tiles_x + tx + kPrefetchTiles]);
+      for (int d = 1; d < kPrefetchTiles && d < vt.tiles_x; ++d)
+        PrefetchTile(src, pyramid_, vt.tiles[tile_row * vt.tiles_x + d]);
+    if (tx + kPrefetchTiles < vt.tiles_x)
+      PrefetchTile(src, pyramid_, vt.tiles[tile_row * vt.tiles_x + tx + kPrefetchTiles]);
     const int u0 = tx * T, nu = std::min(T, vt.view.width - u0);
     uint8_t* base = band + size_t(u0) * OC;
     if (t.kind == TileKind::kEmpty) {
@@ -348,11 +349,14 @@ void Remapper::RemapRows(const ImageView& src, Interpolation interp, int view, i
     const bool fast = t.inside && interp != Interpolation::kBicubic;
     if (fast && interp == Interpolation::kBilinear) {
       if (fmt == PixelFormat::kGray8) {
-        WalkTile<1>(vt, t, T, nu, nv, base, ostride, FastRow{kernels::BilinearGrayRow, kernels::BilinearGrayTile, data, stride});
+        WalkTile<1>(vt, t, T, nu, nv, base, ostride,
+                    FastRow{kernels::BilinearGrayRow, kernels::BilinearGrayTile, data, stride});
       } else if (fmt == PixelFormat::kRgb8) {
-        WalkTile<3>(vt, t, T, nu, nv, base, ostride, FastRow{kernels::BilinearRgbRow, kernels::BilinearRgbTile, data, stride});
+        WalkTile<3>(vt, t, T, nu, nv, base, ostride,
+                    FastRow{kernels::BilinearRgbRow, kernels::BilinearRgbTile, data, stride});
       } else {
-        WalkTile<3>(vt, t, T, nu, nv, base, ostride, FastRow{kernels::BayerRgbRow, kernels::BayerRgbTile, data, stride});
+        WalkTile<3>(vt, t, T, nu, nv, base, ostride,
+                    FastRow{kernels::BayerRgbRow, kernels::BayerRgbTile, data, stride});
       }
       continue;
     }
@@ -393,7 +397,7 @@ void Remapper::Run(const ImageView& src, Interpolation interp, std::vector<Image
   const int n = static_cast<int>(table_.views.size());
   outputs->resize(n);
   const int OC = src.format == PixelFormat::kGray8 ? 1 : 3;
-  std::vector<std::pair<int, int>> rows;   // (view, tile row)
+  std::vector<std::pair<int, int>> rows;  // (view, tile row)
   for (int v = 0; v < n; ++v) {
     Image8& o = (*outputs)[v];
     const auto& vw = table_.views[v].view;

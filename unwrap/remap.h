@@ -5,11 +5,11 @@
 // mosaic at its source position (bilinear on each colour's own grid; G averages its two grids), so a camera's
 // raw frame goes straight to RGB views. Output: grey for grey input, RGB otherwise.
 //
-// Interpolation: bilinear (default; 6-bit fixed-point weights, positions rounded to 1/64 px; AVX2 when present), nearest, or bicubic
-// (Keys, a = -0.5). Tiles that minify sample a 2 x 2 box pyramid of the frame built once per frame, only to
-// the levels the table needs (for Bayer input, level 1 is the mosaic's own 2 x 2 cells as RGB pixels).
-// Interior tiles (all taps inside the image) run without bounds checks; others clamp to the border.
-// Work is spread over threads by tile rows of all views at once (TBB).
+// Interpolation: bilinear (default; 6-bit fixed-point weights, positions rounded to 1/64 px; AVX2 when present),
+// nearest, or bicubic (Keys, a = -0.5). Tiles that minify sample a 2 x 2 box pyramid of the frame built once per frame,
+// only to the levels the table needs (for Bayer input, level 1 is the mosaic's own 2 x 2 cells as RGB pixels). Interior
+// tiles (all taps inside the image) run without bounds checks; others clamp to the border. Work is spread over threads
+// by tile rows of all views at once (TBB).
 #pragma once
 
 #include <cstdint>
@@ -25,19 +25,19 @@ enum class Interpolation { kNearest, kBilinear, kBicubic };
 
 const char* ToString(PixelFormat f);
 const char* ToString(Interpolation i);
-PixelFormat ParsePixelFormat(const std::string& s);       // gray, rgb, bayer_rggb; throws
-Interpolation ParseInterpolation(const std::string& s);   // nearest, bilinear, bicubic; throws
+PixelFormat ParsePixelFormat(const std::string& s);      // gray, rgb, bayer_rggb; throws
+Interpolation ParseInterpolation(const std::string& s);  // nearest, bilinear, bicubic; throws
 
 struct ImageView {
   const uint8_t* data = nullptr;
   int width = 0, height = 0;
-  size_t stride = 0;   // bytes per row
+  size_t stride = 0;  // bytes per row
   PixelFormat format = PixelFormat::kRgb8;
 };
 
 struct Image8 {
   int width = 0, height = 0, channels = 0;
-  std::vector<uint8_t> data;   // rows of width * channels bytes
+  std::vector<uint8_t> data;  // rows of width * channels bytes
   ImageView View(PixelFormat f) const { return {data.data(), width, height, size_t(width) * channels, f}; }
 };
 
@@ -49,7 +49,7 @@ void DownsampleHalf(const ImageView& in, Image8* out);
 
 class Remapper {
  public:
-  explicit Remapper(const RemapTable& table);   // keeps a reference: the table must outlive the remapper
+  explicit Remapper(const RemapTable& table);  // keeps a reference: the table must outlive the remapper
 
   // Remaps src into every view; (*outputs)[i] is resized to view i. Throws hovs::Error when the frame's size
   // does not match the table's source size or the frame is malformed.
@@ -64,7 +64,7 @@ class Remapper {
   void RemapRows(const ImageView& src, Interpolation interpolation, int view, int tile_row, Image8* out) const;
 
   const RemapTable& table_;
-  std::vector<Image8> pyramid_;   // levels 1..L-1 (grey or RGB)
+  std::vector<Image8> pyramid_;  // levels 1..L-1 (grey or RGB)
   double pyramid_ms_ = 0;
 };
 

@@ -9,7 +9,7 @@
 namespace hovs::unwrap::kernels {
 namespace {
 
-constexpr int32_t kHalf = 1 << 9;   // half of a 1/64 px step: rounds positions to the nearest 1/64 px
+constexpr int32_t kHalf = 1 << 9;  // half of a 1/64 px step: rounds positions to the nearest 1/64 px
 
 inline int Lerp6(int a, int b, int f) { return a * (64 - f) + b * f; }
 
@@ -28,9 +28,7 @@ inline int BayerGridValue(const uint8_t* src, ptrdiff_t stride, int32_t x, int32
 
 }  // namespace
 
-const char* ToString(Isa isa) {
-  return isa == Isa::kAvx512 ? "avx512" : isa == Isa::kAvx2 ? "avx2" : "scalar";
-}
+const char* ToString(Isa isa) { return isa == Isa::kAvx512 ? "avx512" : isa == Isa::kAvx2 ? "avx2" : "scalar"; }
 
 Isa DetectedIsa() {
   static const Isa isa = [] {
@@ -50,8 +48,7 @@ std::atomic<int> g_isa_limit{static_cast<int>(Isa::kAvx512)};
 Isa ActiveIsa() { return static_cast<Isa>(std::min(static_cast<int>(DetectedIsa()), g_isa_limit.load())); }
 void LimitIsa(Isa max) { g_isa_limit = static_cast<int>(max); }
 
-void BilinearRgbRowScalar(const uint8_t* src, ptrdiff_t stride, const RowCoords& c, int i0, int n,
-                          uint8_t* o) {
+void BilinearRgbRowScalar(const uint8_t* src, ptrdiff_t stride, const RowCoords& c, int i0, int n, uint8_t* o) {
   for (int k = 0; k < n; ++k) {
     const int i = k;
     const int32_t x = c.X(i0 + k) + kHalf, y = c.Y(i0 + k) + kHalf;
@@ -64,8 +61,7 @@ void BilinearRgbRowScalar(const uint8_t* src, ptrdiff_t stride, const RowCoords&
   }
 }
 
-void BilinearGrayRowScalar(const uint8_t* src, ptrdiff_t stride, const RowCoords& c, int i0, int n,
-                           uint8_t* o) {
+void BilinearGrayRowScalar(const uint8_t* src, ptrdiff_t stride, const RowCoords& c, int i0, int n, uint8_t* o) {
   for (int i = 0; i < n; ++i) {
     const int32_t x = c.X(i0 + i) + kHalf, y = c.Y(i0 + i) + kHalf;
     const int fx = (x >> 10) & 63, fy = (y >> 10) & 63;
@@ -75,8 +71,7 @@ void BilinearGrayRowScalar(const uint8_t* src, ptrdiff_t stride, const RowCoords
   }
 }
 
-void BayerRgbRowScalar(const uint8_t* src, ptrdiff_t stride, const RowCoords& c, int i0, int n,
-                       uint8_t* o) {
+void BayerRgbRowScalar(const uint8_t* src, ptrdiff_t stride, const RowCoords& c, int i0, int n, uint8_t* o) {
   for (int i = 0; i < n; ++i) {
     const int32_t x = c.X(i0 + i), y = c.Y(i0 + i);
     const int r = BayerGridValue(src, stride, x, y, 0, 0), g1 = BayerGridValue(src, stride, x, y, 1, 0);
@@ -97,23 +92,26 @@ __attribute__((target("avx2"))) inline void Coords8(const RowCoords& c, int i, _
     *y = _mm256_loadu_si256(reinterpret_cast<const __m256i*>(c.ys + i));
     return;
   }
-  const __m256 fi = _mm256_cvtepi32_ps(_mm256_add_epi32(_mm256_set1_epi32(i), _mm256_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7)));
+  const __m256 fi =
+      _mm256_cvtepi32_ps(_mm256_add_epi32(_mm256_set1_epi32(i), _mm256_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7)));
   const __m256i one = _mm256_set1_epi32(65536);
   const RowPoly& p = c.poly;
-  const __m256 px = _mm256_add_ps(_mm256_set1_ps(p.bx),
-                                  _mm256_mul_ps(fi, _mm256_add_ps(_mm256_set1_ps(p.c1x), _mm256_mul_ps(fi, _mm256_set1_ps(p.c2x)))));
-  const __m256 py = _mm256_add_ps(_mm256_set1_ps(p.by),
-                                  _mm256_mul_ps(fi, _mm256_add_ps(_mm256_set1_ps(p.c1y), _mm256_mul_ps(fi, _mm256_set1_ps(p.c2y)))));
+  const __m256 px =
+      _mm256_add_ps(_mm256_set1_ps(p.bx),
+                    _mm256_mul_ps(fi, _mm256_add_ps(_mm256_set1_ps(p.c1x), _mm256_mul_ps(fi, _mm256_set1_ps(p.c2x)))));
+  const __m256 py =
+      _mm256_add_ps(_mm256_set1_ps(p.by),
+                    _mm256_mul_ps(fi, _mm256_add_ps(_mm256_set1_ps(p.c1y), _mm256_mul_ps(fi, _mm256_set1_ps(p.c2y)))));
   *x = _mm256_sub_epi32(_mm256_cvttps_epi32(px), one);
   *y = _mm256_sub_epi32(_mm256_cvttps_epi32(py), one);
 }
 
 // Stores 8 pixels whose RGB0 dwords are in p (pixels 0-3 in the low lane, 4-7 in the high lane) as 24 bytes.
 __attribute__((target("avx2"))) inline void StoreRgb8(__m256i p, uint8_t* d) {
-  const __m256i drop = _mm256_setr_epi8(0, 1, 2, 4, 5, 6, 8, 9, 10, 12, 13, 14, -1, -1, -1, -1,
-                                        0, 1, 2, 4, 5, 6, 8, 9, 10, 12, 13, 14, -1, -1, -1, -1);
+  const __m256i drop = _mm256_setr_epi8(0, 1, 2, 4, 5, 6, 8, 9, 10, 12, 13, 14, -1, -1, -1, -1, 0, 1, 2, 4, 5, 6, 8, 9,
+                                        10, 12, 13, 14, -1, -1, -1, -1);
   p = _mm256_shuffle_epi8(p, drop);
-  _mm_storeu_si128(reinterpret_cast<__m128i*>(d), _mm256_castsi256_si128(p));   // 16 bytes: 4 spill, rewritten
+  _mm_storeu_si128(reinterpret_cast<__m128i*>(d), _mm256_castsi256_si128(p));  // 16 bytes: 4 spill, rewritten
   const __m128i hi = _mm256_extracti128_si256(p, 1);
   _mm_storel_epi64(reinterpret_cast<__m128i*>(d + 12), hi);
   const int last = _mm_extract_epi32(hi, 2);
@@ -123,7 +121,8 @@ __attribute__((target("avx2"))) inline void StoreRgb8(__m256i p, uint8_t* d) {
 // The byte offsets of 8 RGB pixels' top-left taps at 16.16 coordinates (x, y) in an image of row stride `stride`.
 __attribute__((target("avx2"))) inline __m256i RgbOffsets8(ptrdiff_t stride, __m256i x, __m256i y) {
   const __m256i half = _mm256_set1_epi32(kHalf);
-  const __m256i ix = _mm256_srai_epi32(_mm256_add_epi32(x, half), 16), iy = _mm256_srai_epi32(_mm256_add_epi32(y, half), 16);
+  const __m256i ix = _mm256_srai_epi32(_mm256_add_epi32(x, half), 16),
+                iy = _mm256_srai_epi32(_mm256_add_epi32(y, half), 16);
   return _mm256_add_epi32(_mm256_mullo_epi32(iy, _mm256_set1_epi32(static_cast<int>(stride))),
                           _mm256_add_epi32(ix, _mm256_add_epi32(ix, ix)));
 }
@@ -136,15 +135,15 @@ __attribute__((target("avx2"))) inline void RgbAt8(const uint8_t* data, ptrdiff_
   const __m256i half = _mm256_set1_epi32(kHalf), m63 = _mm256_set1_epi32(63), c64 = _mm256_set1_epi32(64);
   const __m256i round = _mm256_set1_epi16(32);
   // (left, right) byte pairs of R, G, B for the two pixels of each 128-bit lane.
-  const __m256i pairs = _mm256_setr_epi8(0, 3, 1, 4, 2, 5, -1, -1, 8, 11, 9, 12, 10, 13, -1, -1,
-                                         0, 3, 1, 4, 2, 5, -1, -1, 8, 11, 9, 12, 10, 13, -1, -1);
+  const __m256i pairs = _mm256_setr_epi8(0, 3, 1, 4, 2, 5, -1, -1, 8, 11, 9, 12, 10, 13, -1, -1, 0, 3, 1, 4, 2, 5, -1,
+                                         -1, 8, 11, 9, 12, 10, 13, -1, -1);
   // Each pixel's 16-bit weight (the low word of its dword) repeated in its quadword: registers A hold pixels
   // 0, 1 | 4, 5 and B pixels 2, 3 | 6, 7 (two per 128-bit lane), so a pixel's weight already lies in its own
   // lane and one byte shuffle places it.
-  const __m256i repA = _mm256_setr_epi8(0, 1, 0, 1, 0, 1, 0, 1, 4, 5, 4, 5, 4, 5, 4, 5,
-                                        0, 1, 0, 1, 0, 1, 0, 1, 4, 5, 4, 5, 4, 5, 4, 5);
-  const __m256i repB = _mm256_setr_epi8(8, 9, 8, 9, 8, 9, 8, 9, 12, 13, 12, 13, 12, 13, 12, 13,
-                                        8, 9, 8, 9, 8, 9, 8, 9, 12, 13, 12, 13, 12, 13, 12, 13);
+  const __m256i repA =
+      _mm256_setr_epi8(0, 1, 0, 1, 0, 1, 0, 1, 4, 5, 4, 5, 4, 5, 4, 5, 0, 1, 0, 1, 0, 1, 0, 1, 4, 5, 4, 5, 4, 5, 4, 5);
+  const __m256i repB = _mm256_setr_epi8(8, 9, 8, 9, 8, 9, 8, 9, 12, 13, 12, 13, 12, 13, 12, 13, 8, 9, 8, 9, 8, 9, 8, 9,
+                                        12, 13, 12, 13, 12, 13, 12, 13);
   const uint8_t* d2 = data + stride;
   const auto load = [](const uint8_t* p) {
     long long v;
@@ -155,12 +154,14 @@ __attribute__((target("avx2"))) inline void RgbAt8(const uint8_t* data, ptrdiff_
   y = _mm256_add_epi32(y, half);
   const __m256i fx = _mm256_and_si256(_mm256_srai_epi32(x, 10), m63);
   const __m256i fy = _mm256_and_si256(_mm256_srai_epi32(y, 10), m63);
-  const __m256i tA = _mm256_setr_epi64x(load(data + off[0]), load(data + off[1]), load(data + off[4]), load(data + off[5]));
-  const __m256i tB = _mm256_setr_epi64x(load(data + off[2]), load(data + off[3]), load(data + off[6]), load(data + off[7]));
+  const __m256i tA =
+      _mm256_setr_epi64x(load(data + off[0]), load(data + off[1]), load(data + off[4]), load(data + off[5]));
+  const __m256i tB =
+      _mm256_setr_epi64x(load(data + off[2]), load(data + off[3]), load(data + off[6]), load(data + off[7]));
   const __m256i bA = _mm256_setr_epi64x(load(d2 + off[0]), load(d2 + off[1]), load(d2 + off[4]), load(d2 + off[5]));
   const __m256i bB = _mm256_setr_epi64x(load(d2 + off[2]), load(d2 + off[3]), load(d2 + off[6]), load(d2 + off[7]));
   const __m256i wxd = _mm256_or_si256(_mm256_slli_epi32(fx, 8), _mm256_sub_epi32(c64, fx));
-  const __m256i wyd = _mm256_slli_epi32(fy, 9);   // fy << 9 in the low 16 bits
+  const __m256i wyd = _mm256_slli_epi32(fy, 9);  // fy << 9 in the low 16 bits
   const __m256i wxA = _mm256_shuffle_epi8(wxd, repA), wxB = _mm256_shuffle_epi8(wxd, repB);
   const __m256i wyA = _mm256_shuffle_epi8(wyd, repA), wyB = _mm256_shuffle_epi8(wyd, repB);
   // Horizontal: R G B 0 per pixel (16-bit).
@@ -179,7 +180,7 @@ __attribute__((target("avx2"))) inline void RgbAt8(const uint8_t* data, ptrdiff_
 
 // 8 pixels per step (RgbAt8).
 __attribute__((target("avx2"))) void BilinearRgbRowAvx2(const uint8_t* data, ptrdiff_t stride, const RowCoords& c,
-                                                         int i0, int n, uint8_t* o) {
+                                                        int i0, int n, uint8_t* o) {
   alignas(32) int32_t off[8];
   int i = 0;
   for (; i + 8 <= n; i += 8) {
@@ -196,17 +197,18 @@ __attribute__((target("avx2"))) void BilinearRgbRowAvx2(const uint8_t* data, ptr
 __attribute__((target("avx2"))) inline void GrayCombineAvx2(__m256i fx, __m256i fy, __m256i t, __m256i b, uint8_t* o) {
   const __m256i c64 = _mm256_set1_epi32(64), round = _mm256_set1_epi32(1 << 11);
   const __m256i wx = _mm256_or_si256(_mm256_slli_epi32(fx, 8), _mm256_sub_epi32(c64, fx));
-  const __m256i ht = _mm256_maddubs_epi16(t, wx), hb = _mm256_maddubs_epi16(b, wx);   // h in the low 16 bits
+  const __m256i ht = _mm256_maddubs_epi16(t, wx), hb = _mm256_maddubs_epi16(b, wx);  // h in the low 16 bits
   const __m256i wy = _mm256_or_si256(_mm256_slli_epi32(fy, 16), _mm256_sub_epi32(c64, fy));
   __m256i r = _mm256_madd_epi16(_mm256_or_si256(ht, _mm256_slli_epi32(hb, 16)), wy);
   r = _mm256_srli_epi32(_mm256_add_epi32(r, round), 12);
-  r = _mm256_packus_epi16(_mm256_packus_epi32(r, r), r);   // bytes 0-3 of each lane
+  r = _mm256_packus_epi16(_mm256_packus_epi32(r, r), r);  // bytes 0-3 of each lane
   const int lo = _mm256_cvtsi256_si32(r), hi = _mm256_extract_epi32(r, 4);
   std::memcpy(o, &lo, 4);
   std::memcpy(o + 4, &hi, 4);
 }
 
-__attribute__((target("avx2"))) void BilinearGrayRowAvx2(const uint8_t* data, ptrdiff_t stride, const RowCoords& c, int i0, int n, uint8_t* o) {
+__attribute__((target("avx2"))) void BilinearGrayRowAvx2(const uint8_t* data, ptrdiff_t stride, const RowCoords& c,
+                                                         int i0, int n, uint8_t* o) {
   const __m256i half = _mm256_set1_epi32(kHalf), m63 = _mm256_set1_epi32(63);
   const __m256i vstride = _mm256_set1_epi32(static_cast<int>(stride));
   const __m256i low16 = _mm256_set1_epi32(0xFFFF);
@@ -220,8 +222,9 @@ __attribute__((target("avx2"))) void BilinearGrayRowAvx2(const uint8_t* data, pt
     y = _mm256_add_epi32(y, half);
     const __m256i fx = _mm256_and_si256(_mm256_srai_epi32(x, 10), m63);
     const __m256i fy = _mm256_and_si256(_mm256_srai_epi32(y, 10), m63);
-    const __m256i off = _mm256_add_epi32(_mm256_mullo_epi32(_mm256_srai_epi32(y, 16), vstride), _mm256_srai_epi32(x, 16));
-    const __m256i t = _mm256_and_si256(_mm256_i32gather_epi32(b0, off, 1), low16);   // p0 p1 0 0
+    const __m256i off =
+        _mm256_add_epi32(_mm256_mullo_epi32(_mm256_srai_epi32(y, 16), vstride), _mm256_srai_epi32(x, 16));
+    const __m256i t = _mm256_and_si256(_mm256_i32gather_epi32(b0, off, 1), low16);  // p0 p1 0 0
     const __m256i b = _mm256_and_si256(_mm256_i32gather_epi32(b1, off, 1), low16);
     GrayCombineAvx2(fx, fy, t, b, o + i);
   }
@@ -238,10 +241,12 @@ __attribute__((target("avx2"))) inline __m256i BayerWord(const uint8_t* data, co
     std::memcpy(&v, p, 8);
     return v;
   };
-  const __m256i a = _mm256_shuffle_epi8(
-      _mm256_setr_epi64x(load(data + off[0] + d), load(data + off[1] + d), load(data + off[4] + d), load(data + off[5] + d)), idxA);
-  const __m256i b = _mm256_shuffle_epi8(
-      _mm256_setr_epi64x(load(data + off[2] + d), load(data + off[3] + d), load(data + off[6] + d), load(data + off[7] + d)), idxB);
+  const __m256i a = _mm256_shuffle_epi8(_mm256_setr_epi64x(load(data + off[0] + d), load(data + off[1] + d),
+                                                           load(data + off[4] + d), load(data + off[5] + d)),
+                                        idxA);
+  const __m256i b = _mm256_shuffle_epi8(_mm256_setr_epi64x(load(data + off[2] + d), load(data + off[3] + d),
+                                                           load(data + off[6] + d), load(data + off[7] + d)),
+                                        idxB);
   return _mm256_unpacklo_epi64(a, b);
 }
 
@@ -270,29 +275,34 @@ __attribute__((target("avx2"))) inline BayerGrids8 BayerGridsAt8(__m256i x, __m2
 // pixel's dword already lies in its register's lane: a takes dwords 0, 1 of each lane, b dwords 2, 3.
 __attribute__((target("avx2"))) inline void PairShuffles(__m256i idx, __m256i* a, __m256i* b) {
   const __m256i pair_add = _mm256_setr_epi32(0, 0x08080808, 0, 0, 0, 0x08080808, 0, 0);
-  const __m256i zero_hi = _mm256_setr_epi32(0, 0, int(0x80808080u), int(0x80808080u), 0, 0, int(0x80808080u), int(0x80808080u));
+  const __m256i zero_hi =
+      _mm256_setr_epi32(0, 0, int(0x80808080u), int(0x80808080u), 0, 0, int(0x80808080u), int(0x80808080u));
   *a = _mm256_or_si256(_mm256_add_epi8(idx, pair_add), zero_hi);
-  *b = _mm256_or_si256(_mm256_add_epi8(_mm256_shuffle_epi32(idx, 0xEE), pair_add), zero_hi);   // dwords 2, 3, 2, 3
+  *b = _mm256_or_si256(_mm256_add_epi8(_mm256_shuffle_epi32(idx, 0xEE), pair_add), zero_hi);  // dwords 2, 3, 2, 3
 }
 
 // The colour of 8 pixels from their mosaic taps (et, eb: the even-row grids' two tap rows, ot, ob: the odd-row
 // grids'; per pixel (ce, ce + 2, co, co + 2)) and their grid fractions, all in pixel order, stored as 24 bytes
 // at o.
-__attribute__((target("avx2"))) inline void BayerCombineAvx2(__m256i fxe, __m256i fxo, __m256i fye, __m256i fyo, __m256i et,
-                                                             __m256i eb, __m256i ot, __m256i ob, uint8_t* o) {
+__attribute__((target("avx2"))) inline void BayerCombineAvx2(__m256i fxe, __m256i fxo, __m256i fye, __m256i fyo,
+                                                             __m256i et, __m256i eb, __m256i ot, __m256i ob,
+                                                             uint8_t* o) {
   const __m256i c64 = _mm256_set1_epi32(64), lowmask = _mm256_set1_epi32(0xFFFF);
   // Horizontal weights (64 - fxe, fxe, 64 - fxo, fxo) and vertical (fy << 9 in both words).
-  const __m256i wx = _mm256_or_si256(_mm256_or_si256(_mm256_sub_epi32(c64, fxe), _mm256_slli_epi32(fxe, 8)),
-                                     _mm256_or_si256(_mm256_slli_epi32(_mm256_sub_epi32(c64, fxo), 16), _mm256_slli_epi32(fxo, 24)));
+  const __m256i wx =
+      _mm256_or_si256(_mm256_or_si256(_mm256_sub_epi32(c64, fxe), _mm256_slli_epi32(fxe, 8)),
+                      _mm256_or_si256(_mm256_slli_epi32(_mm256_sub_epi32(c64, fxo), 16), _mm256_slli_epi32(fxo, 24)));
   const __m256i wye = _mm256_mullo_epi32(_mm256_slli_epi32(fye, 9), _mm256_set1_epi32(0x10001));
   const __m256i wyo = _mm256_mullo_epi32(_mm256_slli_epi32(fyo, 9), _mm256_set1_epi32(0x10001));
-  const __m256i het = _mm256_maddubs_epi16(et, wx), heb = _mm256_maddubs_epi16(eb, wx);   // (R, G1)
-  const __m256i hot = _mm256_maddubs_epi16(ot, wx), hob = _mm256_maddubs_epi16(ob, wx);   // (G2, B)
+  const __m256i het = _mm256_maddubs_epi16(et, wx), heb = _mm256_maddubs_epi16(eb, wx);  // (R, G1)
+  const __m256i hot = _mm256_maddubs_epi16(ot, wx), hob = _mm256_maddubs_epi16(ob, wx);  // (G2, B)
   const __m256i ve = _mm256_add_epi16(het, _mm256_mulhrs_epi16(_mm256_sub_epi16(heb, het), wye));
   const __m256i vo = _mm256_add_epi16(hot, _mm256_mulhrs_epi16(_mm256_sub_epi16(hob, hot), wyo));
   const __m256i R = _mm256_srli_epi32(_mm256_add_epi32(_mm256_and_si256(ve, lowmask), _mm256_set1_epi32(32)), 6);
-  const __m256i G = _mm256_srli_epi32(
-      _mm256_add_epi32(_mm256_add_epi32(_mm256_srli_epi32(ve, 16), _mm256_and_si256(vo, lowmask)), _mm256_set1_epi32(64)), 7);
+  const __m256i G =
+      _mm256_srli_epi32(_mm256_add_epi32(_mm256_add_epi32(_mm256_srli_epi32(ve, 16), _mm256_and_si256(vo, lowmask)),
+                                         _mm256_set1_epi32(64)),
+                        7);
   const __m256i B = _mm256_srli_epi32(_mm256_add_epi32(_mm256_srli_epi32(vo, 16), _mm256_set1_epi32(32)), 6);
   const __m256i p = _mm256_or_si256(_mm256_or_si256(R, _mm256_slli_epi32(G, 8)), _mm256_slli_epi32(B, 16));
   StoreRgb8(p, o);
@@ -304,7 +314,8 @@ __attribute__((target("avx2"))) inline void BayerCombineAvx2(__m256i fxe, __m256
 // odd-row grids (G2, B). So each pixel reads four 64-bit words; one byte shuffle per word picks the
 // (left, right) taps of its two grids, the horizontal and vertical steps run on 16-bit pairs (R, G1) and
 // (G2, B). Groups whose 8-byte read would pass the end of a row use the scalar kernel.
-__attribute__((target("avx2"))) void BayerRgbRowAvx2(const uint8_t* data, ptrdiff_t stride, const RowCoords& c, int i0, int n, uint8_t* o) {
+__attribute__((target("avx2"))) void BayerRgbRowAvx2(const uint8_t* data, ptrdiff_t stride, const RowCoords& c, int i0,
+                                                     int n, uint8_t* o) {
   const __m256i vstride = _mm256_set1_epi32(static_cast<int>(stride));
   const __m256i last_base = _mm256_set1_epi32(static_cast<int>(stride) - 8);
   alignas(32) int32_t offe[8], offo[8];
@@ -312,8 +323,8 @@ __attribute__((target("avx2"))) void BayerRgbRowAvx2(const uint8_t* data, ptrdif
   for (; i + 8 <= n; i += 8) {
     __m256i x, y;
     Coords8(c, i0 + i, &x, &y);
-    const __m256i base = _mm256_sub_epi32(_mm256_andnot_si256(_mm256_set1_epi32(1), _mm256_srai_epi32(x, 16)),
-                                          _mm256_set1_epi32(2));
+    const __m256i base =
+        _mm256_sub_epi32(_mm256_andnot_si256(_mm256_set1_epi32(1), _mm256_srai_epi32(x, 16)), _mm256_set1_epi32(2));
     if (_mm256_movemask_ps(_mm256_castsi256_ps(_mm256_cmpgt_epi32(base, last_base))) != 0) {
       BayerRgbRowScalar(data, stride, c, i0 + i, 8, o + 3 * i);
       continue;
@@ -321,14 +332,16 @@ __attribute__((target("avx2"))) void BayerRgbRowAvx2(const uint8_t* data, ptrdif
     const BayerGrids8 g = BayerGridsAt8(x, y);
     const __m256i &pxe = g.pxe, &pxo = g.pxo, &pye = g.pye, &pyo = g.pyo;
     const __m256i ce = _mm256_sub_epi32(_mm256_slli_epi32(_mm256_srai_epi32(pxe, 16), 1), base);
-    const __m256i co = _mm256_sub_epi32(_mm256_add_epi32(_mm256_slli_epi32(_mm256_srai_epi32(pxo, 16), 1), _mm256_set1_epi32(1)), base);
+    const __m256i co = _mm256_sub_epi32(
+        _mm256_add_epi32(_mm256_slli_epi32(_mm256_srai_epi32(pxo, 16), 1), _mm256_set1_epi32(1)), base);
     const __m256i rowe = _mm256_slli_epi32(_mm256_srai_epi32(pye, 16), 1);
     const __m256i rowo = _mm256_add_epi32(_mm256_slli_epi32(_mm256_srai_epi32(pyo, 16), 1), _mm256_set1_epi32(1));
     _mm256_store_si256(reinterpret_cast<__m256i*>(offe), _mm256_add_epi32(_mm256_mullo_epi32(rowe, vstride), base));
     _mm256_store_si256(reinterpret_cast<__m256i*>(offo), _mm256_add_epi32(_mm256_mullo_epi32(rowo, vstride), base));
     // Byte indices (ce, ce + 2, co, co + 2) per pixel.
-    const __m256i idx = _mm256_or_si256(_mm256_or_si256(ce, _mm256_slli_epi32(_mm256_add_epi32(ce, _mm256_set1_epi32(2)), 8)),
-                                        _mm256_or_si256(_mm256_slli_epi32(co, 16), _mm256_slli_epi32(_mm256_add_epi32(co, _mm256_set1_epi32(2)), 24)));
+    const __m256i idx = _mm256_or_si256(
+        _mm256_or_si256(ce, _mm256_slli_epi32(_mm256_add_epi32(ce, _mm256_set1_epi32(2)), 8)),
+        _mm256_or_si256(_mm256_slli_epi32(co, 16), _mm256_slli_epi32(_mm256_add_epi32(co, _mm256_set1_epi32(2)), 24)));
     __m256i idxA, idxB;
     PairShuffles(idx, &idxA, &idxB);
     const __m256i et = BayerWord(data, offe, 0, idxA, idxB), eb = BayerWord(data, offe, 2 * stride, idxA, idxB);
@@ -342,23 +355,32 @@ __attribute__((target("avx2"))) void BayerRgbRowAvx2(const uint8_t* data, ptrdif
 
 void BilinearRgbRow(const uint8_t* src, ptrdiff_t stride, const RowCoords& c, int i0, int n, uint8_t* out) {
   switch (ActiveIsa()) {
-    case Isa::kAvx512: return avx512::BilinearRgbRow(src, stride, c, i0, n, out);
-    case Isa::kAvx2: return BilinearRgbRowAvx2(src, stride, c, i0, n, out);
-    default: return BilinearRgbRowScalar(src, stride, c, i0, n, out);
+    case Isa::kAvx512:
+      return avx512::BilinearRgbRow(src, stride, c, i0, n, out);
+    case Isa::kAvx2:
+      return BilinearRgbRowAvx2(src, stride, c, i0, n, out);
+    default:
+      return BilinearRgbRowScalar(src, stride, c, i0, n, out);
   }
 }
 void BilinearGrayRow(const uint8_t* src, ptrdiff_t stride, const RowCoords& c, int i0, int n, uint8_t* out) {
   switch (ActiveIsa()) {
-    case Isa::kAvx512: return avx512::BilinearGrayRow(src, stride, c, i0, n, out);
-    case Isa::kAvx2: return BilinearGrayRowAvx2(src, stride, c, i0, n, out);
-    default: return BilinearGrayRowScalar(src, stride, c, i0, n, out);
+    case Isa::kAvx512:
+      return avx512::BilinearGrayRow(src, stride, c, i0, n, out);
+    case Isa::kAvx2:
+      return BilinearGrayRowAvx2(src, stride, c, i0, n, out);
+    default:
+      return BilinearGrayRowScalar(src, stride, c, i0, n, out);
   }
 }
 void BayerRgbRow(const uint8_t* src, ptrdiff_t stride, const RowCoords& c, int i0, int n, uint8_t* out) {
   switch (ActiveIsa()) {
-    case Isa::kAvx512: return avx512::BayerRgbRow(src, stride, c, i0, n, out);
-    case Isa::kAvx2: return BayerRgbRowAvx2(src, stride, c, i0, n, out);
-    default: return BayerRgbRowScalar(src, stride, c, i0, n, out);
+    case Isa::kAvx512:
+      return avx512::BayerRgbRow(src, stride, c, i0, n, out);
+    case Isa::kAvx2:
+      return BayerRgbRowAvx2(src, stride, c, i0, n, out);
+    default:
+      return BayerRgbRowScalar(src, stride, c, i0, n, out);
   }
 }
 
@@ -367,8 +389,8 @@ namespace {
 using RowKernel = void (*)(const uint8_t*, ptrdiff_t, const RowCoords&, int, int, uint8_t*);
 
 // The scalar tile path: row by row through a small local buffer, then copied out.
-void TileByRows(RowKernel row, int bytes_per_pixel, const uint8_t* src, ptrdiff_t stride, const Tile& t, int T,
-                int nu, int nv, uint8_t* out, ptrdiff_t ostride) {
+void TileByRows(RowKernel row, int bytes_per_pixel, const uint8_t* src, ptrdiff_t stride, const Tile& t, int T, int nu,
+                int nv, uint8_t* out, ptrdiff_t ostride) {
   alignas(64) uint8_t local[64 * 3 + 32];
   RowCoords c;
   for (int j = 0; j < nv; ++j) {
@@ -388,11 +410,12 @@ namespace {
 // r0 + k + s, column c0 + j); then the pixels from the patch, whose taps come in the same order as from the
 // frame, so the same bytes come out. A region too large for the patch goes row by row through the row kernel.
 struct TilePassAvx2 {
-  static constexpr int kColumns = 128, kPairs = 128;   // pair patches; a plain (RGB) patch: kPairs rows of 2 kColumns bytes
+  static constexpr int kColumns = 128,
+                       kPairs = 128;  // pair patches; a plain (RGB) patch: kPairs rows of 2 kColumns bytes
   alignas(32) int32_t xs[64 * 64], ys[64 * 64];
   alignas(32) uint8_t patch[kPairs * 2 * kColumns];
-  int row = 0;                          // coordinates kept per tile row (whole 8-pixel steps)
-  int32_t x0 = 0, x1 = 0, y0 = 0, y1 = 0;   // the extreme coordinates (16.16)
+  int row = 0;                             // coordinates kept per tile row (whole 8-pixel steps)
+  int32_t x0 = 0, x1 = 0, y0 = 0, y1 = 0;  // the extreme coordinates (16.16)
 
   __attribute__((target("avx2"))) void Coordinates(const Tile& t, int T, int nu, int nv) {
     row = (nu + 7) & ~7;
@@ -405,7 +428,7 @@ struct TilePassAvx2 {
       for (int i = 0; i < nu; i += 8) {
         __m256i x, y;
         Coords8(c, i, &x, &y);
-        if (nu - i < 8) {   // lanes past nu: lane 0's coordinates (inside the region, never stored)
+        if (nu - i < 8) {  // lanes past nu: lane 0's coordinates (inside the region, never stored)
           const __m256i live = _mm256_cmpgt_epi32(_mm256_set1_epi32(nu - i), _mm256_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7));
           x = _mm256_blendv_epi8(_mm256_permutevar8x32_epi32(x, _mm256_setzero_si256()), x, live);
           y = _mm256_blendv_epi8(_mm256_permutevar8x32_epi32(y, _mm256_setzero_si256()), y, live);
@@ -422,7 +445,8 @@ struct TilePassAvx2 {
     _mm256_store_si256(reinterpret_cast<__m256i*>(v[2]), ymin);
     _mm256_store_si256(reinterpret_cast<__m256i*>(v[3]), ymax);
     x0 = v[0][0], x1 = v[1][0], y0 = v[2][0], y1 = v[3][0];
-    for (int k = 1; k < 8; ++k) x0 = std::min(x0, v[0][k]), x1 = std::max(x1, v[1][k]), y0 = std::min(y0, v[2][k]), y1 = std::max(y1, v[3][k]);
+    for (int k = 1; k < 8; ++k)
+      x0 = std::min(x0, v[0][k]), x1 = std::max(x1, v[1][k]), y0 = std::min(y0, v[2][k]), y1 = std::max(y1, v[3][k]);
   }
   RowCoords Row(int j) const { return RowCoords{xs + j * row, ys + j * row, {}}; }
   // The patch pass of the RGB and Bayer tiles: step(off, j, i) for the 8 pixels from (i, j), where off holds the
@@ -440,20 +464,25 @@ struct TilePassAvx2 {
       for (int i = 0; i < nu; i += 8) step(offs[j & 1] + i, j, i);
     }
   }
-  __attribute__((target("avx2"))) __m256i X(int j, int i) const { return _mm256_load_si256(reinterpret_cast<const __m256i*>(xs + j * row + i)); }
-  __attribute__((target("avx2"))) __m256i Y(int j, int i) const { return _mm256_load_si256(reinterpret_cast<const __m256i*>(ys + j * row + i)); }
+  __attribute__((target("avx2"))) __m256i X(int j, int i) const {
+    return _mm256_load_si256(reinterpret_cast<const __m256i*>(xs + j * row + i));
+  }
+  __attribute__((target("avx2"))) __m256i Y(int j, int i) const {
+    return _mm256_load_si256(reinterpret_cast<const __m256i*>(ys + j * row + i));
+  }
 
   // The plain patch of source rows first .. first + rows - 1, bytes from .. from + bytes - 1 of each (only those
   // bytes are read); returns its row stride.
-  __attribute__((target("avx2"))) ptrdiff_t Copy(const uint8_t* src, ptrdiff_t stride, int first, int rows, ptrdiff_t from,
-                                                 int bytes) {
+  __attribute__((target("avx2"))) ptrdiff_t Copy(const uint8_t* src, ptrdiff_t stride, int first, int rows,
+                                                 ptrdiff_t from, int bytes) {
     const ptrdiff_t pstride = (bytes + 31) & ~31;
     for (int k = 0; k < rows; ++k) {
       const uint8_t* a = src + (first + k) * stride + from;
       uint8_t* d = patch + k * pstride;
       int b = 0;
       for (; b + 32 <= bytes; b += 32)
-        _mm256_store_si256(reinterpret_cast<__m256i*>(d + b), _mm256_loadu_si256(reinterpret_cast<const __m256i*>(a + b)));
+        _mm256_store_si256(reinterpret_cast<__m256i*>(d + b),
+                           _mm256_loadu_si256(reinterpret_cast<const __m256i*>(a + b)));
       std::memcpy(d + b, a + b, size_t(bytes - b));
     }
     return pstride;
@@ -469,8 +498,8 @@ struct TilePassAvx2 {
 
   // The pair patch of source rows first .. first + pairs, columns from .. from + columns - 1 (only those bytes are
   // read); returns its row stride.
-  __attribute__((target("avx2"))) ptrdiff_t CopyPairs(const uint8_t* src, ptrdiff_t stride, int first, int pairs, int from,
-                                                      int columns) {
+  __attribute__((target("avx2"))) ptrdiff_t CopyPairs(const uint8_t* src, ptrdiff_t stride, int first, int pairs,
+                                                      int from, int columns) {
     const ptrdiff_t pstride = (2 * columns + 31) & ~31;
     for (int k = 0; k < pairs; ++k) {
       const uint8_t* a = src + (first + k) * stride + from;
@@ -498,8 +527,9 @@ struct TilePassAvx2 {
 // the region is bytes 3 c0 .. 3 c1 + 7 of rows r0 .. r1 + 1. It is copied as it is, the coordinates are moved
 // to the patch's origin by whole pixels (the same fractions, so the same weights), and the row kernel reads the
 // patch instead of the frame.
-__attribute__((target("avx2"), flatten)) void BilinearRgbTileAvx2(const uint8_t* src, ptrdiff_t stride, const Tile& t, int T,
-                                                                  int nu, int nv, uint8_t* out, ptrdiff_t ostride) {
+__attribute__((target("avx2"), flatten)) void BilinearRgbTileAvx2(const uint8_t* src, ptrdiff_t stride, const Tile& t,
+                                                                  int T, int nu, int nv, uint8_t* out,
+                                                                  ptrdiff_t ostride) {
   TilePassAvx2 p;
   p.Coordinates(t, T, nu, nv);
   const auto cell = [](int32_t q) { return (q + kHalf) >> 16; };
@@ -516,7 +546,7 @@ __attribute__((target("avx2"), flatten)) void BilinearRgbTileAvx2(const uint8_t*
         uint8_t* o = out + j * ostride + 3 * i;
         if (nu - i >= 8) {
           RgbAt8(p.patch, pstride, off, p.X(j, i), p.Y(j, i), o);
-        } else {   // lanes past nu hold lane 0's coordinates
+        } else {  // lanes past nu hold lane 0's coordinates
           uint8_t tail[24];
           RgbAt8(p.patch, pstride, off, p.X(j, i), p.Y(j, i), tail);
           std::memcpy(o, tail, size_t(3 * (nu - i)));
@@ -526,8 +556,9 @@ __attribute__((target("avx2"), flatten)) void BilinearRgbTileAvx2(const uint8_t*
 
 // Grey: a pixel's taps are columns c .. c + 1 of rows r .. r + 1 (c, r: (x + 1/128 px) >> 16), so one gathered
 // 4-byte word of the patch (two per 8 pixels from the frame).
-__attribute__((target("avx2"), flatten)) void BilinearGrayTileAvx2(const uint8_t* src, ptrdiff_t stride, const Tile& t, int T,
-                                                                   int nu, int nv, uint8_t* out, ptrdiff_t ostride) {
+__attribute__((target("avx2"), flatten)) void BilinearGrayTileAvx2(const uint8_t* src, ptrdiff_t stride, const Tile& t,
+                                                                   int T, int nu, int nv, uint8_t* out,
+                                                                   ptrdiff_t ostride) {
   TilePassAvx2 p;
   p.Coordinates(t, T, nu, nv);
   const auto cell = [](int32_t q) { return (q + kHalf) >> 16; };
@@ -539,7 +570,8 @@ __attribute__((target("avx2"), flatten)) void BilinearGrayTileAvx2(const uint8_t
   }
   const ptrdiff_t pstride = p.CopyPairs(src, stride, r0, pairs, c0, columns);
   const __m256i half = _mm256_set1_epi32(kHalf), m63 = _mm256_set1_epi32(63);
-  const __m256i dx = _mm256_set1_epi32(c0), dy = _mm256_set1_epi32(r0), vpstride = _mm256_set1_epi32(static_cast<int>(pstride));
+  const __m256i dx = _mm256_set1_epi32(c0), dy = _mm256_set1_epi32(r0),
+                vpstride = _mm256_set1_epi32(static_cast<int>(pstride));
   // Per dword (p0, p1, 0, 0) of the top row and of the bottom row; pshufb indices count from the 128-bit lane.
   const __m256i lane = _mm256_setr_epi32(0, 0x04040404, 0x08080808, 0x0C0C0C0C, 0, 0x04040404, 0x08080808, 0x0C0C0C0C);
   const __m256i top = _mm256_add_epi8(_mm256_set1_epi32(int(0x80800200u)), lane);
@@ -550,8 +582,10 @@ __attribute__((target("avx2"), flatten)) void BilinearGrayTileAvx2(const uint8_t
       const __m256i x = _mm256_add_epi32(p.X(j, i), half), y = _mm256_add_epi32(p.Y(j, i), half);
       const __m256i fx = _mm256_and_si256(_mm256_srai_epi32(x, 10), m63);
       const __m256i fy = _mm256_and_si256(_mm256_srai_epi32(y, 10), m63);
-      const __m256i ix = _mm256_sub_epi32(_mm256_srai_epi32(x, 16), dx), iy = _mm256_sub_epi32(_mm256_srai_epi32(y, 16), dy);
-      const __m256i g = _mm256_i32gather_epi32(base, _mm256_add_epi32(_mm256_mullo_epi32(iy, vpstride), _mm256_add_epi32(ix, ix)), 1);
+      const __m256i ix = _mm256_sub_epi32(_mm256_srai_epi32(x, 16), dx),
+                    iy = _mm256_sub_epi32(_mm256_srai_epi32(y, 16), dy);
+      const __m256i g =
+          _mm256_i32gather_epi32(base, _mm256_add_epi32(_mm256_mullo_epi32(iy, vpstride), _mm256_add_epi32(ix, ix)), 1);
       uint8_t* o = out + j * ostride + i;
       if (nu - i >= 8) {
         GrayCombineAvx2(fx, fy, _mm256_shuffle_epi8(g, top), _mm256_shuffle_epi8(g, bottom), o);
@@ -567,20 +601,21 @@ __attribute__((target("avx2"), flatten)) void BilinearGrayTileAvx2(const uint8_t
 // Bayer: a pixel's taps are rows ra .. ra + 3 and columns start .. start + 3 (ra = (((y >> 1) + 1/128 grid px) >>
 // 15) - 1, start alike), so two 8-byte words of the patch (pair rows ra - r0 and ra - r0 + 2) instead of the
 // four that BayerRgbRowAvx2 reads from the mosaic. A region reaching a row's last 3 bytes goes row by row too.
-__attribute__((target("avx2"), flatten)) void BayerRgbTileAvx2(const uint8_t* src, ptrdiff_t stride, const Tile& t, int T,
-                                                               int nu, int nv, uint8_t* out, ptrdiff_t ostride) {
+__attribute__((target("avx2"), flatten)) void BayerRgbTileAvx2(const uint8_t* src, ptrdiff_t stride, const Tile& t,
+                                                               int T, int nu, int nv, uint8_t* out, ptrdiff_t ostride) {
   TilePassAvx2 p;
   p.Coordinates(t, T, nu, nv);
   // Taps start at cell - 1, cell = ((v >> 1) + kHalf) >> 15 (non-decreasing in v).
   const auto cell = [](int32_t q) { return ((q >> 1) + kHalf) >> 15; };
-  const int c0 = cell(p.x0) - 1, c1 = cell(p.x1) + 2, r0 = cell(p.y0) - 1, r1 = cell(p.y1) + 2;   // columns, rows read
+  const int c0 = cell(p.x0) - 1, c1 = cell(p.x1) + 2, r0 = cell(p.y0) - 1, r1 = cell(p.y1) + 2;  // columns, rows read
   const int columns = c1 - c0 + 1, pairs = r1 - r0;
   if (c1 > stride - 1 || columns > TilePassAvx2::kColumns || pairs > TilePassAvx2::kPairs) {
     for (int j = 0; j < nv; ++j) BayerRgbRowAvx2(src, stride, p.Row(j), 0, nu, out + j * ostride);
     return;
   }
   const ptrdiff_t pstride = p.CopyPairs(src, stride, r0, pairs, c0, columns);
-  const __m256i origin_c = _mm256_set1_epi32(c0 + 1), origin_r = _mm256_set1_epi32(r0 + 1), bit15 = _mm256_set1_epi32(0x8000);
+  const __m256i origin_c = _mm256_set1_epi32(c0 + 1), origin_r = _mm256_set1_epi32(r0 + 1),
+                bit15 = _mm256_set1_epi32(0x8000);
   const __m256i vpstride = _mm256_set1_epi32(static_cast<int>(pstride));
   const auto load = [](const uint8_t* q) {
     long long w;
@@ -614,8 +649,10 @@ __attribute__((target("avx2"), flatten)) void BayerRgbTileAvx2(const uint8_t* sr
         const uint8_t* qb = p.patch + 2 * pstride;
         const __m256i tA = _mm256_setr_epi64x(load(q + off[0]), load(q + off[1]), load(q + off[4]), load(q + off[5]));
         const __m256i tB = _mm256_setr_epi64x(load(q + off[2]), load(q + off[3]), load(q + off[6]), load(q + off[7]));
-        const __m256i bA = _mm256_setr_epi64x(load(qb + off[0]), load(qb + off[1]), load(qb + off[4]), load(qb + off[5]));
-        const __m256i bB = _mm256_setr_epi64x(load(qb + off[2]), load(qb + off[3]), load(qb + off[6]), load(qb + off[7]));
+        const __m256i bA =
+            _mm256_setr_epi64x(load(qb + off[0]), load(qb + off[1]), load(qb + off[4]), load(qb + off[5]));
+        const __m256i bB =
+            _mm256_setr_epi64x(load(qb + off[2]), load(qb + off[3]), load(qb + off[6]), load(qb + off[7]));
         const __m256i et = _mm256_unpacklo_epi64(_mm256_shuffle_epi8(tA, eA), _mm256_shuffle_epi8(tB, eB));
         const __m256i ot = _mm256_unpacklo_epi64(_mm256_shuffle_epi8(tA, oA), _mm256_shuffle_epi8(tB, oB));
         const __m256i eb = _mm256_unpacklo_epi64(_mm256_shuffle_epi8(bA, eA), _mm256_shuffle_epi8(bB, eB));
@@ -635,25 +672,34 @@ __attribute__((target("avx2"), flatten)) void BayerRgbTileAvx2(const uint8_t* sr
 void BilinearRgbTile(const uint8_t* src, ptrdiff_t stride, const Tile& t, int T, int nu, int nv, uint8_t* out,
                      ptrdiff_t ostride) {
   switch (ActiveIsa()) {
-    case Isa::kAvx512: return avx512::BilinearRgbTile(src, stride, t, T, nu, nv, out, ostride);
-    case Isa::kAvx2: return BilinearRgbTileAvx2(src, stride, t, T, nu, nv, out, ostride);
-    default: return TileByRows(BilinearRgbRowScalar, 3, src, stride, t, T, nu, nv, out, ostride);
+    case Isa::kAvx512:
+      return avx512::BilinearRgbTile(src, stride, t, T, nu, nv, out, ostride);
+    case Isa::kAvx2:
+      return BilinearRgbTileAvx2(src, stride, t, T, nu, nv, out, ostride);
+    default:
+      return TileByRows(BilinearRgbRowScalar, 3, src, stride, t, T, nu, nv, out, ostride);
   }
 }
 void BilinearGrayTile(const uint8_t* src, ptrdiff_t stride, const Tile& t, int T, int nu, int nv, uint8_t* out,
                       ptrdiff_t ostride) {
   switch (ActiveIsa()) {
-    case Isa::kAvx512: return avx512::BilinearGrayTile(src, stride, t, T, nu, nv, out, ostride);
-    case Isa::kAvx2: return BilinearGrayTileAvx2(src, stride, t, T, nu, nv, out, ostride);
-    default: return TileByRows(BilinearGrayRowScalar, 1, src, stride, t, T, nu, nv, out, ostride);
+    case Isa::kAvx512:
+      return avx512::BilinearGrayTile(src, stride, t, T, nu, nv, out, ostride);
+    case Isa::kAvx2:
+      return BilinearGrayTileAvx2(src, stride, t, T, nu, nv, out, ostride);
+    default:
+      return TileByRows(BilinearGrayRowScalar, 1, src, stride, t, T, nu, nv, out, ostride);
   }
 }
 void BayerRgbTile(const uint8_t* src, ptrdiff_t stride, const Tile& t, int T, int nu, int nv, uint8_t* out,
                   ptrdiff_t ostride) {
   switch (ActiveIsa()) {
-    case Isa::kAvx512: return avx512::BayerRgbTile(src, stride, t, T, nu, nv, out, ostride);
-    case Isa::kAvx2: return BayerRgbTileAvx2(src, stride, t, T, nu, nv, out, ostride);
-    default: return TileByRows(BayerRgbRowScalar, 3, src, stride, t, T, nu, nv, out, ostride);
+    case Isa::kAvx512:
+      return avx512::BayerRgbTile(src, stride, t, T, nu, nv, out, ostride);
+    case Isa::kAvx2:
+      return BayerRgbTileAvx2(src, stride, t, T, nu, nv, out, ostride);
+    default:
+      return TileByRows(BayerRgbRowScalar, 3, src, stride, t, T, nu, nv, out, ostride);
   }
 }
 

@@ -14,13 +14,13 @@ namespace hovs::unwrap::kernels {
 
 enum class Isa : int { kScalar = 0, kAvx2 = 1, kAvx512 = 2 };
 const char* ToString(Isa isa);
-Isa DetectedIsa();        // the widest kernels this CPU runs (AVX-512: F, BW, VL, DQ and VBMI)
-Isa ActiveIsa();          // what the dispatching functions below use: DetectedIsa(), unless limited
-void LimitIsa(Isa max);   // process-wide, for tests and benchmarks: use at most this instruction set
+Isa DetectedIsa();       // the widest kernels this CPU runs (AVX-512: F, BW, VL, DQ and VBMI)
+Isa ActiveIsa();         // what the dispatching functions below use: DetectedIsa(), unless limited
+void LimitIsa(Isa max);  // process-wide, for tests and benchmarks: use at most this instruction set
 
 // The coordinates of a row: per-pixel arrays (dense tiles) or the row polynomial of an interp tile.
 struct RowCoords {
-  const int32_t* xs = nullptr;   // null: use poly
+  const int32_t* xs = nullptr;  // null: use poly
   const int32_t* ys = nullptr;
   RowPoly poly{};
   int32_t X(int i) const { return xs ? xs[i] : poly.X(i); }
@@ -44,12 +44,9 @@ void BayerRgbTile(const uint8_t* src, ptrdiff_t stride, const Tile& t, int T, in
                   ptrdiff_t ostride);
 
 // Scalar versions (also used for tails and tests).
-void BilinearRgbRowScalar(const uint8_t* src, ptrdiff_t stride, const RowCoords& c, int i0, int n,
-                          uint8_t* out);
-void BilinearGrayRowScalar(const uint8_t* src, ptrdiff_t stride, const RowCoords& c, int i0, int n,
-                           uint8_t* out);
-void BayerRgbRowScalar(const uint8_t* src, ptrdiff_t stride, const RowCoords& c, int i0, int n,
-                       uint8_t* out);
+void BilinearRgbRowScalar(const uint8_t* src, ptrdiff_t stride, const RowCoords& c, int i0, int n, uint8_t* out);
+void BilinearGrayRowScalar(const uint8_t* src, ptrdiff_t stride, const RowCoords& c, int i0, int n, uint8_t* out);
+void BayerRgbRowScalar(const uint8_t* src, ptrdiff_t stride, const RowCoords& c, int i0, int n, uint8_t* out);
 
 // The AVX-512 versions (remap_kernels_avx512.cc); call only when DetectedIsa() is kAvx512.
 namespace avx512 {

@@ -28,7 +28,7 @@
 namespace hovs::unwrap::kernels::avx512 {
 namespace {
 
-constexpr int32_t kHalf = 1 << 9;   // as remap_kernels.cc: positions rounded to the nearest 1/64 px
+constexpr int32_t kHalf = 1 << 9;  // as remap_kernels.cc: positions rounded to the nearest 1/64 px
 
 // Coordinates of pixels i .. i + 15 of a row (the row polynomial in RowPoly::X's float operations). Lanes at or
 // past `n` (n < 16 for a tail) repeat lane 0, so every lane reads inside the image.
@@ -38,14 +38,16 @@ HOVS_AVX512 inline void Coords16(const RowCoords& c, int i, int n, __m512i* x, _
     *x = _mm512_maskz_loadu_epi32(live, c.xs + i);
     *y = _mm512_maskz_loadu_epi32(live, c.ys + i);
   } else {
-    const __m512 fi = _mm512_cvtepi32_ps(
-        _mm512_add_epi32(_mm512_set1_epi32(i), _mm512_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15)));
+    const __m512 fi = _mm512_cvtepi32_ps(_mm512_add_epi32(
+        _mm512_set1_epi32(i), _mm512_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15)));
     const __m512i one = _mm512_set1_epi32(65536);
     const RowPoly& p = c.poly;
-    const __m512 px = _mm512_add_ps(_mm512_set1_ps(p.bx),
-                                    _mm512_mul_ps(fi, _mm512_add_ps(_mm512_set1_ps(p.c1x), _mm512_mul_ps(fi, _mm512_set1_ps(p.c2x)))));
-    const __m512 py = _mm512_add_ps(_mm512_set1_ps(p.by),
-                                    _mm512_mul_ps(fi, _mm512_add_ps(_mm512_set1_ps(p.c1y), _mm512_mul_ps(fi, _mm512_set1_ps(p.c2y)))));
+    const __m512 px = _mm512_add_ps(
+        _mm512_set1_ps(p.bx),
+        _mm512_mul_ps(fi, _mm512_add_ps(_mm512_set1_ps(p.c1x), _mm512_mul_ps(fi, _mm512_set1_ps(p.c2x)))));
+    const __m512 py = _mm512_add_ps(
+        _mm512_set1_ps(p.by),
+        _mm512_mul_ps(fi, _mm512_add_ps(_mm512_set1_ps(p.c1y), _mm512_mul_ps(fi, _mm512_set1_ps(p.c2y)))));
     *x = _mm512_sub_epi32(_mm512_cvttps_epi32(px), one);
     *y = _mm512_sub_epi32(_mm512_cvttps_epi32(py), one);
   }
@@ -99,8 +101,8 @@ HOVS_AVX512 inline __m512i RgbOffsets(ptrdiff_t stride, __m512i x, __m512i y) {
 
 // 16 RGB pixels (bilinear) at 16.16 coordinates (x, y) whose tap offsets (RgbOffsets) are at offs; the first
 // `count` are stored at o.
-HOVS_AVX512 inline void RgbAt(const uint8_t* data, ptrdiff_t stride, const int32_t* offs, __m512i x, __m512i y, int count,
-                              uint8_t* o) {
+HOVS_AVX512 inline void RgbAt(const uint8_t* data, ptrdiff_t stride, const int32_t* offs, __m512i x, __m512i y,
+                              int count, uint8_t* o) {
   const __m512i m63 = _mm512_set1_epi32(63), c64 = _mm512_set1_epi32(64);
   x = _mm512_add_epi32(x, _mm512_set1_epi32(kHalf));
   y = _mm512_add_epi32(y, _mm512_set1_epi32(kHalf));
@@ -122,10 +124,10 @@ HOVS_AVX512 inline void RgbAt(const uint8_t* data, ptrdiff_t stride, const int32
   }
   // Lane k of the pack: pixels 2k, 2k + 1 (first half) and 8 + 2k, 9 + 2k (second half), 4 bytes each (R G B 0).
   const __m512i packed = _mm512_packus_epi16(v[0], v[1]);
-  alignas(64) static const uint8_t kOrder[64] = {
-      0,  1,  2,  4,  5,  6,  16, 17, 18, 20, 21, 22, 32, 33, 34, 36, 37, 38, 48, 49, 50, 52,
-      53, 54, 8,  9,  10, 12, 13, 14, 24, 25, 26, 28, 29, 30, 40, 41, 42, 44, 45, 46, 56, 57,
-      58, 60, 61, 62, 0,  0,  0,  0,  0,  0,  0,  0,  0,  0,  0,  0,  0,  0,  0,  0};
+  alignas(64) static const uint8_t kOrder[64] = {0,  1,  2,  4,  5,  6,  16, 17, 18, 20, 21, 22, 32, 33, 34, 36,
+                                                 37, 38, 48, 49, 50, 52, 53, 54, 8,  9,  10, 12, 13, 14, 24, 25,
+                                                 26, 28, 29, 30, 40, 41, 42, 44, 45, 46, 56, 57, 58, 60, 61, 62,
+                                                 0,  0,  0,  0,  0,  0,  0,  0,  0,  0,  0,  0,  0,  0,  0,  0};
   Store48(_mm512_permutexvar_epi8(_mm512_load_si512(kOrder), packed), 3 * count, o);
 }
 
@@ -161,9 +163,10 @@ HOVS_AVX512 inline bool Gray16(const uint8_t* data, ptrdiff_t stride, __m512i x,
   y = _mm512_add_epi32(y, _mm512_set1_epi32(kHalf));
   const __m512i fx = _mm512_and_si512(_mm512_srai_epi32(x, 10), m63);
   const __m512i fy = _mm512_and_si512(_mm512_srai_epi32(y, 10), m63);
-  const __m512i off = _mm512_add_epi32(_mm512_mullo_epi32(_mm512_srai_epi32(y, 16), _mm512_set1_epi32(static_cast<int>(stride))),
-                                       _mm512_srai_epi32(x, 16));
-  const __m512i t = _mm512_and_si512(_mm512_i32gather_epi32(off, data, 1), low16);   // p0 p1 0 0
+  const __m512i off =
+      _mm512_add_epi32(_mm512_mullo_epi32(_mm512_srai_epi32(y, 16), _mm512_set1_epi32(static_cast<int>(stride))),
+                       _mm512_srai_epi32(x, 16));
+  const __m512i t = _mm512_and_si512(_mm512_i32gather_epi32(off, data, 1), low16);  // p0 p1 0 0
   const __m512i b = _mm512_and_si512(_mm512_i32gather_epi32(off, data + stride, 1), low16);
   GrayCombine(fx, fy, t, b, count, o);
   return true;
@@ -172,8 +175,8 @@ HOVS_AVX512 inline bool Gray16(const uint8_t* data, ptrdiff_t stride, __m512i x,
 // The colour of 16 pixels from their mosaic taps (et, eb: the even-row grids' two tap rows, ot, ob: the odd-row
 // grids'; per pixel 4 bytes: the even-column grid's taps (ce, ce + 2), then the odd-column grid's (co, co + 2)),
 // pxe and pye the even grids' 16.16 positions; the first `count` are stored at o.
-HOVS_AVX512 inline void BayerCombine(__m512i pxe, __m512i pye, __m512i et, __m512i eb, __m512i ot, __m512i ob, int count,
-                                     uint8_t* o) {
+HOVS_AVX512 inline void BayerCombine(__m512i pxe, __m512i pye, __m512i et, __m512i eb, __m512i ot, __m512i ob,
+                                     int count, uint8_t* o) {
   const __m512i m63 = _mm512_set1_epi32(63), c64 = _mm512_set1_epi32(64), c32 = _mm512_set1_epi32(32);
   const __m512i lowmask = _mm512_set1_epi32(0xFFFF);
   const __m512i fxe = _mm512_and_si512(_mm512_srai_epi32(pxe, 10), m63);
@@ -181,38 +184,43 @@ HOVS_AVX512 inline void BayerCombine(__m512i pxe, __m512i pye, __m512i et, __m51
   const __m512i fye = _mm512_and_si512(_mm512_srai_epi32(pye, 10), m63);
   const __m512i fyo = _mm512_and_si512(_mm512_sub_epi32(fye, c32), m63);
   // Horizontal weights (64 - fxe, fxe, 64 - fxo, fxo) and vertical (fy << 9 in both words).
-  const __m512i wx = _mm512_or_si512(_mm512_or_si512(_mm512_sub_epi32(c64, fxe), _mm512_slli_epi32(fxe, 8)),
-                                     _mm512_or_si512(_mm512_slli_epi32(_mm512_sub_epi32(c64, fxo), 16), _mm512_slli_epi32(fxo, 24)));
+  const __m512i wx =
+      _mm512_or_si512(_mm512_or_si512(_mm512_sub_epi32(c64, fxe), _mm512_slli_epi32(fxe, 8)),
+                      _mm512_or_si512(_mm512_slli_epi32(_mm512_sub_epi32(c64, fxo), 16), _mm512_slli_epi32(fxo, 24)));
   const __m512i wye = _mm512_or_si512(_mm512_slli_epi32(fye, 9), _mm512_slli_epi32(fye, 25));
   const __m512i wyo = _mm512_or_si512(_mm512_slli_epi32(fyo, 9), _mm512_slli_epi32(fyo, 25));
-  const __m512i het = _mm512_maddubs_epi16(et, wx), heb = _mm512_maddubs_epi16(eb, wx);   // (R, G1)
-  const __m512i hot = _mm512_maddubs_epi16(ot, wx), hob = _mm512_maddubs_epi16(ob, wx);   // (G2, B)
+  const __m512i het = _mm512_maddubs_epi16(et, wx), heb = _mm512_maddubs_epi16(eb, wx);  // (R, G1)
+  const __m512i hot = _mm512_maddubs_epi16(ot, wx), hob = _mm512_maddubs_epi16(ob, wx);  // (G2, B)
   const __m512i ve = _mm512_add_epi16(het, _mm512_mulhrs_epi16(_mm512_sub_epi16(heb, het), wye));
   const __m512i vo = _mm512_add_epi16(hot, _mm512_mulhrs_epi16(_mm512_sub_epi16(hob, hot), wyo));
   const __m512i R = _mm512_srli_epi32(_mm512_add_epi32(_mm512_and_si512(ve, lowmask), _mm512_set1_epi32(32)), 6);
-  const __m512i G = _mm512_srli_epi32(
-      _mm512_add_epi32(_mm512_add_epi32(_mm512_srli_epi32(ve, 16), _mm512_and_si512(vo, lowmask)), _mm512_set1_epi32(64)), 7);
+  const __m512i G =
+      _mm512_srli_epi32(_mm512_add_epi32(_mm512_add_epi32(_mm512_srli_epi32(ve, 16), _mm512_and_si512(vo, lowmask)),
+                                         _mm512_set1_epi32(64)),
+                        7);
   const __m512i B = _mm512_srli_epi32(_mm512_add_epi32(_mm512_srli_epi32(vo, 16), _mm512_set1_epi32(32)), 6);
   const __m512i rgb0 = _mm512_or_si512(_mm512_or_si512(R, _mm512_slli_epi32(G, 8)), _mm512_slli_epi32(B, 16));
-  alignas(64) static const uint8_t kDrop[64] = {
-      0,  1,  2,  4,  5,  6,  8,  9,  10, 12, 13, 14, 16, 17, 18, 20, 21, 22, 24, 25, 26, 28,
-      29, 30, 32, 33, 34, 36, 37, 38, 40, 41, 42, 44, 45, 46, 48, 49, 50, 52, 53, 54, 56, 57,
-      58, 60, 61, 62, 0,  0,  0,  0,  0,  0,  0,  0,  0,  0,  0,  0,  0,  0,  0,  0};
+  alignas(64) static const uint8_t kDrop[64] = {0,  1,  2,  4,  5,  6,  8,  9,  10, 12, 13, 14, 16, 17, 18, 20,
+                                                21, 22, 24, 25, 26, 28, 29, 30, 32, 33, 34, 36, 37, 38, 40, 41,
+                                                42, 44, 45, 46, 48, 49, 50, 52, 53, 54, 56, 57, 58, 60, 61, 62,
+                                                0,  0,  0,  0,  0,  0,  0,  0,  0,  0,  0,  0,  0,  0,  0,  0};
   Store48(_mm512_permutexvar_epi8(_mm512_load_si512(kDrop), rgb0), 3 * count, o);
 }
 
 // 16 grey pixels as Gray16 from a pair-interleaved patch (see CopyPairPatch): a pixel's four taps are the 4 bytes
 // at twice its column in its row's pair row, one gather per 16 pixels instead of two. Bit-identical to Gray16.
-HOVS_AVX512 inline void PatchGray16(const uint8_t* patch, ptrdiff_t pstride, __m512i x, __m512i y, int count, uint8_t* o) {
+HOVS_AVX512 inline void PatchGray16(const uint8_t* patch, ptrdiff_t pstride, __m512i x, __m512i y, int count,
+                                    uint8_t* o) {
   const __m512i m63 = _mm512_set1_epi32(63);
   x = _mm512_add_epi32(x, _mm512_set1_epi32(kHalf));
   y = _mm512_add_epi32(y, _mm512_set1_epi32(kHalf));
   const __m512i fx = _mm512_and_si512(_mm512_srai_epi32(x, 10), m63);
   const __m512i fy = _mm512_and_si512(_mm512_srai_epi32(y, 10), m63);
   const __m512i ix = _mm512_srai_epi32(x, 16);
-  const __m512i off = _mm512_add_epi32(_mm512_mullo_epi32(_mm512_srai_epi32(y, 16), _mm512_set1_epi32(static_cast<int>(pstride))),
-                                       _mm512_add_epi32(ix, ix));
-  const __m512i g = _mm512_i32gather_epi32(off, patch, 1);   // top left, bottom left, top right, bottom right
+  const __m512i off =
+      _mm512_add_epi32(_mm512_mullo_epi32(_mm512_srai_epi32(y, 16), _mm512_set1_epi32(static_cast<int>(pstride))),
+                       _mm512_add_epi32(ix, ix));
+  const __m512i g = _mm512_i32gather_epi32(off, patch, 1);  // top left, bottom left, top right, bottom right
   // Per dword (p0, p1, 0, 0) of the top row and of the bottom row; byte indices count from the 128-bit lane.
   const __m512i lane = _mm512_broadcast_i32x4(_mm_setr_epi32(0, 0x04040404, 0x08080808, 0x0C0C0C0C));
   const __m512i t = _mm512_shuffle_epi8(g, _mm512_add_epi8(_mm512_set1_epi32(int(0x80800200u)), lane));
@@ -244,9 +252,10 @@ HOVS_AVX512 inline bool Bayer16(const uint8_t* data, ptrdiff_t stride, __m512i x
                                                _mm512_add_epi32(offe, vstride));
   // Byte indices (ce, ce + 2, co, co + 2) - start inside each pixel's own dword: (1, 3, 0, 2) when co = ce - 1,
   // (0, 2, 1, 3) when co = ce + 1; plus the dword's place in its 128-bit lane.
-  const __m512i idx = _mm512_add_epi8(
-      _mm512_mask_blend_epi32(_mm512_test_epi32_mask(pxe, bit15), _mm512_set1_epi32(0x02000301), _mm512_set1_epi32(0x03010200)),
-      _mm512_broadcast_i32x4(_mm_setr_epi32(0, 0x04040404, 0x08080808, 0x0C0C0C0C)));
+  const __m512i idx =
+      _mm512_add_epi8(_mm512_mask_blend_epi32(_mm512_test_epi32_mask(pxe, bit15), _mm512_set1_epi32(0x02000301),
+                                              _mm512_set1_epi32(0x03010200)),
+                      _mm512_broadcast_i32x4(_mm_setr_epi32(0, 0x04040404, 0x08080808, 0x0C0C0C0C)));
   const __m512i et = _mm512_shuffle_epi8(_mm512_i32gather_epi32(offe, data, 1), idx);
   const __m512i eb = _mm512_shuffle_epi8(_mm512_i32gather_epi32(offe, data + 2 * stride, 1), idx);
   const __m512i ot = _mm512_shuffle_epi8(_mm512_i32gather_epi32(offo, data, 1), idx);
@@ -262,16 +271,18 @@ HOVS_AVX512 inline bool Bayer16(const uint8_t* data, ptrdiff_t stride, __m512i x
 // 32 plain loads per 16 pixels instead of four 16-lane gathers (64 elements). The words' offsets in the patch
 // (PatchBayerOffsets; origin: the patch's first column and row, plus one) are read from offs. Bit-identical to
 // Bayer16: the same taps reach BayerCombine in the same byte order.
-HOVS_AVX512 inline __m512i PatchBayerOffsets(ptrdiff_t pstride, __m512i origin_c, __m512i origin_r, __m512i x, __m512i y) {
+HOVS_AVX512 inline __m512i PatchBayerOffsets(ptrdiff_t pstride, __m512i origin_c, __m512i origin_r, __m512i x,
+                                             __m512i y) {
   const __m512i half = _mm512_set1_epi32(kHalf);
   const __m512i pxe = _mm512_add_epi32(_mm512_srai_epi32(x, 1), half);
   const __m512i pye = _mm512_add_epi32(_mm512_srai_epi32(y, 1), half);
-  const __m512i col = _mm512_sub_epi32(_mm512_srai_epi32(pxe, 15), origin_c);   // start - c0
-  const __m512i row = _mm512_sub_epi32(_mm512_srai_epi32(pye, 15), origin_r);   // ra - r0
-  return _mm512_add_epi32(_mm512_mullo_epi32(row, _mm512_set1_epi32(static_cast<int>(pstride))), _mm512_add_epi32(col, col));
+  const __m512i col = _mm512_sub_epi32(_mm512_srai_epi32(pxe, 15), origin_c);  // start - c0
+  const __m512i row = _mm512_sub_epi32(_mm512_srai_epi32(pye, 15), origin_r);  // ra - r0
+  return _mm512_add_epi32(_mm512_mullo_epi32(row, _mm512_set1_epi32(static_cast<int>(pstride))),
+                          _mm512_add_epi32(col, col));
 }
-HOVS_AVX512 inline void PatchBayer16(const uint8_t* patch, ptrdiff_t pstride, const int32_t* offs,
-                                     __m512i x, __m512i y, int count, uint8_t* o) {
+HOVS_AVX512 inline void PatchBayer16(const uint8_t* patch, ptrdiff_t pstride, const int32_t* offs, __m512i x, __m512i y,
+                                     int count, uint8_t* o) {
   const __m512i half = _mm512_set1_epi32(kHalf), bit15 = _mm512_set1_epi32(0x8000);
   const __m512i pxe = _mm512_add_epi32(_mm512_srai_epi32(x, 1), half);
   const __m512i pye = _mm512_add_epi32(_mm512_srai_epi32(y, 1), half);
@@ -283,9 +294,9 @@ HOVS_AVX512 inline void PatchBayer16(const uint8_t* patch, ptrdiff_t pstride, co
   // the two-register table (bit 6 picks t1 / b1).
   const __m512i cols = _mm512_mask_blend_epi32(_mm512_test_epi32_mask(pxe, bit15), _mm512_set1_epi32(0x04000602),
                                                _mm512_set1_epi32(0x06020400));
-  const __m512i base = _mm512_setr_epi32(0, 0x08080808, 0x10101010, 0x18181818, 0x20202020, 0x28282828, 0x30303030,
-                                         0x38383838, 0x40404040, 0x48484848, 0x50505050, 0x58585858, 0x60606060,
-                                         0x68686868, 0x70707070, 0x78787878);
+  const __m512i base =
+      _mm512_setr_epi32(0, 0x08080808, 0x10101010, 0x18181818, 0x20202020, 0x28282828, 0x30303030, 0x38383838,
+                        0x40404040, 0x48484848, 0x50505050, 0x58585858, 0x60606060, 0x68686868, 0x70707070, 0x78787878);
   const __m512i sel = _mm512_maskz_mov_epi32(_mm512_testn_epi32_mask(pye, bit15), _mm512_set1_epi32(0x01010101));
   const __m512i idx_e = _mm512_add_epi8(_mm512_add_epi8(base, cols), sel);
   const __m512i idx_o = _mm512_xor_si512(idx_e, _mm512_set1_epi32(0x01010101));
@@ -325,7 +336,8 @@ HOVS_AVX512 inline void BayerRowInline(const uint8_t* data, ptrdiff_t stride, co
 HOVS_AVX512 void BilinearRgbRow(const uint8_t* src, ptrdiff_t stride, const RowCoords& c, int i0, int n, uint8_t* out) {
   RgbRowInline(src, stride, c, i0, n, out);
 }
-HOVS_AVX512 void BilinearGrayRow(const uint8_t* src, ptrdiff_t stride, const RowCoords& c, int i0, int n, uint8_t* out) {
+HOVS_AVX512 void BilinearGrayRow(const uint8_t* src, ptrdiff_t stride, const RowCoords& c, int i0, int n,
+                                 uint8_t* out) {
   GrayRowInline(src, stride, c, i0, n, out);
 }
 HOVS_AVX512 void BayerRgbRow(const uint8_t* src, ptrdiff_t stride, const RowCoords& c, int i0, int n, uint8_t* out) {
@@ -337,25 +349,26 @@ HOVS_AVX512 void BayerRgbRow(const uint8_t* src, ptrdiff_t stride, const RowCoor
 // time), kept, with the source region the pixels' reads cover (only bytes the row kernels would read); (2) that
 // region copied into a patch, 64-byte aligned rows (it stays in L1); (3) the pixels from the patch. Reading the
 // frame directly, each 16-pixel step's loads or gathers wait on L2 and beyond (the reads follow curves across the
-// frame). Measured on the article's six views (the measurement of 2026-11-23 (commit a5de1f7), Zen 4, against the direct kernels in interleaved
-// runs): RGB 6.2 -> 5.1 ms, Bayer 8.5 -> 6.1 ms, grey 5.3 -> 3.6 ms; the row polynomials 16 at a time took
-// another 10-25 % off each. A region larger than the patch holds goes row by row through the direct kernels.
+// frame). Measured on the article's six views (the measurement of 2026-11-23 (commit a5de1f7), Zen 4, against the
+// direct kernels in interleaved runs): RGB 6.2 -> 5.1 ms, Bayer 8.5 -> 6.1 ms, grey 5.3 -> 3.6 ms; the row polynomials
+// 16 at a time took another 10-25 % off each. A region larger than the patch holds goes row by row through the direct
+// kernels.
 namespace {
 
-constexpr int kPatchRowBytes = 256, kPatchRows = 128;   // 32 kB
+constexpr int kPatchRowBytes = 256, kPatchRows = 128;  // 32 kB
 
 struct TilePass {
-  static constexpr int kRow = 64 + 16;   // coordinates kept per tile row (T <= 64; a step may fill 16 past nu)
+  static constexpr int kRow = 64 + 16;  // coordinates kept per tile row (T <= 64; a step may fill 16 past nu)
   alignas(64) int32_t xs[64 * kRow], ys[64 * kRow];
   alignas(64) uint8_t patch[kPatchRows * kPatchRowBytes];
-  int c0 = 0, c1 = 0, r0 = 0, r1 = 0;   // the range of the source cells over the tile's pixels
+  int c0 = 0, c1 = 0, r0 = 0, r1 = 0;  // the range of the source cells over the tile's pixels
 
   // Pass 1. Cells: the RGB kernel's tap (x + 1/2 of 1/64 px) >> 16, or for a mosaic (kBayer) the start of
   // Bayer16's taps plus one, ((x >> 1) + 1/128 grid px) >> 15 (rows alike). Lanes past nu repeat lane 0.
   template <bool kBayer>
   HOVS_AVX512 void Coordinates(const Tile& t, int T, int nu, int nv) {
     __m512i xmin = _mm512_set1_epi32(INT32_MAX), xmax = _mm512_set1_epi32(INT32_MIN), ymin = xmin, ymax = xmax;
-    RowPolys<16> polys[4];   // the row polynomials 16 rows at a time (vectorised)
+    RowPolys<16> polys[4];  // the row polynomials 16 rows at a time (vectorised)
     for (int j0 = 0; j0 < nv; j0 += 16) InterpRowPolys(t, T, j0, &polys[j0 / 16]);
     RowCoords c;
     for (int j = 0; j < nv; ++j) {
@@ -378,8 +391,9 @@ struct TilePass {
   // patch offsets offsets(j, i) of their words. The offsets of a tile row are computed and stored one row ahead
   // of their use, so the steps' scalar loads of them read L1, never a store still in flight: stored just before
   // (or taken out of the register, GCC's choice when it sees both) they waited on store-to-load forwarding from
-  // a 64-byte store, which held back every step's loads. The measurement of 2026-12-02 (commit 1010873), one core, three interleaved rounds each:
-  // Bayer 7.2-7.4 -> 5.5-5.9 ms, RGB 8.6-8.7 -> 7.3-8.2 ms for the six views (bit-identical).
+  // a 64-byte store, which held back every step's loads. The measurement of 2026-12-02 (commit 1010873), one core,
+  // three interleaved rounds each: Bayer 7.2-7.4 -> 5.5-5.9 ms, RGB 8.6-8.7 -> 7.3-8.2 ms for the six views
+  // (bit-identical).
   template <class Offsets, class Step>
   HOVS_AVX512 void PixelSteps(int nu, int nv, Offsets offsets, Step step) const {
     alignas(64) int32_t offs[2][kRow];
@@ -436,7 +450,8 @@ HOVS_AVX512 void BilinearRgbTile(const uint8_t* src, ptrdiff_t stride, const Til
   const int bytes = 3 * (p.c1 - p.c0) + 8, rows = p.r1 - p.r0 + 2;
   if (bytes > kPatchRowBytes || rows > kPatchRows) {
     for (int j = 0; j < nv; ++j)
-      RgbRowInline(src, stride, RowCoords{p.xs + j * TilePass::kRow, p.ys + j * TilePass::kRow, {}}, 0, nu, out + j * ostride);
+      RgbRowInline(src, stride, RowCoords{p.xs + j * TilePass::kRow, p.ys + j * TilePass::kRow, {}}, 0, nu,
+                   out + j * ostride);
     return;
   }
   const ptrdiff_t pstride = PatchStride(bytes);
@@ -444,9 +459,8 @@ HOVS_AVX512 void BilinearRgbTile(const uint8_t* src, ptrdiff_t stride, const Til
   const __m512i dx = _mm512_set1_epi32(p.c0 * 65536), dy = _mm512_set1_epi32(p.r0 * 65536);
   p.PixelSteps(
       nu, nv,
-      [&](int j, int i) HOVS_AVX512 {
-        return RgbOffsets(pstride, _mm512_sub_epi32(p.X(j, i), dx), _mm512_sub_epi32(p.Y(j, i), dy));
-      },
+      [&](int j, int i)
+          HOVS_AVX512 { return RgbOffsets(pstride, _mm512_sub_epi32(p.X(j, i), dx), _mm512_sub_epi32(p.Y(j, i), dy)); },
       [&](const int32_t* offs, int j, int i) HOVS_AVX512 {
         RgbAt(p.patch, pstride, offs, _mm512_sub_epi32(p.X(j, i), dx), _mm512_sub_epi32(p.Y(j, i), dy),
               nu - i < 16 ? nu - i : 16, out + j * ostride + 3 * i);
@@ -462,7 +476,8 @@ HOVS_AVX512 void BilinearGrayTile(const uint8_t* src, ptrdiff_t stride, const Ti
   const int columns = p.c1 - p.c0 + 2, pairs = p.r1 - p.r0 + 1;
   if (2 * columns > kPatchRowBytes || pairs > kPatchRows) {
     for (int j = 0; j < nv; ++j)
-      GrayRowInline(src, stride, RowCoords{p.xs + j * TilePass::kRow, p.ys + j * TilePass::kRow, {}}, 0, nu, out + j * ostride);
+      GrayRowInline(src, stride, RowCoords{p.xs + j * TilePass::kRow, p.ys + j * TilePass::kRow, {}}, 0, nu,
+                    out + j * ostride);
     return;
   }
   const ptrdiff_t pstride = PatchStride(2 * columns);
@@ -477,23 +492,26 @@ HOVS_AVX512 void BilinearGrayTile(const uint8_t* src, ptrdiff_t stride, const Ti
 // Bayer: a pixel's taps are rows ra .. ra + 3 and columns start .. start + 3 (cells minus one), so the region
 // is columns c0 - 1 .. c1 + 2 and rows r0 - 1 .. r1 + 2, as pair rows r0 - 1 .. r1 + 1. One reaching a row's
 // last 3 bytes (where Bayer16 hands pixels to the scalar kernel) goes row by row too.
-HOVS_AVX512 void BayerRgbTile(const uint8_t* src, ptrdiff_t stride, const Tile& t, int T, int nu, int nv,
-                              uint8_t* out, ptrdiff_t ostride) {
+HOVS_AVX512 void BayerRgbTile(const uint8_t* src, ptrdiff_t stride, const Tile& t, int T, int nu, int nv, uint8_t* out,
+                              ptrdiff_t ostride) {
   TilePass p;
   p.Coordinates<true>(t, T, nu, nv);
   const int columns = p.c1 - p.c0 + 4, pairs = p.r1 - p.r0 + 3;
   if (p.c1 + 2 > stride - 1 || 2 * columns > kPatchRowBytes || pairs > kPatchRows) {
     for (int j = 0; j < nv; ++j)
-      BayerRowInline(src, stride, RowCoords{p.xs + j * TilePass::kRow, p.ys + j * TilePass::kRow, {}}, 0, nu, out + j * ostride);
+      BayerRowInline(src, stride, RowCoords{p.xs + j * TilePass::kRow, p.ys + j * TilePass::kRow, {}}, 0, nu,
+                     out + j * ostride);
     return;
   }
   const ptrdiff_t pstride = PatchStride(2 * columns);
   CopyPairPatch(src, stride, p.r0 - 1, pairs, p.c0 - 1, columns, p.patch, pstride);
   const __m512i origin_c = _mm512_set1_epi32(p.c0), origin_r = _mm512_set1_epi32(p.r0);
   p.PixelSteps(
-      nu, nv, [&](int j, int i) HOVS_AVX512 { return PatchBayerOffsets(pstride, origin_c, origin_r, p.X(j, i), p.Y(j, i)); },
+      nu, nv,
+      [&](int j, int i) HOVS_AVX512 { return PatchBayerOffsets(pstride, origin_c, origin_r, p.X(j, i), p.Y(j, i)); },
       [&](const int32_t* offs, int j, int i) HOVS_AVX512 {
-        PatchBayer16(p.patch, pstride, offs, p.X(j, i), p.Y(j, i), nu - i < 16 ? nu - i : 16, out + j * ostride + 3 * i);
+        PatchBayer16(p.patch, pstride, offs, p.X(j, i), p.Y(j, i), nu - i < 16 ? nu - i : 16,
+                     out + j * ostride + 3 * i);
       });
 }
 

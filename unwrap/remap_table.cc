@@ -19,7 +19,7 @@ namespace {
 
 constexpr char kMagic[8] = {'H', 'O', 'V', 'S', 'M', 'A', 'P', '\0'};
 constexpr uint32_t kFormatVersion = 2;
-constexpr uint32_t kOldestReadableVersion = 1;   // one tile size for every view
+constexpr uint32_t kOldestReadableVersion = 1;  // one tile size for every view
 
 bool IsTileSize(int t) { return t == 8 || t == 16 || t == 32 || t == 64; }
 
@@ -42,7 +42,7 @@ int LevelSide(int n, int level) {
 // passed as kInvalidCoordinate with *overflow set, never converted (the conversion would be undefined).
 template <class F>
 void ForEachTileCoordinate(const Tile& t, const int32_t* dense, int T, int nu, int nv, bool* overflow, F f) {
-  constexpr float kLimit = 1073741824.f;   // 2^30
+  constexpr float kLimit = 1073741824.f;  // 2^30
   for (int j = 0; j < nv; ++j) {
     if (t.kind == TileKind::kInterp) {
       const RowPoly p = InterpRowPoly(t, T, j);
@@ -72,9 +72,8 @@ void ForEachTileCoordinate(const Tile& t, const int32_t* dense, int T, int nu, i
 bool TileInside(const Tile& t, const int32_t* dense, int T, int nu, int nv, int lw, int lh) {
   const int64_t lo = int64_t(2) << 16, hx = int64_t(lw - 4) << 16, hy = int64_t(lh - 4) << 16;
   bool inside = lw >= 6 && lh >= 6, overflow = false;
-  ForEachTileCoordinate(t, dense, T, nu, nv, &overflow, [&](int32_t x, int32_t y) {
-    inside = inside && x >= lo && y >= lo && x <= hx && y <= hy;
-  });
+  ForEachTileCoordinate(t, dense, T, nu, nv, &overflow,
+                        [&](int32_t x, int32_t y) { inside = inside && x >= lo && y >= lo && x <= hx && y <= hy; });
   return inside && !overflow;
 }
 
@@ -102,7 +101,7 @@ class Reader {
   }
   void Bytes(void* out, size_t n, const char* what) {
     HOVS_REQUIRE(pos_ + n <= d_.size(), where_, "truncated mapping file (reading ", what, ")");
-    if (n > 0) std::memcpy(out, d_.data() + pos_, n);   // an empty table's data() may be null
+    if (n > 0) std::memcpy(out, d_.data() + pos_, n);  // an empty table's data() may be null
     pos_ += n;
   }
   size_t pos() const { return pos_; }
@@ -208,8 +207,7 @@ TileBuild BuildTile(const AnyModel& model, const VirtualView<double>& view, int 
     for (int j = 0; j < nv; ++j) {
       InterpRow(tl, T, j, rx.data(), ry.data());
       for (int i = 0; i < nu; ++i) {
-        const double x = (FromFixed(rx[i]) + 0.5) * level_scale - 0.5,
-                     y = (FromFixed(ry[i]) + 0.5) * level_scale - 0.5;
+        const double x = (FromFixed(rx[i]) + 0.5) * level_scale - 0.5, y = (FromFixed(ry[i]) + 0.5) * level_scale - 0.5;
         worst = std::max(worst, std::sqrt(Sq(x - xs[j * T + i]) + Sq(y - ys[j * T + i])));
       }
     }
@@ -244,10 +242,10 @@ nlohmann::json ModelJson(const AnyModel& model) {
 }  // namespace
 
 void RemapOptions::Check(const std::string& where) const {
-  HOVS_REQUIRE(tile == 0 || IsTileSize(tile), where,
-               "tile must be 8, 16, 32 or 64, or 0 for automatic (got ", tile, ")");
-  HOVS_REQUIRE(max_interp_error > 0 && max_interp_error <= 0.5, where,
-               "max_interp_error must be in (0, 0.5] px (got ", max_interp_error, ")");
+  HOVS_REQUIRE(tile == 0 || IsTileSize(tile), where, "tile must be 8, 16, 32 or 64, or 0 for automatic (got ", tile,
+               ")");
+  HOVS_REQUIRE(max_interp_error > 0 && max_interp_error <= 0.5, where, "max_interp_error must be in (0, 0.5] px (got ",
+               max_interp_error, ")");
   HOVS_REQUIRE(max_level >= 0 && max_level <= 8, where, "max_level must be 0..8");
 }
 
@@ -362,13 +360,18 @@ RemapTable BuildRemapTable(const AnyModel& model, const Layout& layout, const Re
   for (const auto& v : layout.views) views.push_back(SpecJson(v));
   nlohmann::json versions = nlohmann::json::parse(versions_json, nullptr, false);
   if (versions.is_discarded()) versions = nlohmann::json::object();
-  const nlohmann::json header = {
-      {"format", "hovs-mapping"}, {"format_version", kFormatVersion}, {"byte_order", "little"},
-      {"model", ModelJson(model)}, {"layout", {{"name", layout.name}, {"views", views}}},
-      {"source", {{"width", model.width()}, {"height", model.height()}}},
-      {"options", {{"tile", options.tile}, {"max_interp_error_px", options.max_interp_error},
-                   {"antialias", options.antialias}, {"max_level", options.max_level}}},
-      {"versions", versions}};
+  const nlohmann::json header = {{"format", "hovs-mapping"},
+                                 {"format_version", kFormatVersion},
+                                 {"byte_order", "little"},
+                                 {"model", ModelJson(model)},
+                                 {"layout", {{"name", layout.name}, {"views", views}}},
+                                 {"source", {{"width", model.width()}, {"height", model.height()}}},
+                                 {"options",
+                                  {{"tile", options.tile},
+                                   {"max_interp_error_px", options.max_interp_error},
+                                   {"antialias", options.antialias},
+                                   {"max_level", options.max_level}}},
+                                 {"versions", versions}};
   table.header = header.dump(1);
   table.build_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   return table;
@@ -474,15 +477,17 @@ RemapTable ParseRemapTable(const std::string& bytes, const std::string& where) {
   t.header.resize(hn);
   r.Bytes(t.header.data(), hn, "header");
   const auto h = ParseJson(t.header, where + " (header)");
-  HOVS_REQUIRE(h.is_object() && JsonText(h, "format") == "hovs-mapping", where, "the header is not a hovs mapping header");
+  HOVS_REQUIRE(h.is_object() && JsonText(h, "format") == "hovs-mapping", where,
+               "the header is not a hovs mapping header");
   HOVS_REQUIRE(JsonText(h, "byte_order") == "little", where, "unsupported byte order");
   try {
     t.source_width = h.at("source").at("width");
     t.source_height = h.at("source").at("height");
     HOVS_REQUIRE(t.source_width >= 1 && t.source_height >= 1 && t.source_width <= kMaxSourceSide &&
                      t.source_height <= kMaxSourceSide,
-                 where, "source image size ", t.source_width, " x ", t.source_height, " is outside 1..", kMaxSourceSide);
-    const int header_tile = h.at("options").at("tile");   // 0: chosen per view
+                 where, "source image size ", t.source_width, " x ", t.source_height, " is outside 1..",
+                 kMaxSourceSide);
+    const int header_tile = h.at("options").at("tile");  // 0: chosen per view
     const auto& views = h.at("layout").at("views");
     HOVS_REQUIRE(views.is_array() && !views.empty() && views.size() <= 256, where, "the header lists ",
                  views.is_array() ? views.size() : 0, " views (1 to 256)");
@@ -504,8 +509,8 @@ RemapTable ParseRemapTable(const std::string& bytes, const std::string& where) {
       HOVS_REQUIRE(IsTileSize(int(tile)) && (header_tile == 0 || int(tile) == header_tile), vw, "tile size ", tile,
                    " (the header asks for ", header_tile, ")");
       v.tile = static_cast<int>(tile);
-      HOVS_REQUIRE(v.tiles_x == (v.view.width + v.tile - 1) / v.tile && v.tiles_y == (v.view.height + v.tile - 1) / v.tile &&
-                       count == uint32_t(v.tiles_x * v.tiles_y),
+      HOVS_REQUIRE(v.tiles_x == (v.view.width + v.tile - 1) / v.tile &&
+                       v.tiles_y == (v.view.height + v.tile - 1) / v.tile && count == uint32_t(v.tiles_x * v.tiles_y),
                    vw, "the tile grid does not match the view's size");
       HOVS_REQUIRE(uint64_t(count) * sizeof(Tile) <= body.size() - r.pos(), vw, "truncated mapping file (tiles)");
       v.tiles.resize(count);

@@ -35,13 +35,13 @@ namespace hovs::unwrap {
 struct RemapOptions {
   // Output tile size: 8, 16, 32 or 64 for every view, or 0 (automatic, the default): a view gets 64 x 64 tiles
   // when at that size every tile that sees the mirror is interp at pyramid level 0 and inside the image (no
-  // per-pixel coordinates, no minification, no clamped taps), else 32 x 32. Larger tiles carry less per-tile work (row polynomials, the source patch
-  // and its overlap with the neighbours' patches): the article's six views, all interp at 64, remap about 10 %
-  // faster than at 32; views that cross the rim or the camera's reflection, or minify, keep 32, where a 64
-  // tile would need four times the per-pixel coordinates or pick one pyramid level for a larger area.
+  // per-pixel coordinates, no minification, no clamped taps), else 32 x 32. Larger tiles carry less per-tile work (row
+  // polynomials, the source patch and its overlap with the neighbours' patches): the article's six views, all interp at
+  // 64, remap about 10 % faster than at 32; views that cross the rim or the camera's reflection, or minify, keep 32,
+  // where a 64 tile would need four times the per-pixel coordinates or pick one pyramid level for a larger area.
   int tile = 0;
-  double max_interp_error = 1.0 / 64;   // px, level-0 source pixels
-  bool antialias = true;                // minifying tiles sample a box-filtered pyramid level
+  double max_interp_error = 1.0 / 64;  // px, level-0 source pixels
+  bool antialias = true;               // minifying tiles sample a box-filtered pyramid level
   int max_level = 4;
   void Check(const std::string& where) const;
 };
@@ -50,10 +50,10 @@ enum class TileKind : uint8_t { kEmpty = 0, kInterp = 1, kDense = 2 };
 
 struct Tile {
   TileKind kind = TileKind::kEmpty;
-  uint8_t level = 0;          // pyramid level sampled
-  uint8_t inside = 0;         // 1: every coordinate lies at least 2 px inside the level's image (no clamping)
+  uint8_t level = 0;   // pyramid level sampled
+  uint8_t inside = 0;  // 1: every coordinate lies at least 2 px inside the level's image (no clamping)
   uint8_t reserved = 0;
-  uint32_t dense_index = 0;   // dense tiles: first pixel in ViewTable::dense (T * T pixels, row-major)
+  uint32_t dense_index = 0;  // dense tiles: first pixel in ViewTable::dense (T * T pixels, row-major)
   // Interp tiles: source coordinates (at `level`) of the 3 x 3 nodes at tile pixels (0, T/2, T) x (0, T/2, T),
   // row-major (node k = 3 * row + column). Coordinates are biquadratic in the tile pixel.
   float x[9] = {0, 0, 0, 0, 0, 0, 0, 0, 0};
@@ -89,9 +89,12 @@ inline RowPoly InterpRowPoly(const Tile& t, int T, int j) {
     ay[k] = l0 * t.y[k] + l1 * t.y[3 + k] + l2 * t.y[6 + k];
   }
   const float inv = 1.0f / float(T), inv2 = inv * inv;
-  return {(ax[0] + 1) * 65536.f, (-3 * ax[0] + 4 * ax[1] - ax[2]) * inv * 65536.f,
-          (2 * ax[0] - 4 * ax[1] + 2 * ax[2]) * inv2 * 65536.f, (ay[0] + 1) * 65536.f,
-          (-3 * ay[0] + 4 * ay[1] - ay[2]) * inv * 65536.f, (2 * ay[0] - 4 * ay[1] + 2 * ay[2]) * inv2 * 65536.f};
+  return {(ax[0] + 1) * 65536.f,
+          (-3 * ax[0] + 4 * ax[1] - ax[2]) * inv * 65536.f,
+          (2 * ax[0] - 4 * ax[1] + 2 * ax[2]) * inv2 * 65536.f,
+          (ay[0] + 1) * 65536.f,
+          (-3 * ay[0] + 4 * ay[1] - ay[2]) * inv * 65536.f,
+          (2 * ay[0] - 4 * ay[1] + 2 * ay[2]) * inv2 * 65536.f};
 }
 // InterpRowPoly of rows j0 .. j0 + kRows - 1, structure of arrays: written as a loop over the rows so that a
 // vectorising build evaluates them together (the same operations per row, so the same bits where the file is
@@ -105,7 +108,8 @@ template <int kRows>
 __attribute__((always_inline)) inline void InterpRowPolys(const Tile& t, int T, int j0, RowPolys<kRows>* out) {
   for (int k = 0; k < kRows; ++k) {
     const RowPoly p = InterpRowPoly(t, T, j0 + k);
-    out->bx[k] = p.bx, out->c1x[k] = p.c1x, out->c2x[k] = p.c2x, out->by[k] = p.by, out->c1y[k] = p.c1y, out->c2y[k] = p.c2y;
+    out->bx[k] = p.bx, out->c1x[k] = p.c1x, out->c2x[k] = p.c2x, out->by[k] = p.by, out->c1y[k] = p.c1y,
+    out->c2y[k] = p.c2y;
   }
 }
 inline void InterpRow(const Tile& t, int T, int j, int32_t* xs, int32_t* ys) {
@@ -116,10 +120,10 @@ inline void InterpRow(const Tile& t, int T, int j, int32_t* xs, int32_t* ys) {
 struct ViewTable {
   ViewSpec spec;
   VirtualView<double> view;
-  int tile = 32;                // T: this view's tile size
+  int tile = 32;  // T: this view's tile size
   int tiles_x = 0, tiles_y = 0;
   std::vector<Tile> tiles;
-  std::vector<int32_t> dense;   // x, y pairs (16.16 at the tile's level); kInvalidCoordinate for invalid pixels
+  std::vector<int32_t> dense;  // x, y pairs (16.16 at the tile's level); kInvalidCoordinate for invalid pixels
   // Statistics of the build.
   int64_t valid_pixels = 0;
   int interp_tiles = 0, dense_tiles = 0, empty_tiles = 0;
@@ -129,8 +133,8 @@ struct ViewTable {
 
 struct RemapTable {
   int source_width = 0, source_height = 0;
-  int levels = 1;                     // pyramid levels any tile samples (1: no pyramid)
-  std::string header;                 // JSON: model, layout, options, versions (written into the mapping file)
+  int levels = 1;      // pyramid levels any tile samples (1: no pyramid)
+  std::string header;  // JSON: model, layout, options, versions (written into the mapping file)
   std::vector<ViewTable> views;
   double build_seconds = 0;
 
@@ -147,7 +151,7 @@ void ExactMaps(const AnyModel& model, const VirtualView<double>& view, std::vect
 RemapTable BuildRemapTable(const AnyModel& model, const Layout& layout, const RemapOptions& options,
                            const std::string& versions_json = "{}");
 
-void SaveRemapTable(const std::filesystem::path& path, const RemapTable& table);   // atomic
+void SaveRemapTable(const std::filesystem::path& path, const RemapTable& table);  // atomic
 // Verified (magic, version, checksum) and checked field by field against its header, so that a damaged or edited
 // file, even one given a valid checksum again, cannot make the remap read outside the frame. Throws hovs::Error.
 RemapTable LoadRemapTable(const std::filesystem::path& path);

@@ -8,12 +8,16 @@ namespace hovs::unwrap {
 nlohmann::json ViewJson(const ViewTable& vt) {
   const auto& v = vt.view;
   const auto& q = v.mirror_from_view;
-  nlohmann::json j = {{"name", vt.spec.name}, {"type", ToString(v.projection)}, {"width", v.width},
+  nlohmann::json j = {{"name", vt.spec.name},
+                      {"type", ToString(v.projection)},
+                      {"width", v.width},
                       {"height", v.height},
                       {"mirror_from_view", {{"qw", q.w()}, {"qx", q.x()}, {"qy", q.y()}, {"qz", q.z()}}},
-                      {"valid_pixels", vt.valid_pixels}, {"tile_size", vt.tile}, {"tiles", {{"interp", vt.interp_tiles}, {"dense", vt.dense_tiles},
-                                                                    {"empty", vt.empty_tiles}}},
-                      {"max_interp_error_px", vt.max_interp_error}, {"max_pyramid_level", vt.max_level}};
+                      {"valid_pixels", vt.valid_pixels},
+                      {"tile_size", vt.tile},
+                      {"tiles", {{"interp", vt.interp_tiles}, {"dense", vt.dense_tiles}, {"empty", vt.empty_tiles}}},
+                      {"max_interp_error_px", vt.max_interp_error},
+                      {"max_pyramid_level", vt.max_level}};
   if (v.projection == ViewProjection::kPerspective) {
     j["K"] = {{v.camera.fx, 0.0, v.camera.cx}, {0.0, v.camera.fy, v.camera.cy}, {0.0, 0.0, 1.0}};
     j["yaw_deg"] = vt.spec.yaw_deg, j["pitch_deg"] = vt.spec.pitch_deg, j["roll_deg"] = vt.spec.roll_deg;

@@ -15,7 +15,7 @@ namespace hovs::unwrap {
 nlohmann::json ViewJson(const ViewTable& view);
 
 struct ViewPsnr {
-  double psnr_db = 0;          // over the view's valid pixels (those the mapping fills); 0 without any
+  double psnr_db = 0;  // over the view's valid pixels (those the mapping fills); 0 without any
   double valid_fraction = 0;
 };
 

@@ -26,9 +26,12 @@ std::string CpuModel() {
     return colon == std::string::npos || start == std::string::npos ? std::string() : line.substr(start);
   };
   for (std::string line; std::getline(in, line) && !line.empty();) {
-    if (line.rfind("model name", 0) == 0) name = value(line);
-    else if (line.rfind("cpu family", 0) == 0) family = value(line);
-    else if (line.rfind("model", 0) == 0 && line.find_first_of(" \t") == 5) model = value(line);
+    if (line.rfind("model name", 0) == 0)
+      name = value(line);
+    else if (line.rfind("cpu family", 0) == 0)
+      family = value(line);
+    else if (line.rfind("model", 0) == 0 && line.find_first_of(" \t") == 5)
+      model = value(line);
   }
   if (name.empty()) return "unknown";
   return family.empty() ? name : name + " (family " + family + ", model " + model + ")";
@@ -40,7 +43,7 @@ int main(int argc, char** argv) {
   const bool kept = std::getenv("HOVS_DEFAULT_MALLOC") == nullptr && hovs::KeepFreedMemoryForReuse();
   if (!kept) std::fprintf(stderr, "note: malloc keeps its default settings\n");
   benchmark::AddCustomContext("cpu_model", CpuModel());
-#ifdef NDEBUG   // the context's "library_build_type" is Google Benchmark's own build (Debian: without NDEBUG)
+#ifdef NDEBUG  // the context's "library_build_type" is Google Benchmark's own build (Debian: without NDEBUG)
   benchmark::AddCustomContext("hovs_build", "NDEBUG (Release)");
 #else
   benchmark::AddCustomContext("hovs_build", "assertions on (not for timing)");

@@ -45,7 +45,8 @@ void BM_DetectCheckerboardRendered2750x2200(benchmark::State& state) {
 BENCHMARK(BM_DetectCheckerboardRendered2750x2200)->Unit(benchmark::kMillisecond)->UseRealTime()->MinTime(3.0);
 
 void BM_DetectCheckerboardVmr1024x768(benchmark::State& state) {
-  const cv::Mat img = cv::imread(std::string(HOVS_SOURCE_DIR) + "/../shared/data/vmr/VMRImage0.jpg", cv::IMREAD_GRAYSCALE);
+  const cv::Mat img =
+      cv::imread(std::string(HOVS_SOURCE_DIR) + "/../shared/data/vmr/VMRImage0.jpg", cv::IMREAD_GRAYSCALE);
   calib::CheckerboardDetectOptions o;
   o.board = {7, 6, 0.03};
   for (auto _ : state) {

@@ -15,7 +15,7 @@ using namespace hovs;
 void BM_DenseDepth(benchmark::State& state) {
   const auto rig0 = test::AlignedRig();
   const depth::StereoRig rig{AnyModel::Exact(rig0), AnyModel::Exact(rig0), Rigid3d::Translation(Vec3d(-0.64, 0, 0))};
-  depth::RectifyOptions ro;   // 2048 x 512
+  depth::RectifyOptions ro;  // 2048 x 512
   const depth::Rectification r = depth::Rectify(rig, ro);
   cv::Mat a(ro.height, ro.width + 40, CV_8UC1);
   cv::RNG(3).fill(a, cv::RNG::UNIFORM, 0, 256);
@@ -36,6 +36,13 @@ void BM_DenseDepth(benchmark::State& state) {
     benchmark::DoNotOptimize(d.range.data());
   }
 }
-BENCHMARK(BM_DenseDepth)->Args({320, 0})->Args({192, 0})->Args({64, 0})->Args({320, 1})->Unit(benchmark::kMillisecond)->UseRealTime()->MinTime(2.0);
+BENCHMARK(BM_DenseDepth)
+    ->Args({320, 0})
+    ->Args({192, 0})
+    ->Args({64, 0})
+    ->Args({320, 1})
+    ->Unit(benchmark::kMillisecond)
+    ->UseRealTime()
+    ->MinTime(2.0);
 
 }  // namespace

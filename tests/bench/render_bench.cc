@@ -70,7 +70,12 @@ void BM_RenderFrameReused(benchmark::State& state) {
   ro.ground_truth = state.range(1) != 0;
   RenderReusedFrames(state, scene, ro);
 }
-BENCHMARK(BM_RenderFrameReused)->Args({4, 1})->Args({4, 0})->Unit(benchmark::kMillisecond)->UseRealTime()->Iterations(3);
+BENCHMARK(BM_RenderFrameReused)
+    ->Args({4, 1})
+    ->Args({4, 0})
+    ->Unit(benchmark::kMillisecond)
+    ->UseRealTime()
+    ->Iterations(3);
 
 // The same frame (reused buffers, 4 samples per pixel, ground truth) with the optional camera effects, which take
 // the double-precision path: 0 a thin lens (2 mm aperture radius, focused at 1.5 m), 1 the lens and motion blur
@@ -111,8 +116,10 @@ struct RawRays {
       for (int i = 0; i < 16; ++i) {
         const Vec3d &oi = o[16 * p + i], &di = d[16 * p + i];
         auto& k = packets[p];
-        k.ox[i] = static_cast<float>(oi.x()), k.oy[i] = static_cast<float>(oi.y()), k.oz[i] = static_cast<float>(oi.z());
-        k.dx[i] = static_cast<float>(di.x()), k.dy[i] = static_cast<float>(di.y()), k.dz[i] = static_cast<float>(di.z());
+        k.ox[i] = static_cast<float>(oi.x()), k.oy[i] = static_cast<float>(oi.y()),
+        k.oz[i] = static_cast<float>(oi.z());
+        k.dx[i] = static_cast<float>(di.x()), k.dy[i] = static_cast<float>(di.y()),
+        k.dz[i] = static_cast<float>(di.z());
       }
   }
   size_t Count() const { return packets.size() * 16; }
@@ -126,7 +133,8 @@ struct RawRays {
     });
   }
   // The same rays from double-precision vectors, each lane converted while its packet is filled
-  // (RayScene::IntersectOnly16): the raw figure of the measurement of 2026-12-03 (commit 28909e9), which spends about half its time filling.
+  // (RayScene::IntersectOnly16): the raw figure of the measurement of 2026-12-03 (commit 28909e9), which spends about
+  // half its time filling.
   void TraceFromDouble(const hovs::raytrace::RayScene& scene) const {
     tbb::parallel_for(tbb::blocked_range<size_t>(0, packets.size(), 64), [&](const tbb::blocked_range<size_t>& r) {
       unsigned ids[16];
@@ -158,14 +166,14 @@ BENCHMARK(BM_RawIntersect16)->Arg(16)->Arg(8)->Arg(0)->Unit(benchmark::kMillisec
 // times right after, each timed on its own, so that both see the same state of this VM (whose speed drifts by tens
 // of per cent within minutes). ratio = the frame's rays per second over raw rtcIntersect16's (from single-precision
 // packets), summed over the iterations; ratio_to_raw8 the same over rtcIntersect8's; ratio_to_raw_from_double over
-// rtcIntersect16 filled lane by lane from doubles, the reference of the measurement of 2026-12-03 (commit a2b1d88) (0.5-0.8 times as fast as the raw
-// figure: its packet filling took about as long as Embree's traversal), kept so that their figures can be compared.
-// Argument: the frame's buffers (the first frame, which maps memory new to the process, rendered before the timing):
-// 0 fresh ones, the previous frame's freed just before (inside the timing); 1 reused (RenderInto); 2 fresh ones, the
-// previous frame's freed right after its render, so about a second before (during the raw traces): on a VM whose
-// hypervisor takes back guest memory that stays free (see BM_FrameMemoryFirstTouch) the new buffers came through
-// host page faults until freed large buffers were kept for reuse (hovs::KeepFreedLargePages, set up by the benchmark
-// main as by the hovs command); now 0 and 2 get the previous frame's memory back.
+// rtcIntersect16 filled lane by lane from doubles, the reference of the measurement of 2026-12-03 (commit a2b1d88)
+// (0.5-0.8 times as fast as the raw figure: its packet filling took about as long as Embree's traversal), kept so that
+// their figures can be compared. Argument: the frame's buffers (the first frame, which maps memory new to the process,
+// rendered before the timing): 0 fresh ones, the previous frame's freed just before (inside the timing); 1 reused
+// (RenderInto); 2 fresh ones, the previous frame's freed right after its render, so about a second before (during the
+// raw traces): on a VM whose hypervisor takes back guest memory that stays free (see BM_FrameMemoryFirstTouch) the new
+// buffers came through host page faults until freed large buffers were kept for reuse (hovs::KeepFreedLargePages, set
+// up by the benchmark main as by the hovs command); now 0 and 2 get the previous frame's memory back.
 void RatioToRaw(benchmark::State& state, const hovs::scenes::SceneConfig& config, int mode) {
   const hovs::raytrace::RayScene scene(config.description);
   const RawRays raw(scene);
@@ -228,8 +236,8 @@ BENCHMARK(BM_RenderRatioToRaw)->Arg(0)->Arg(1)->Arg(2)->Unit(benchmark::kMillise
 // binocular rig among buildings and boxes: unit 0 also sees unit 1), 2 reference_stereo.yaml.
 void BM_RenderRatioToRawScenes(benchmark::State& state) {
   static const char* const kScenes[] = {"room", "street", "reference_stereo"};
-  const auto config = hovs::scenes::LoadSceneConfig(std::string(HOVS_SOURCE_DIR) + "/scenes/" +
-                                                     kScenes[state.range(0)] + ".yaml");
+  const auto config =
+      hovs::scenes::LoadSceneConfig(std::string(HOVS_SOURCE_DIR) + "/scenes/" + kScenes[state.range(0)] + ".yaml");
   state.SetLabel(kScenes[state.range(0)]);
   RatioToRaw(state, config, 1);
 }
@@ -254,7 +262,7 @@ void BM_FrameMemoryFirstTouch(benchmark::State& state) {
     });
     benchmark::DoNotOptimize(b.data());
   };
-  touch();   // the process's first frame-sized touch (memory new to this process) is not what is measured
+  touch();  // the process's first frame-sized touch (memory new to this process) is not what is measured
   for (auto _ : state) {
     state.PauseTiming();
     std::this_thread::sleep_for(std::chrono::milliseconds(state.range(0)));

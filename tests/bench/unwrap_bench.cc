@@ -79,7 +79,9 @@ void HovsRemap(benchmark::State& state, const unwrap::RemapTable& table) {
   state.counters["dense_tiles"] = dense;
   state.counters["empty_tiles"] = empty;
   state.counters["pyramid_tiles"] = minified;
-  state.SetLabel(std::string(bayer ? "bayer_rggb8 -> rgb, " : grey ? "gray8, " : "rgb8, ") +
+  state.SetLabel(std::string(bayer  ? "bayer_rggb8 -> rgb, "
+                             : grey ? "gray8, "
+                                    : "rgb8, ") +
                  unwrap::kernels::ToString(unwrap::kernels::ActiveIsa()));
   unwrap::kernels::LimitIsa(unwrap::kernels::Isa::kAvx512);
 }
@@ -104,7 +106,16 @@ void OpenCvRemap(benchmark::State& state, const CvMaps& maps) {
 }
 
 void BM_HovsSixViews(benchmark::State& state) { HovsRemap(state, test::ArticleTable()); }
-BENCHMARK(BM_HovsSixViews)->Args({0, 2})->Args({1, 2})->Args({2, 2})->Args({0, 1})->Args({1, 1})->Args({2, 1})->Unit(benchmark::kMillisecond)->UseRealTime()->MinTime(2.0);
+BENCHMARK(BM_HovsSixViews)
+    ->Args({0, 2})
+    ->Args({1, 2})
+    ->Args({2, 2})
+    ->Args({0, 1})
+    ->Args({1, 1})
+    ->Args({2, 1})
+    ->Unit(benchmark::kMillisecond)
+    ->UseRealTime()
+    ->MinTime(2.0);
 
 void BM_OpenCvRemapSixViews(benchmark::State& state) {
   static const CvMaps maps = MakeMaps(test::ArticleTable());

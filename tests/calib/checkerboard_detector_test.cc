@@ -92,8 +92,10 @@ TEST(CheckerboardDetector, FindsTheVmrCornersOfTheReferenceToolbox) {
   const auto from_reference = CalibratePolynomial(reference, 1024, 768, po);
   const auto from_detected = CalibratePolynomial(same.detected, 1024, 768, po);
   const auto from_edges = CalibratePolynomial(edges.detected, 1024, 768, po);
-  std::printf("VMR calibration RMS: reference corners %.4f px, hovs with the 9 x 9 window %.4f px, hovs from the "
-              "edges %.4f px\n", from_reference.rms, from_detected.rms, from_edges.rms);
+  std::printf(
+      "VMR calibration RMS: reference corners %.4f px, hovs with the 9 x 9 window %.4f px, hovs from the "
+      "edges %.4f px\n",
+      from_reference.rms, from_detected.rms, from_edges.rms);
   EXPECT_LT(std::abs(from_detected.rms - from_reference.rms), 0.01);
   EXPECT_LT(from_edges.rms, 0.9 * from_reference.rms);
   EXPECT_LT(from_edges.rms, 0.31);
@@ -107,7 +109,8 @@ TEST(CheckerboardDetector, FindsNoBoardInNoise) {
     cv::Mat noise(440, 550, CV_8UC1);
     uint32_t state = seed;
     for (int y = 0; y < noise.rows; ++y)
-      for (int x = 0; x < noise.cols; ++x) state = state * 1664525u + 1013904223u, noise.at<uint8_t>(y, x) = state >> 24;
+      for (int x = 0; x < noise.cols; ++x)
+        state = state * 1664525u + 1013904223u, noise.at<uint8_t>(y, x) = state >> 24;
     const auto det = DetectCheckerboard(noise, o);
     EXPECT_FALSE(det.found) << "seed " << seed << ": " << det.status;
     // Blurred noise (texture at the scale of small squares) as well.
@@ -158,4 +161,3 @@ TEST(CheckerboardDetector, ReportsWhyNothingWasFound) {
 
 }  // namespace
 }  // namespace hovs::calib
-

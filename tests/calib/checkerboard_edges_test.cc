@@ -19,9 +19,9 @@ namespace hovs::calib {
 namespace {
 
 struct Board {
-  int cols = 7, rows = 5;        // inner corners; the board has (cols + 1) x (rows + 1) squares
-  Eigen::Matrix3d H, Hinv;       // image (before the warp) from board units (one square = 1)
-  double k = 0;                  // radial warp about c: p' = c + (p - c) (1 + k |p - c|^2)
+  int cols = 7, rows = 5;   // inner corners; the board has (cols + 1) x (rows + 1) squares
+  Eigen::Matrix3d H, Hinv;  // image (before the warp) from board units (one square = 1)
+  double k = 0;             // radial warp about c: p' = c + (p - c) (1 + k |p - c|^2)
   Vec2d c{160, 120};
   Vec2d Warp(const Vec2d& p) const { return c + (p - c) * (1 + k * (p - c).squaredNorm()); }
   Vec2d Unwarp(const Vec2d& q) const {
@@ -30,7 +30,7 @@ struct Board {
     for (int i = 0; i < 6 && k != 0; ++i) p = c + (q - c) / (1 + k * (p - c).squaredNorm());
     return p;
   }
-  Vec2d Corner(int i, int j) const {   // inner corner (i, j): board point (i + 1, j + 1)
+  Vec2d Corner(int i, int j) const {  // inner corner (i, j): board point (i + 1, j + 1)
     const Eigen::Vector3d x = H * Eigen::Vector3d(i + 1, j + 1, 1);
     return Warp(Vec2d(x(0) / x(2), x(1) / x(2)));
   }
@@ -40,12 +40,12 @@ struct Board {
     const double u = m(0) / m(2), v = m(1) / m(2);
     if (u >= 0 && v >= 0 && u < cols + 1 && v < rows + 1)
       return (static_cast<int>(u) + static_cast<int>(v)) % 2 ? 220 : 30;
-    if (u > -0.5 && v > -0.5 && u < cols + 1.5 && v < rows + 1.5) return 220;   // paper margin
-    return 110 + 50 * std::sin(0.9 * q.x()) * std::cos(0.7 * q.y());             // background
+    if (u > -0.5 && v > -0.5 && u < cols + 1.5 && v < rows + 1.5) return 220;  // paper margin
+    return 110 + 50 * std::sin(0.9 * q.x()) * std::cos(0.7 * q.y());           // background
   }
   cv::Mat Render(int w, int h, double blur_sigma, double noise_sigma, std::mt19937* rng) const {
     cv::Mat img(h, w, CV_64FC1);
-    const int ss = 8;   // samples per pixel and axis (box filter)
+    const int ss = 8;  // samples per pixel and axis (box filter)
     for (int y = 0; y < h; ++y)
       for (int x = 0; x < w; ++x) {
         double s = 0;
@@ -73,7 +73,8 @@ Board MakeBoard(std::mt19937* rng, double square, double k) {
   Eigen::Matrix3d T = Eigen::Matrix3d::Identity(), P = Eigen::Matrix3d::Identity(), R;
   T(0, 2) = -mid.x(), T(1, 2) = -mid.y();
   P(2, 0) = 0.03 * U(*rng), P(2, 1) = 0.03 * U(*rng);
-  R << std::cos(a) * square, -std::sin(a) * square, b.c.x(), std::sin(a) * square, std::cos(a) * square, b.c.y(), 0, 0, 1;
+  R << std::cos(a) * square, -std::sin(a) * square, b.c.x(), std::sin(a) * square, std::cos(a) * square, b.c.y(), 0, 0,
+      1;
   b.H = R * P * T;
   b.Hinv = b.H.inverse();
   return b;
@@ -145,7 +146,7 @@ TEST(CheckerboardEdges, SmallSquaresKeepTheirCorners) {
   std::vector<std::optional<Vec2d>> grid;
   for (int j = 0; j < b.rows; ++j)
     for (int i = 0; i < b.cols; ++i) grid.emplace_back(b.Corner(i, j) + Vec2d(0.3, -0.2));
-  grid[3].reset();   // a corner not found stays not found
+  grid[3].reset();  // a corner not found stays not found
   const auto before = grid;
   const auto refined = RefineCheckerboardCornersByEdges(img, b.cols, b.rows, &grid);
   for (size_t q = 0; q < grid.size(); ++q) {

@@ -28,8 +28,8 @@ TEST(Evaluation, AFrameRotationIsMeasuredAndRemoved) {
   const auto model = PolynomialFromCatadioptric(rig, 6);
   auto turned = rig;
   const double angle = 0.2 * M_PI / 180;
-  turned.cam_from_mirror = turned.cam_from_mirror *
-                           Rigid3d(QuaternionFromAngleAxis<double>(Vec3d(0, 0, angle)), Vec3d::Zero());
+  turned.cam_from_mirror =
+      turned.cam_from_mirror * Rigid3d(QuaternionFromAngleAxis<double>(Vec3d(0, 0, angle)), Vec3d::Zero());
   const RayAccuracy r = CompareWithTruth(turned, model);
   EXPECT_GT(r.mean_deg, 0.1);
   EXPECT_NEAR(r.frame_rotation_deg, 0.2, 1e-3);
@@ -57,7 +57,7 @@ TEST(Evaluation, PhysicalRigErrors) {
   const PhysicalAccuracy design = CompareWithTruth(truth, test::AlignedRig());
   EXPECT_NEAR(design.tilt_error_deg, std::hypot(1.0, 0.4), 1e-6);
   const Rigid3d eps(QuaternionFromAngleAxis<double>(Vec3d(1.0, 0.4, 0.0) * M_PI / 180), Vec3d(0.001, -0.0005, 0.001));
-  const Vec3d aligned_centre = truth.mirror.SecondFocus();   // mirror frame: the aligned camera at F2
+  const Vec3d aligned_centre = truth.mirror.SecondFocus();  // mirror frame: the aligned camera at F2
   EXPECT_NEAR(design.centre_error_m, (eps.Inverse() * aligned_centre - aligned_centre).norm(), 1e-9);
   EXPECT_GT(design.mean_deg, 0.1);
 }

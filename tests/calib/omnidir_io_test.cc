@@ -36,9 +36,16 @@ TEST(OmnidirIo, YamlRoundTripsAndOpenCvProjectsLikeHovs) {
   const auto& b = g.model;
   EXPECT_EQ(b.width, a.width);
   EXPECT_EQ(b.height, a.height);
-  for (const auto& [x, y] : {std::pair{a.xi, b.xi}, {a.fx, b.fx}, {a.fy, b.fy}, {a.cx, b.cx}, {a.cy, b.cy},
-                             {a.skew, b.skew}, {a.distortion.k1, b.distortion.k1}, {a.distortion.k2, b.distortion.k2},
-                             {a.distortion.p1, b.distortion.p1}, {a.distortion.p2, b.distortion.p2}})
+  for (const auto& [x, y] : {std::pair{a.xi, b.xi},
+                             {a.fx, b.fx},
+                             {a.fy, b.fy},
+                             {a.cx, b.cx},
+                             {a.cy, b.cy},
+                             {a.skew, b.skew},
+                             {a.distortion.k1, b.distortion.k1},
+                             {a.distortion.k2, b.distortion.k2},
+                             {a.distortion.p1, b.distortion.p1},
+                             {a.distortion.p2, b.distortion.p2}})
     EXPECT_NEAR(y, x, 1e-14 * std::max(1.0, std::abs(x)));
   EXPECT_DOUBLE_EQ(g.annulus_max, 1080);
   EXPECT_DOUBLE_EQ(g.rms_px, 0.123);
@@ -103,10 +110,11 @@ TEST(UnifiedCalibration, TrueParametersInsideThreeSigmaWithHalfPixelNoise) {
     ASSERT_TRUE(u.converged) << u.solver_report;
     ASSERT_EQ(u.stddev.size(), 5u) << "covariance unavailable";
     EXPECT_NEAR(u.rms, 0.5 * std::sqrt(2.0 * (1.0 - 59.0 / 630.0)), 0.05) << "residuals at the noise level";
-    const std::pair<double, double> checks[] = {
-        {u.model.xi - truth.xi, u.stddev.at("xi")}, {u.model.fx - truth.fx, u.stddev.at("fx")},
-        {u.model.fy - truth.fy, u.stddev.at("fy")}, {u.model.cx - truth.cx, u.stddev.at("cx")},
-        {u.model.cy - truth.cy, u.stddev.at("cy")}};
+    const std::pair<double, double> checks[] = {{u.model.xi - truth.xi, u.stddev.at("xi")},
+                                                {u.model.fx - truth.fx, u.stddev.at("fx")},
+                                                {u.model.fy - truth.fy, u.stddev.at("fy")},
+                                                {u.model.cx - truth.cx, u.stddev.at("cx")},
+                                                {u.model.cy - truth.cy, u.stddev.at("cy")}};
     for (const auto& [err, sd] : checks) {
       EXPECT_GT(sd, 0);
       inside += std::abs(err) <= 3 * sd;
@@ -121,9 +129,11 @@ TEST(UnifiedCalibration, TrueParametersInsideThreeSigmaWithHalfPixelNoise) {
                      (std::abs(d.model.cy - truth.cy) <= 3 * d.stddev.at("cy"));
     centre_trials += 2;
     if (seed == 30)
-      std::printf("[ figure ] unified, 0.5 px noise: xi %.5f +- %.5f (true %.5f), fx %.2f +- %.2f (true %.2f), RMS %.3f px; "
-                  "distortion free: xi +- %.4f, fx +- %.1f\n", u.model.xi, u.stddev.at("xi"), truth.xi, u.model.fx,
-                  u.stddev.at("fx"), truth.fx, u.rms, d.stddev.at("xi"), d.stddev.at("fx"));
+      std::printf(
+          "[ figure ] unified, 0.5 px noise: xi %.5f +- %.5f (true %.5f), fx %.2f +- %.2f (true %.2f), RMS %.3f px; "
+          "distortion free: xi +- %.4f, fx +- %.1f\n",
+          u.model.xi, u.stddev.at("xi"), truth.xi, u.model.fx, u.stddev.at("fx"), truth.fx, u.rms, d.stddev.at("xi"),
+          d.stddev.at("fx"));
   }
   EXPECT_GE(inside, trials - 1) << inside << " of " << trials;
   EXPECT_GE(centre_inside, centre_trials - 1) << centre_inside << " of " << centre_trials;
@@ -153,8 +163,9 @@ TEST(PolynomialCalibration, GrossCornerErrorsAreRejectedAndListed) {
   EXPECT_GT(all.rms, 2 * r.rms);
   const auto kept = InlierObservations(obs, r);
   EXPECT_EQ(kept[4].pixels.size(), obs[4].pixels.size() - 1);
-  std::printf("[ figure ] 3 corners moved 2.2-6 px: RMS %.3f px with them, %.3f px after rejection (threshold %.2f px)\n",
-              all.rms, r.rms, r.outlier_threshold_px);
+  std::printf(
+      "[ figure ] 3 corners moved 2.2-6 px: RMS %.3f px with them, %.3f px after rejection (threshold %.2f px)\n",
+      all.rms, r.rms, r.outlier_threshold_px);
 }
 
 }  // namespace

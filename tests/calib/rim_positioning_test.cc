@@ -19,7 +19,7 @@ struct Rendered {
 
 Rendered RenderWithOffset(const Vec3d& offset, double height_error, const Vec3d& tilt = Vec3d::Zero()) {
   auto cfg = scenes::LoadSceneConfig(std::string(HOVS_SOURCE_DIR) + "/scenes/reference_board.yaml");
-  scenes::DownscaleCameras(&cfg, 2);   // 1375 x 1100
+  scenes::DownscaleCameras(&cfg, 2);  // 1375 x 1100
   auto& u = cfg.description.units[0];
   Rendered r;
   r.nominal = u.rig;
@@ -33,7 +33,8 @@ Rendered RenderWithOffset(const Vec3d& offset, double height_error, const Vec3d&
   const auto f = raytrace::Render(scene, raytrace::ViewCamera::Unit(0), ro);
   r.grey.resize(size_t(f.width) * f.height);
   for (size_t k = 0; k < r.grey.size(); ++k)
-    r.grey[k] = static_cast<uint8_t>(std::lround(255 * std::clamp((f.rgb[3 * k] + f.rgb[3 * k + 1] + f.rgb[3 * k + 2]) / 3.f, 0.f, 1.f)));
+    r.grey[k] = static_cast<uint8_t>(
+        std::lround(255 * std::clamp((f.rgb[3 * k] + f.rgb[3 * k + 1] + f.rgb[3 * k + 2]) / 3.f, 0.f, 1.f)));
   return r;
 }
 
@@ -42,15 +43,16 @@ TEST(RimPositioning, RecoversTheCameraOffsetAndHeightFromTheRim) {
                                        std::pair{Vec3d(-0.0015, 0.0004, 0), -0.001}}) {
     const Rendered r = RenderWithOffset(offset, height);
     RimEdge edge;
-    const MirrorPosition p = LocateMirror(r.grey.data(), r.nominal.camera.width, r.nominal.camera.height, r.nominal, {}, &edge);
+    const MirrorPosition p =
+        LocateMirror(r.grey.data(), r.nominal.camera.width, r.nominal.camera.height, r.nominal, {}, &edge);
     const Vec3d true_offset = r.truth.CameraCentre() - r.nominal.CameraCentre();
-    std::printf("[ figure ] rim positioning, camera off by (%.2f, %.2f, %.2f) mm: %d edge points of %d rays, "
-                "estimated (%.3f, %.3f, %.3f) mm, residual RMS %.3f px; rim radius %.2f px (nominal %.2f)\n",
-                1e3 * true_offset.x(), 1e3 * true_offset.y(), 1e3 * true_offset.z(), p.points, edge.rays,
-                1e3 * p.offset.x(), 1e3 * p.offset.y(), 1e3 * p.offset.z(), p.rms_px, p.rim_radius_px,
-                p.nominal_rim_radius_px);
+    std::printf(
+        "[ figure ] rim positioning, camera off by (%.2f, %.2f, %.2f) mm: %d edge points of %d rays, "
+        "estimated (%.3f, %.3f, %.3f) mm, residual RMS %.3f px; rim radius %.2f px (nominal %.2f)\n",
+        1e3 * true_offset.x(), 1e3 * true_offset.y(), 1e3 * true_offset.z(), p.points, edge.rays, 1e3 * p.offset.x(),
+        1e3 * p.offset.y(), 1e3 * p.offset.z(), p.rms_px, p.rim_radius_px, p.nominal_rim_radius_px);
     EXPECT_TRUE(p.converged);
-    EXPECT_GT(p.points, 250);   // rays whose search leaves the image (top and bottom of the rim) are skipped
+    EXPECT_GT(p.points, 250);  // rays whose search leaves the image (top and bottom of the rim) are skipped
     // At 1375 x 1100 (23 px per mm of lateral offset, 8 px of rim radius per mm of height): measured errors
     // 0.002-0.066 mm lateral, 0.001-0.13 mm in height (the camera 1 mm closer shows a bias not yet explained).
     EXPECT_LT((p.offset.head<2>() - true_offset.head<2>()).norm(), 1e-4) << "lateral, m";

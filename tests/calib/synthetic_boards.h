@@ -12,8 +12,9 @@ namespace hovs::calib {
 
 // The article's board (7 x 5 inner corners, 30 mm) at random poses around the reference unit, projected by the
 // core's exact model; every corner visible.
-inline std::vector<BoardObservation> SyntheticObservations(const CatadioptricCamera<double>& rig, int images, double noise_px,
-                                                    unsigned seed, std::vector<Rigid3d>* poses = nullptr) {
+inline std::vector<BoardObservation> SyntheticObservations(const CatadioptricCamera<double>& rig, int images,
+                                                           double noise_px, unsigned seed,
+                                                           std::vector<Rigid3d>* poses = nullptr) {
   constexpr double kDeg = M_PI / 180;
   std::mt19937 rng(seed);
   std::uniform_real_distribution<double> U(0, 1);
@@ -28,9 +29,10 @@ inline std::vector<BoardObservation> SyntheticObservations(const CatadioptricCam
     const Vec3d y = z.cross(x);
     Mat3<double> R;
     R.col(0) = x, R.col(1) = y, R.col(2) = z;
-    const Eigen::Quaterniond q = Eigen::Quaterniond(R) *
-                                 Eigen::Quaterniond(Eigen::AngleAxisd((U(rng) - 0.5) * 0.6, Vec3d(U(rng), U(rng), 0).normalized())) *
-                                 Eigen::Quaterniond(Eigen::AngleAxisd(U(rng) * 2 * M_PI, Vec3d::UnitZ()));
+    const Eigen::Quaterniond q =
+        Eigen::Quaterniond(R) *
+        Eigen::Quaterniond(Eigen::AngleAxisd((U(rng) - 0.5) * 0.6, Vec3d(U(rng), U(rng), 0).normalized())) *
+        Eigen::Quaterniond(Eigen::AngleAxisd(U(rng) * 2 * M_PI, Vec3d::UnitZ()));
     const Rigid3d mirror_from_board(q, c);
     BoardObservation o;
     o.image = "synthetic" + std::to_string(out.size());

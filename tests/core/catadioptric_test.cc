@@ -200,8 +200,8 @@ void ExpectTheScalarReflections(const MirrorReflector& fast, const std::vector<V
 
 TEST(Catadioptric, BatchReflectionIsBitIdenticalToTheScalarOne) {
   // ReflectBatch (vectorised; the renderer's per-sample path) against Reflect, exactly: every decision and
-  // every bit of M and d. Rays (BatchTestRays): spread past the rim, pointing away, and along the asymptotic cone where the
-  // quadratic degenerates (those lanes take the scalar code); 1001 rays, so the vector loop has a remainder. The
+  // every bit of M and d. Rays (BatchTestRays): spread past the rim, pointing away, and along the asymptotic cone where
+  // the quadratic degenerates (those lanes take the scalar code); 1001 rays, so the vector loop has a remainder. The
   // first two blocks of 64 rays all pass outside the rim, so ReflectBatch answers them without solving.
   std::mt19937 rng(5);
   for (const auto& rig : {test::AlignedRig(), test::MisalignedRig()}) {
@@ -237,7 +237,8 @@ TEST(SinCos, OfTurnsMatchesTheLibraryToTheLastBitsOverSeveralTurns) {
     double s = 0, c = 0;
     SinCosOfTurns(w, &s, &c);
     const long double a = 2.0L * 3.14159265358979323846264338327950288L * w;
-    worst = std::max({worst, std::abs(s - static_cast<double>(std::sin(a))), std::abs(c - static_cast<double>(std::cos(a)))});
+    worst = std::max(
+        {worst, std::abs(s - static_cast<double>(std::sin(a))), std::abs(c - static_cast<double>(std::cos(a)))});
   }
   EXPECT_LT(worst, 3e-16);
   double s = 1, c = 0;
@@ -303,7 +304,7 @@ TEST(Catadioptric, SinglePrecisionBatchReflectionIsWithinFloatRoundingOfTheScala
       Vec3d M = Vec3d::Zero(), d = Vec3d::Zero();
       const bool hit = fast.Reflect(o, Vec3d(vx[i], vy[i], vz[i]), &M, &d);
       const double rim = hit ? std::hypot(M.x(), M.y()) / rig.mirror.RimRadius() : 0.0;
-      if (hit && rim > 1 - 1e-5) continue;   // at the rim: either answer
+      if (hit && rim > 1 - 1e-5) continue;  // at the rim: either answer
       ASSERT_EQ(ok[i], hit ? 1 : 0) << "ray " << i;
       if (!hit) {
         ++misses;

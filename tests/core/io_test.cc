@@ -15,7 +15,9 @@ namespace {
 namespace fs = std::filesystem;
 
 fs::path TempRoot() {
-  const fs::path p = fs::temp_directory_path() / ("hovs-io-test-" + std::to_string(::testing::UnitTest::GetInstance()->random_seed()) + "-" + ::testing::UnitTest::GetInstance()->current_test_info()->name());
+  const fs::path p =
+      fs::temp_directory_path() / ("hovs-io-test-" + std::to_string(::testing::UnitTest::GetInstance()->random_seed()) +
+                                   "-" + ::testing::UnitTest::GetInstance()->current_test_info()->name());
   fs::remove_all(p);
   fs::create_directories(p);
   return p;
@@ -65,7 +67,7 @@ TEST(Io, StagingLeftByAKilledRunIsRemovedByTheNextOne) {
   // A run killed before its destructor (Ctrl-C, a crash) leaves its hidden staging folder; the next run for the
   // same target removes it when its process is gone, and leaves a live process's folder and other names alone.
   const fs::path root = TempRoot();
-  const fs::path dead = root / ".report.partial-999999999-1-0";   // beyond any pid_max: no such process
+  const fs::path dead = root / ".report.partial-999999999-1-0";  // beyond any pid_max: no such process
   const fs::path dead_old = root / ".report.old-999999999-2-0";
   const fs::path live = root / (".report.partial-" + std::to_string(::getpid()) + "-3-0");
   const fs::path other = root / ".other.partial-999999999-4-0";
@@ -108,18 +110,20 @@ TEST(Io, OutputFoldersReplaceOnlyTheSameCommandsEarlierOutput) {
   EXPECT_NE(ErrorOf([&] { CheckOutputFolder(root / "report", "calibrate"); }).find("output of 'hovs render'"),
             std::string::npos);
   WriteFileAtomic(root / "config.yaml", "a: 1\n");
-  EXPECT_NE(ErrorOf([&] { CheckOutputFolder(root / "config.yaml", "design"); }).find("not a folder"), std::string::npos);
-  EXPECT_NE(ErrorOf([&] { CheckOutputFolder(root / "config.yaml", "design", {root / "config.yaml"}); })
-                .find("is an input"),
+  EXPECT_NE(ErrorOf([&] { CheckOutputFolder(root / "config.yaml", "design"); }).find("not a folder"),
             std::string::npos);
+  EXPECT_NE(
+      ErrorOf([&] { CheckOutputFolder(root / "config.yaml", "design", {root / "config.yaml"}); }).find("is an input"),
+      std::string::npos);
   fs::create_directories(root / "user");
   WriteFileAtomic(root / "user" / "notes.txt", "mine");
   EXPECT_NE(ErrorOf([&] { CheckOutputFolder(root / "user", "render"); }).find("did not write"), std::string::npos);
   fs::create_directory_symlink(root / "report", root / "link");
   EXPECT_NE(ErrorOf([&] { CheckOutputFolder(root / "link", "render"); }).find("symbolic link"), std::string::npos);
   // An earlier output that holds an input of this run (given, or read through ReadFile) is refused.
-  EXPECT_NE(ErrorOf([&] { CheckOutputFolder(root / "report", "render", {root / "report" / "a.json"}); })
-                .find("holds the input"),
+  EXPECT_NE(ErrorOf([&] {
+              CheckOutputFolder(root / "report", "render", {root / "report" / "a.json"});
+            }).find("holds the input"),
             std::string::npos);
   ReadFile(root / "report" / "a.json");
   EXPECT_NE(ErrorOf([&] { CheckOutputFolder(root / "report", "render"); }).find("holds the input"), std::string::npos);
@@ -189,7 +193,8 @@ TEST(Manifest, MalformedFieldsAreNamedErrors) {
   rejected([](nlohmann::json* m) { (*m)["format"] = "other"; }, "not a hovs dataset manifest");
   // Garbage that once went through: paths out of the folder, unknown keys and versions, repeated frame ids, sizes.
   rejected([](nlohmann::json* m) { (*m)["frames"][0]["views"][0]["image"] = "/etc/passwd"; }, "absolute");
-  rejected([](nlohmann::json* m) { (*m)["frames"][0]["views"][0]["image"] = "../../x.png"; }, "leaves the file's folder");
+  rejected([](nlohmann::json* m) { (*m)["frames"][0]["views"][0]["image"] = "../../x.png"; },
+           "leaves the file's folder");
   rejected([](nlohmann::json* m) { (*m)["frames"][0]["views"][0]["ground_truth"]["exr"] = "/tmp/t.exr"; }, "absolute");
   rejected([](nlohmann::json* m) { (*m)["framez"] = 1; }, "unknown key 'framez'");
   rejected([](nlohmann::json* m) { (*m)["frames"][0]["views"][0]["imgae"] = "x"; }, "unknown key 'imgae'");

@@ -94,8 +94,7 @@ TEST(Jets, PolynomialWorldToCamThroughNewton) {
     return uv;
   };
   const std::array<double, 6> x = {poly_d.poly[0], poly_d.poly[2], 1.0, 1.3, -0.4, -0.8};
-  EXPECT_LT((CompareJacobians<6>(f, x, {1e-4 * std::abs(x[0]), 1e-4 * std::abs(x[1]), 1e-6, 1e-5, 1e-5, 1e-5})),
-            1e-6);
+  EXPECT_LT((CompareJacobians<6>(f, x, {1e-4 * std::abs(x[0]), 1e-4 * std::abs(x[1]), 1e-6, 1e-5, 1e-5, 1e-5})), 1e-6);
 }
 
 TEST(Jets, UnifiedBothDirections) {

@@ -87,15 +87,15 @@ TEST(LargePages, FreedBuffersAreKeptUpToTheLimitAndReusedBySize) {
   EXPECT_EQ(KeptLargePageBytes(), 0u);
   KeepFreedLargePages(16 * mib);
   auto* a = static_cast<unsigned char*>(AllocateLargePages(8 * mib));
-  auto* b = static_cast<unsigned char*>(AllocateLargePages(8 * mib - 100));   // 8 MiB in 2 MiB pages too
+  auto* b = static_cast<unsigned char*>(AllocateLargePages(8 * mib - 100));  // 8 MiB in 2 MiB pages too
   auto* c = static_cast<unsigned char*>(AllocateLargePages(8 * mib));
   a[5] = 1, b[5] = 2, c[5] = 3;
   FreeLargePages(a, 8 * mib);
   FreeLargePages(b, 8 * mib - 100);
   EXPECT_EQ(KeptLargePageBytes(), 16 * mib);
-  FreeLargePages(c, 8 * mib);   // does not fit: a, the longest kept, is unmapped
+  FreeLargePages(c, 8 * mib);  // does not fit: a, the longest kept, is unmapped
   EXPECT_EQ(KeptLargePageBytes(), 16 * mib);
-  auto* d = static_cast<unsigned char*>(AllocateLargePages(10 * mib));   // no kept buffer of that size
+  auto* d = static_cast<unsigned char*>(AllocateLargePages(10 * mib));  // no kept buffer of that size
   EXPECT_NE(d, b);
   EXPECT_NE(d, c);
   EXPECT_EQ(KeptLargePageBytes(), 16 * mib);
@@ -103,14 +103,14 @@ TEST(LargePages, FreedBuffersAreKeptUpToTheLimitAndReusedBySize) {
   auto* f = static_cast<unsigned char*>(AllocateLargePages(8 * mib - 1));
   EXPECT_EQ(e, c);
   EXPECT_EQ(f, b);
-  EXPECT_EQ(e[5] + f[5], 5);   // what their previous owners wrote
+  EXPECT_EQ(e[5] + f[5], 5);  // what their previous owners wrote
   EXPECT_EQ(KeptLargePageBytes(), 0u);
-  FreeLargePages(d, 10 * mib);   // 10 MiB: fits alone
-  FreeLargePages(e, 8 * mib);    // with d it would not: d is unmapped
+  FreeLargePages(d, 10 * mib);  // 10 MiB: fits alone
+  FreeLargePages(e, 8 * mib);   // with d it would not: d is unmapped
   EXPECT_EQ(KeptLargePageBytes(), 8 * mib);
   KeepFreedLargePages(4 * mib);  // a lower limit unmaps what no longer fits
   EXPECT_EQ(KeptLargePageBytes(), 0u);
-  FreeLargePages(f, 8 * mib);    // larger than the limit: unmapped at once
+  FreeLargePages(f, 8 * mib);  // larger than the limit: unmapped at once
   EXPECT_EQ(KeptLargePageBytes(), 0u);
   EXPECT_EQ(KeepFreedLargePages(previous_limit), 4 * mib);
 }

@@ -38,7 +38,8 @@ TEST(Pinhole, RoundTripWithDistortion) {
   auto cam = test::ReferenceCamera();
   cam.distortion = {-0.12, 0.03, 2e-4, -1e-4};
   int n = 0;
-  const double worst = WorstRoundTrip(cam, cam.width, cam.height, 41, [](const Vec2d&) { return true; }, &n);
+  const double worst = WorstRoundTrip(
+      cam, cam.width, cam.height, 41, [](const Vec2d&) { return true; }, &n);
   EXPECT_GT(n, 3000);
   EXPECT_LT(worst, 1e-9);
   Vec2d uv = Vec2d::Zero();
@@ -76,8 +77,8 @@ TEST(Unified, FromDesignReproducesTheExactProjection) {
     EXPECT_GT(compared, 1500);
     EXPECT_LT(worst, 1e-6) << "distortion " << with_distortion;
     int n = 0;
-    EXPECT_LT(WorstRoundTrip(u, rig.camera.width, rig.camera.height, 43,
-                             [&](const Vec2d& uv) { return rig.SeesMirror(uv); }, &n),
+    EXPECT_LT(WorstRoundTrip(
+                  u, rig.camera.width, rig.camera.height, 43, [&](const Vec2d& uv) { return rig.SeesMirror(uv); }, &n),
               1e-9);
     EXPECT_GT(n, 1000);
   }
@@ -200,7 +201,7 @@ TEST(Models, CheckRefusesWhatNoCameraHas) {
   poly_refused([](auto* q) { q->cx = 1e9; });
   poly_refused([](auto* q) { q->cy = NAN; });
   poly_refused([](auto* q) { q->c = 1e308; });
-  poly_refused([](auto* q) { q->poly[2] = 1e308; });   // f(rho) overflows over the annulus
+  poly_refused([](auto* q) { q->poly[2] = 1e308; });  // f(rho) overflows over the annulus
   poly_refused([](auto* q) { q->rho_max = 1e9; });
   poly_refused([](auto* q) { q->inv_poly = {1, NAN}; });
   poly_refused([](auto* q) { q->width = -3; });

@@ -11,10 +11,10 @@ namespace {
 
 TEST(Statistics, AngleBetweenIsExactNearZeroAndHalfTurn) {
   const Vec3d a(1, 0, 0);
-  const double tiny = 1e-9;   // rad: acos(cos(1e-9)) would give 0
+  const double tiny = 1e-9;  // rad: acos(cos(1e-9)) would give 0
   EXPECT_NEAR(AngleBetweenDeg(a, Vec3d(std::cos(tiny), std::sin(tiny), 0)), tiny * 180 / M_PI, 1e-20);
   EXPECT_NEAR(AngleBetweenDeg(a, Vec3d(-1, 1e-9, 0)), 180.0, 1e-6);
-  EXPECT_NEAR(AngleBetweenDeg(3 * a, Vec3d(0, 2, 0)), 90.0, 1e-12);   // lengths do not matter
+  EXPECT_NEAR(AngleBetweenDeg(3 * a, Vec3d(0, 2, 0)), 90.0, 1e-12);  // lengths do not matter
 }
 
 TEST(Statistics, BestRotationRecoversARotationFromNoisyBearings) {
@@ -47,9 +47,9 @@ TEST(Statistics, RunningStatsAndMedian) {
   EXPECT_DOUBLE_EQ(s.Rms(), std::sqrt(26.0 / 3));
   RunningStats negative;
   negative.Add(-2.0);
-  EXPECT_EQ(negative.max, -2.0);   // the first value, not 0
+  EXPECT_EQ(negative.max, -2.0);  // the first value, not 0
   EXPECT_EQ(Median({5, 1, 3}), 3);
-  EXPECT_EQ(Median({4, 1, 3, 2}), 3);   // the upper of an even count
+  EXPECT_EQ(Median({4, 1, 3, 2}), 3);  // the upper of an even count
   EXPECT_EQ(Median({}), 0);
 }
 

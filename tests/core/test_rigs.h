@@ -40,8 +40,7 @@ std::vector<Vec2d> MirrorPixels(const Rig& rig, int step) {
 // World points around the unit (mirror frame), 0.5 .. 10 m away, elevations -60 .. -5 degrees.
 inline std::vector<Vec3d> WorldPoints(int n, unsigned seed) {
   std::mt19937 rng(seed);
-  std::uniform_real_distribution<double> az(-M_PI, M_PI), el(-60 * M_PI / 180, -5 * M_PI / 180),
-      range(0.5, 10.0);
+  std::uniform_real_distribution<double> az(-M_PI, M_PI), el(-60 * M_PI / 180, -5 * M_PI / 180), range(0.5, 10.0);
   std::vector<Vec3d> out;
   for (int i = 0; i < n; ++i) {
     const double a = az(rng), e = el(rng), r = range(rng);

@@ -27,15 +27,17 @@ TEST(StereoCli, CalibratesRenderedPairsAndComputesDepth) {
   const auto j = nlohmann::json::parse(ReadFile(dir / "cal/stereo.json"));
   const double b_err = std::abs(j["ground_truth"]["baseline_error_mm"].get<double>());
   const double r_err = j["ground_truth"]["rotation_error_deg"].get<double>();
-  std::printf("[ figure ] stereo-calibrate, 3 rendered pairs (1 spp): baseline error %.3f mm, rotation error %.4f deg, "
-              "RMS %.3f px\n", b_err, r_err, j["rms_px"].get<double>());
-  EXPECT_LE(b_err, 1.0);    // 3 pairs only; the 12-pair figure is in the notes and README
+  std::printf(
+      "[ figure ] stereo-calibrate, 3 rendered pairs (1 spp): baseline error %.3f mm, rotation error %.4f deg, "
+      "RMS %.3f px\n",
+      b_err, r_err, j["rms_px"].get<double>());
+  EXPECT_LE(b_err, 1.0);  // 3 pairs only; the 12-pair figure is in the notes and README
   EXPECT_LE(r_err, 0.05);
   EXPECT_TRUE(fs::exists(dir / "cal/stereo.yaml"));
   EXPECT_NE(ReadFile(dir / "cal/stereo.yaml").find("baseline"), std::string::npos);
-  EXPECT_TRUE(fs::exists(dir / "cal/figures/frame0_left.png"));   // reprojection figure per pair and unit
+  EXPECT_TRUE(fs::exists(dir / "cal/figures/frame0_left.png"));  // reprojection figure per pair and unit
   EXPECT_EQ(j["corner_refinement"], "edges");
-  for (const auto& det : j["detections"])   // at 1 spp most corners still come from the markers' edges
+  for (const auto& det : j["detections"])  // at 1 spp most corners still come from the markers' edges
     EXPECT_GE(det["left_from_edges"].get<double>(), 0.5 * det["left_corners"].get<double>()) << det.dump();
   // An unknown corner refinement: one error naming the option, nothing written.
   const auto badref = Hovs("stereo-calibrate --dataset " + (dir / "stereo/dataset.json").string() +
@@ -60,13 +62,13 @@ TEST(StereoCli, CalibratesRenderedPairsAndComputesDepth) {
   ASSERT_EQ(d.exit_code, 0) << d.output;
   const auto few = Hovs("depth --dataset " + (dir / "stereo/dataset.json").string() + " --max-points 0 -o " +
                         (dir / "badopt").string());
-  EXPECT_EQ(few.exit_code, 2) << few.output;   // (a negative count once wrote a single point)
+  EXPECT_EQ(few.exit_code, 2) << few.output;  // (a negative count once wrote a single point)
   EXPECT_NE(few.output.find("--max-points"), std::string::npos) << few.output;
   EXPECT_FALSE(fs::exists(dir / "badopt"));
   const auto dj = nlohmann::json::parse(ReadFile(dir / "depth/depth.json"));
   ASSERT_TRUE(dj.contains("ground_truth"));
   EXPECT_NE(dj["relative_pose_from"].get<std::string>().find("stereo.json"), std::string::npos);
-  const auto& band = dj["ground_truth"]["bands"][1];   // 2-4 m: most of the floor
+  const auto& band = dj["ground_truth"]["bands"][1];  // 2-4 m: most of the floor
   EXPECT_LT(band["median_relative_error"].get<double>(), 0.03) << band.dump();
   for (const char* f : {"range.exr", "points.ply", "points.vtp", "rectified_left.png", "disparity.png"})
     EXPECT_TRUE(fs::exists(dir / "depth" / f)) << f;

@@ -43,7 +43,7 @@ TEST(Sparse, LawOfSinesIsTheTriangulationOfAParallelRig) {
   const auto rig0 = test::AlignedRig();
   StereoRig rig{AnyModel::Exact(rig0), AnyModel::Exact(rig0), Rigid3d::Translation(Vec3d(-0.64, 0, 0))};
   EXPECT_NEAR(rig.Baseline(), 0.64, 1e-12);
-  const Vec3d X(1.3, 2.1, 0.0);   // a horizontal ray from both units
+  const Vec3d X(1.3, 2.1, 0.0);  // a horizontal ray from both units
   const Triangulation t = Triangulate(rig, X, X - Vec3d(0.64, 0, 0), 0);
   ASSERT_TRUE(t.ok);
   const double thl = std::acos(X.normalized().x()), thr = std::acos((X - Vec3d(0.64, 0, 0)).normalized().x());
@@ -103,11 +103,12 @@ TEST(Sparse, PointsAtOneToFiveMetresWithTrueAndPolynomialModels) {
   // Pixel noise 0.05 px: the corner accuracy measured on renders (cornerSubPix, tests/raytrace); and twice that.
   const SparseResult exact = SparseRun(cfg, truth, 0.05, 3), fitted = SparseRun(cfg, poly, 0.05, 3);
   const SparseResult exact2 = SparseRun(cfg, truth, 0.1, 3), fitted2 = SparseRun(cfg, poly, 0.1, 3);
-  for (const auto& [noise, e, f] : {std::tuple<double, const SparseResult&, const SparseResult&>{0.05, exact, fitted},
-                                    {0.1, exact2, fitted2}})
-    std::printf("[ figure ] sparse, %.2f px noise, %d points at 1-5 m: true models worst %.5f %% (RMS %.5f %%, "
-                "mean squared z %.2f); fitted polynomial models (N = 5) worst %.5f %% (RMS %.5f %%)\n",
-                noise, e.n, 100 * e.worst_rel, 100 * e.rms_rel, e.z2, 100 * f.worst_rel, 100 * f.rms_rel);
+  for (const auto& [noise, e, f] :
+       {std::tuple<double, const SparseResult&, const SparseResult&>{0.05, exact, fitted}, {0.1, exact2, fitted2}})
+    std::printf(
+        "[ figure ] sparse, %.2f px noise, %d points at 1-5 m: true models worst %.5f %% (RMS %.5f %%, "
+        "mean squared z %.2f); fitted polynomial models (N = 5) worst %.5f %% (RMS %.5f %%)\n",
+        noise, e.n, 100 * e.worst_rel, 100 * e.rms_rel, e.z2, 100 * f.worst_rel, 100 * f.rms_rel);
   EXPECT_GT(exact.n, 300);
   EXPECT_LE(exact.worst_rel, 0.005);
   EXPECT_LE(fitted.worst_rel, 0.01);
@@ -163,12 +164,14 @@ TEST(Dense, StreetSceneAgainstTheRangeChannel) {
     return b;
   };
   const auto l8 = to8(fl), r8 = to8(fr);
-  RectifyOptions rop;   // 2048 x 512, the lower half-space
+  RectifyOptions rop;  // 2048 x 512, the lower half-space
   const Rectification rect = Rectify(rig, rop);
   unwrap::Remapper ml(rect.left), mr(rect.right);
   std::vector<unwrap::Image8> left, right;
-  ml.Run({l8.data(), fl.width, fl.height, size_t(fl.width) * 3, unwrap::PixelFormat::kRgb8}, unwrap::Interpolation::kBilinear, &left);
-  mr.Run({r8.data(), fr.width, fr.height, size_t(fr.width) * 3, unwrap::PixelFormat::kRgb8}, unwrap::Interpolation::kBilinear, &right);
+  ml.Run({l8.data(), fl.width, fl.height, size_t(fl.width) * 3, unwrap::PixelFormat::kRgb8},
+         unwrap::Interpolation::kBilinear, &left);
+  mr.Run({r8.data(), fr.width, fr.height, size_t(fr.width) * 3, unwrap::PixelFormat::kRgb8},
+         unwrap::Interpolation::kBilinear, &right);
   // Ground truth: the range channel (Z) of the left render at each rectified pixel's source pixel.
   std::vector<float> mx, my;
   rect.left.DecodeView(0, &mx, &my);
@@ -176,7 +179,11 @@ TEST(Dense, StreetSceneAgainstTheRangeChannel) {
     DenseOptions dop;
     dop.coarse_to_fine = c2f;
     const DenseDepth d = ComputeDenseDepth(rect, left[0], right[0], dop);
-    struct Band { double lo, hi; std::vector<double> rel; int pixels = 0; };
+    struct Band {
+      double lo, hi;
+      std::vector<double> rel;
+      int pixels = 0;
+    };
     std::vector<Band> bands = {{1, 2, {}}, {2, 4, {}}, {4, 8, {}}, {8, 16, {}}};
     for (size_t k = 0; k < mx.size(); ++k) {
       if (mx[k] < 0) continue;
@@ -206,7 +213,8 @@ TEST(Dense, StreetSceneAgainstTheRangeChannel) {
     for (int i = 0; i < 3; ++i) {
       ASSERT_GT(bands[i].rel.size(), 1000u) << bands[i].lo << "-" << bands[i].hi << " m";
       EXPECT_LT(bands[i].rel[bands[i].rel.size() / 2], 0.02) << bands[i].lo << "-" << bands[i].hi << " m";
-      const double within = double(std::count_if(bands[i].rel.begin(), bands[i].rel.end(), [](double e) { return e <= 0.05; }));
+      const double within =
+          double(std::count_if(bands[i].rel.begin(), bands[i].rel.end(), [](double e) { return e <= 0.05; }));
       EXPECT_GT(within / bands[i].pixels, 0.7) << bands[i].lo << "-" << bands[i].hi << " m";
     }
   }

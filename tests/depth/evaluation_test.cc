@@ -46,7 +46,8 @@ Fixture ExactFixture(double left_shift_px) {
     const Vec3d X = left_from_board * b;
     Vec2d l, r;
     if (f.dataset.left_unit.rig.ImgFromMirror(X, &l) != ProjectionStatus::kOk) continue;
-    if (f.dataset.right_unit.rig.ImgFromMirror(f.calibration.right_from_left * X, &r) != ProjectionStatus::kOk) continue;
+    if (f.dataset.right_unit.rig.ImgFromMirror(f.calibration.right_from_left * X, &r) != ProjectionStatus::kOk)
+      continue;
     p.left.push_back({id, l + Vec2d(left_shift_px, 0), true});
     p.right.push_back({id, r, false});
   }
@@ -97,7 +98,7 @@ TEST(DepthEvaluation, RecordStatistics) {
   const nlohmann::json j = SparseDepthJson(e);
   EXPECT_EQ(j["points"], 10);
   EXPECT_DOUBLE_EQ(j["max_rel_error"].get<double>(), 0.05);
-  EXPECT_EQ(j["worst_points"][0]["corner"], 3);   // stable: the first of equal errors
+  EXPECT_EQ(j["worst_points"][0]["corner"], 3);  // stable: the first of equal errors
   EXPECT_EQ(j["worst_points"][1]["corner"], 8);
   EXPECT_DOUBLE_EQ(j["conditioned"]["max_rel_error"].get<double>(), 0.010);
   EXPECT_EQ(j["conditioned"]["points"], 8);

@@ -18,20 +18,20 @@ namespace hovs::depth {
 namespace {
 
 struct Scene {
-  Eigen::Matrix3d H;          // image (before the warp) from marker coordinates in [0, 1]^2
+  Eigen::Matrix3d H;  // image (before the warp) from marker coordinates in [0, 1]^2
   Eigen::Matrix3d Hinv;
-  double margin = 0;          // > 0: the paper ends this far (marker units) left of and above the marker
-  double k = 0;               // radial warp about (cx, cy): p' = c + (p - c) (1 + k |p - c|^2)
+  double margin = 0;  // > 0: the paper ends this far (marker units) left of and above the marker
+  double k = 0;       // radial warp about (cx, cy): p' = c + (p - c) (1 + k |p - c|^2)
   Vec2d c{100, 100};
   std::array<int, 36> bits{};
   Vec2d Warp(const Vec2d& p) const { return c + (p - c) * (1 + k * (p - c).squaredNorm()); }
-  Vec2d Unwarp(const Vec2d& q) const {   // fixed point: the warp is mild
+  Vec2d Unwarp(const Vec2d& q) const {  // fixed point: the warp is mild
     Vec2d p = q;
     if (k == 0) return p;
     for (int i = 0; i < 12; ++i) p = c + (q - c) / (1 + k * (p - c).squaredNorm());
     return p;
   }
-  Vec2d Corner(int j) const {   // marker corners (0,0) (1,0) (1,1) (0,1): one consistent order
+  Vec2d Corner(int j) const {  // marker corners (0,0) (1,0) (1,1) (0,1): one consistent order
     const Eigen::Vector3d m(j == 1 || j == 2 ? 1 : 0, j >= 2 ? 1 : 0, 1);
     const Eigen::Vector3d x = H * m;
     return Warp(Vec2d(x(0) / x(2), x(1) / x(2)));
@@ -41,11 +41,11 @@ struct Scene {
     const Eigen::Vector3d m = Hinv * Eigen::Vector3d(p.x(), p.y(), 1);
     const double u = m(0) / m(2), v = m(1) / m(2);
     if (u < 0 || v < 0 || u >= 1 || v >= 1) {
-      if (margin > 0 && (u < -margin || v < -margin)) return 120 + 40 * std::sin(37 * u) * std::cos(23 * v);   // ground
-      return 235;   // paper
+      if (margin > 0 && (u < -margin || v < -margin)) return 120 + 40 * std::sin(37 * u) * std::cos(23 * v);  // ground
+      return 235;                                                                                             // paper
     }
     const int i = static_cast<int>(u * 8), j = static_cast<int>(v * 8);
-    if (i == 0 || j == 0 || i == 7 || j == 7) return 15;   // border
+    if (i == 0 || j == 0 || i == 7 || j == 7) return 15;  // border
     return bits[(j - 1) * 6 + (i - 1)] ? 235 : 15;
   }
   cv::Mat Render(int w, int h) const {
@@ -69,8 +69,8 @@ Scene MakeScene(std::mt19937* rng, double size, double k) {
   // A square of the given size around the centre, rotated, with some perspective.
   const double a = 0.7 * U(*rng);
   Eigen::Matrix3d R;
-  R << std::cos(a) * size, -std::sin(a) * size, 100 - 0.5 * size * (std::cos(a) - std::sin(a)),
-      std::sin(a) * size, std::cos(a) * size, 100 - 0.5 * size * (std::sin(a) + std::cos(a)), 0, 0, 1;
+  R << std::cos(a) * size, -std::sin(a) * size, 100 - 0.5 * size * (std::cos(a) - std::sin(a)), std::sin(a) * size,
+      std::cos(a) * size, 100 - 0.5 * size * (std::sin(a) + std::cos(a)), 0, 0, 1;
   Eigen::Matrix3d P = Eigen::Matrix3d::Identity();
   P(2, 0) = 0.15 * U(*rng), P(2, 1) = 0.15 * U(*rng);
   // Perspective in marker coordinates about the marker's centre keeps it near the image centre.
@@ -128,23 +128,25 @@ TEST(MarkerEdges, CornersOfStraightAndBentMarkers) {
   // (the unwrapped view's detection near the rim).
   for (const double guide : {0.3, 1.5}) {
     const Result edge = Measure(48, 0, 6, 6, guide, 0.1);
-    std::printf("[ figure ] 48 px markers at the board's edge, guides %.1f px off: %d of %d corners, RMS %.4f px, "
-                "worst %.4f px\n", guide, edge.refined, edge.total, edge.rms, edge.worst);
+    std::printf(
+        "[ figure ] 48 px markers at the board's edge, guides %.1f px off: %d of %d corners, RMS %.4f px, "
+        "worst %.4f px\n",
+        guide, edge.refined, edge.total, edge.rms, edge.worst);
     EXPECT_GE(edge.refined, edge.total * 3 / 4);
     EXPECT_LE(edge.rms, 0.03);
     EXPECT_LE(edge.worst, 0.08);
   }
   // Small markers (3 px cells).
   const Result small = Measure(24, 0, 6, 5, 0.2);
-  std::printf("[ figure ] 24 px markers: %d of %d corners, RMS %.4f px, worst %.4f px\n", small.refined,
-              small.total, small.rms, small.worst);
+  std::printf("[ figure ] 24 px markers: %d of %d corners, RMS %.4f px, worst %.4f px\n", small.refined, small.total,
+              small.rms, small.worst);
   EXPECT_GE(small.refined, small.total * 3 / 4);
   EXPECT_LE(small.rms, 0.08);
 }
 
 TEST(MarkerEdges, LeavesMarkersTooSmallOrWithoutContrastAlone) {
   std::mt19937 rng(9);
-  const Scene s = MakeScene(&rng, 14, 0);   // 1.75 px cells: below min_cell_px
+  const Scene s = MakeScene(&rng, 14, 0);  // 1.75 px cells: below min_cell_px
   const cv::Mat img = s.Render(200, 200);
   std::array<Vec2d, 4> c;
   for (int j = 0; j < 4; ++j) c[j] = s.Corner(j);

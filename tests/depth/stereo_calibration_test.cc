@@ -78,12 +78,14 @@ TEST(StereoCalibration, RecoversTheRigFromTwelvePairs) {
       EXPECT_TRUE(c.outliers.empty());
     }
     const double baseline_err = std::abs(c.baseline - truth.translation.norm());
-    const double rot_err = 2 * std::asin(std::min(1.0, (c.right_from_left.rotation * truth.rotation.conjugate()).vec().norm())) / kDeg;
+    const double rot_err =
+        2 * std::asin(std::min(1.0, (c.right_from_left.rotation * truth.rotation.conjugate()).vec().norm())) / kDeg;
     const double t_err = (c.right_from_left.translation - truth.translation).norm();
-    std::printf("[ figure ] stereo calibration, 12 pairs, %.1f px noise: baseline %.5f m (true %.5f, error %.3f mm, "
-                "sigma %.3f mm), rotation error %.4f deg (sigma %.4f %.4f %.4f deg), translation error %.3f mm, RMS %.3f px\n",
-                noise, c.baseline, truth.translation.norm(), 1e3 * baseline_err, 1e3 * c.sigma_baseline, rot_err,
-                c.sigma_rotation_deg.x(), c.sigma_rotation_deg.y(), c.sigma_rotation_deg.z(), 1e3 * t_err, c.rms_px);
+    std::printf(
+        "[ figure ] stereo calibration, 12 pairs, %.1f px noise: baseline %.5f m (true %.5f, error %.3f mm, "
+        "sigma %.3f mm), rotation error %.4f deg (sigma %.4f %.4f %.4f deg), translation error %.3f mm, RMS %.3f px\n",
+        noise, c.baseline, truth.translation.norm(), 1e3 * baseline_err, 1e3 * c.sigma_baseline, rot_err,
+        c.sigma_rotation_deg.x(), c.sigma_rotation_deg.y(), c.sigma_rotation_deg.z(), 1e3 * t_err, c.rms_px);
     EXPECT_EQ(c.pair_names.size(), 12u);
     EXPECT_LE(baseline_err, 0.0005);
     EXPECT_LE(rot_err, 0.02);
@@ -93,7 +95,7 @@ TEST(StereoCalibration, RecoversTheRigFromTwelvePairs) {
       EXPECT_LT(c.rms_px, 1e-4);
       EXPECT_LT(t_err, 1e-6);
     } else {
-      EXPECT_NEAR(c.rms_px, noise * std::sqrt(2.0), 0.05);   // 2-D residuals of noise per axis
+      EXPECT_NEAR(c.rms_px, noise * std::sqrt(2.0), 0.05);  // 2-D residuals of noise per axis
       EXPECT_LT(baseline_err, 4 * c.sigma_baseline + 1e-6) << "sigma must describe the error";
       // The article's method on the same corners (outlier removed): per-unit board poses, then the 3-D
       // residual alone. Noise-free it is exact too; with noise the joint reprojection problem must be better.
@@ -102,9 +104,12 @@ TEST(StereoCalibration, RecoversTheRigFromTwelvePairs) {
       o3.residual = "3d";
       const StereoCalibration a = CalibrateStereo(left, right, pairs, board, o3);
       const double a_t_err = (a.right_from_left.translation - truth.translation).norm();
-      const double a_rot = 2 * std::asin(std::min(1.0, (a.right_from_left.rotation * truth.rotation.conjugate()).vec().norm())) / kDeg;
-      std::printf("[ figure ] the article's 3-D residual method, same corners: translation error %.3f mm, rotation "
-                  "error %.4f deg, 3-D RMS %.2f mm, reprojection RMS %.3f px\n", 1e3 * a_t_err, a_rot, 1e3 * a.rms_3d_m, a.rms_px);
+      const double a_rot =
+          2 * std::asin(std::min(1.0, (a.right_from_left.rotation * truth.rotation.conjugate()).vec().norm())) / kDeg;
+      std::printf(
+          "[ figure ] the article's 3-D residual method, same corners: translation error %.3f mm, rotation "
+          "error %.4f deg, 3-D RMS %.2f mm, reprojection RMS %.3f px\n",
+          1e3 * a_t_err, a_rot, 1e3 * a.rms_3d_m, a.rms_px);
       EXPECT_TRUE(a.converged) << a.solver_report;
       EXPECT_GT(a.rms_px, c.rms_px);
     }
@@ -118,7 +123,8 @@ TEST(StereoCalibration, JointReprojectionBeatsTheArticles3dResidualOverNoiseDraw
   const StereoSet set;
   const auto& [cfg, opts, poses, board, units, left, right, truth] = set;
   const auto errors = [&](const StereoCalibration& c) {
-    const double rot = 2 * std::asin(std::min(1.0, (c.right_from_left.rotation * truth.rotation.conjugate()).vec().norm()));
+    const double rot =
+        2 * std::asin(std::min(1.0, (c.right_from_left.rotation * truth.rotation.conjugate()).vec().norm()));
     return std::make_pair((c.right_from_left.translation - truth.translation).norm(), rot / kDeg);
   };
   double joint_t = 0, joint_r = 0, article_t = 0, article_r = 0;
@@ -138,9 +144,10 @@ TEST(StereoCalibration, JointReprojectionBeatsTheArticles3dResidualOverNoiseDraw
     joint_t += jt * jt, joint_r += jr * jr, article_t += at * at, article_r += ar * ar;
   }
   const auto rms = [](double s) { return std::sqrt(s / kDraws); };
-  std::printf("[ figure ] 12 pairs, 0.2 px noise, %d draws: translation error RMS %.3f mm joint, %.3f mm the article's "
-              "3-D residual; rotation error RMS %.4f / %.4f deg\n", kDraws, 1e3 * rms(joint_t), 1e3 * rms(article_t),
-              rms(joint_r), rms(article_r));
+  std::printf(
+      "[ figure ] 12 pairs, 0.2 px noise, %d draws: translation error RMS %.3f mm joint, %.3f mm the article's "
+      "3-D residual; rotation error RMS %.4f / %.4f deg\n",
+      kDraws, 1e3 * rms(joint_t), 1e3 * rms(article_t), rms(joint_r), rms(article_r));
   EXPECT_LT(joint_t, article_t);
   EXPECT_LT(joint_r, article_r);
 }
@@ -149,8 +156,8 @@ TEST(StereoCalibration, RejectsTooFewPairsAndPairsWithoutCommonMarkers) {
   const StereoSet set;
   const auto& [cfg, opts, poses, board, units, left, right, truth] = set;
   std::mt19937 rng(1);
-  std::vector<StereoPairObservation> one = {{"only", Observe(units[0], board, poses[0], 0.1, &rng),
-                                             Observe(units[1], board, poses[0], 0.1, &rng)}};
+  std::vector<StereoPairObservation> one = {
+      {"only", Observe(units[0], board, poses[0], 0.1, &rng), Observe(units[1], board, poses[0], 0.1, &rng)}};
   EXPECT_THROW(CalibrateStereo(left, right, one, board, {}), Error);
   // Two pairs whose right views see none of the markers the left views see.
   std::vector<StereoPairObservation> disjoint;
@@ -219,8 +226,10 @@ TEST(MarkerDetection, FindsTheMarkersOfARenderAtTheirTruePixels) {
   std::vector<CornerObservation> truth;
   int hidden = 0;
   for (const auto& c : scenes::BoardCornerTruth(scene, inst, 0)) {
-    if (c.status == "visible") truth.push_back({c.id, c.pixel});
-    else ++hidden;
+    if (c.status == "visible")
+      truth.push_back({c.id, c.pixel});
+    else
+      ++hidden;
   }
   ASSERT_GT(truth.size(), 40u);
   // Render only around the board.
@@ -252,7 +261,7 @@ TEST(MarkerDetection, FindsTheMarkersOfARenderAtTheirTruePixels) {
     double s2 = 0;
     for (const auto& c : cs) {
       const auto it = truth_by_id.find(c.id);
-      if (it == truth_by_id.end()) {   // a marker partly hidden by the other unit can still decode
+      if (it == truth_by_id.end()) {  // a marker partly hidden by the other unit can still decode
         ++s.false_corners;
         continue;
       }
@@ -264,18 +273,20 @@ TEST(MarkerDetection, FindsTheMarkersOfARenderAtTheirTruePixels) {
     return s;
   };
   const Score before = score(found);
-  std::printf("[ figure ] ArUco in unwrapped views: %d of %zu visible corners found (%d hidden, %d detected at hidden "
-              "corners), RMS %.3f px, worst %.3f px\n", before.matched, truth.size(), hidden, before.false_corners,
-              before.rms, before.worst);
+  std::printf(
+      "[ figure ] ArUco in unwrapped views: %d of %zu visible corners found (%d hidden, %d detected at hidden "
+      "corners), RMS %.3f px, worst %.3f px\n",
+      before.matched, truth.size(), hidden, before.false_corners, before.rms, before.worst);
   EXPECT_LE(before.false_corners, 4);
   EXPECT_GE(before.matched, int(0.8 * truth.size()));
   EXPECT_LE(before.rms, 0.3);
   // The per-marker check against the board pose removes markers with corners at hidden positions.
   const std::vector<int> removed = RejectInconsistentMarkers(model, &found, board, 2.0);
   const Score after = score(found);
-  std::printf("[ figure ] after the per-marker consistency check: %zu markers removed, %d corners, %d at hidden "
-              "corners, RMS %.3f px, worst %.3f px\n", removed.size(), after.matched, after.false_corners, after.rms,
-              after.worst);
+  std::printf(
+      "[ figure ] after the per-marker consistency check: %zu markers removed, %d corners, %d at hidden "
+      "corners, RMS %.3f px, worst %.3f px\n",
+      removed.size(), after.matched, after.false_corners, after.rms, after.worst);
   EXPECT_EQ(after.false_corners, 0);
   EXPECT_LE(after.worst, 0.3);
   EXPECT_LE(after.rms, 0.08) << "corners from the markers' edges";

@@ -164,15 +164,21 @@ TEST(DesignConfig, RejectsBadInput) {
   ExpectError(RefText() + "colour: red\n", "unknown key 'colour'");
   ExpectError(RefText() + "mirror: {rim_diameter: 0.06}\n", "duplicate key 'mirror'");
   ExpectError(RefText() + "constraints: {max_upper_elevation: 0}\n", "unknown key 'max_upper_elevation'");
-  ExpectError("camera: {focal_length: -0.016, pixel_pitch: 4.54e-6, width: 2750, height: 2200, lens_aperture: 0.02}\n"
-              "mirror: {rim_diameter: 0.080}\n", "focal length must be positive");
-  ExpectError("camera: {focal_length: .nan, pixel_pitch: 4.54e-6, width: 2750, height: 2200, lens_aperture: 0.02}\n"
-              "mirror: {rim_diameter: 0.080}\n", "finite");
+  ExpectError(
+      "camera: {focal_length: -0.016, pixel_pitch: 4.54e-6, width: 2750, height: 2200, lens_aperture: 0.02}\n"
+      "mirror: {rim_diameter: 0.080}\n",
+      "focal length must be positive");
+  ExpectError(
+      "camera: {focal_length: .nan, pixel_pitch: 4.54e-6, width: 2750, height: 2200, lens_aperture: 0.02}\n"
+      "mirror: {rim_diameter: 0.080}\n",
+      "finite");
   ExpectError(RefText() + "search: {b: [0.0, 0.08]}\n", "b minimum must be positive");
   ExpectError(RefText() + "search: {b: [-0.01, 0.08]}\n", "b minimum must be positive");
   ExpectError(RefText() + "search: {a: [0.08, 0.02]}\n", "exceeds maximum");
-  ExpectError("camera: {focal_length: 0.016, pixel_pitch: 4.54e-6, width: 2750, height: 2200, lens_aperture: 0.02}\n"
-              "mirror: {rim_diameter: -0.08}\n", "d minimum must be positive");
+  ExpectError(
+      "camera: {focal_length: 0.016, pixel_pitch: 4.54e-6, width: 2750, height: 2200, lens_aperture: 0.02}\n"
+      "mirror: {rim_diameter: -0.08}\n",
+      "d minimum must be positive");
   ExpectError(RefText() + "objective: biggest\n", "unknown objective 'biggest'");
   ExpectError(RefText() + "search: {grid: [1, 100]}\n", "at least 2 x 2");
   ExpectError(RefText() + "search: {grid: [100.5, 100]}\n", "expected an integer");
@@ -182,9 +188,7 @@ TEST(DesignConfig, RejectsBadInput) {
   ExpectError(RefText() + "search: {d: [0.06, 0.1]}\n", "not both");
 }
 
-TEST(DesignConfig, MissingFileIsAnError) {
-  EXPECT_THROW(LoadDesignConfig("/nonexistent/design.yaml"), Error);
-}
+TEST(DesignConfig, MissingFileIsAnError) { EXPECT_THROW(LoadDesignConfig("/nonexistent/design.yaml"), Error); }
 
 }  // namespace
 }  // namespace hovs::design

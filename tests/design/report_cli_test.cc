@@ -27,7 +27,8 @@ TEST(DesignCli, WritesTheCompleteReport) {
   const CliRun r = Hovs("design --config " + kReference + " --out " + out.string());
   ASSERT_EQ(r.exit_code, 0) << r.output;
   EXPECT_NE(r.output.find("integer-mm optimum   a = 48.0000 mm, b = 44.0000 mm"), std::string::npos) << r.output;
-  for (const char* f : {"config.yaml", "sweep.csv", "design.json", "radial_resolution.csv", "index.html", "summary.txt"})
+  for (const char* f :
+       {"config.yaml", "sweep.csv", "design.json", "radial_resolution.csv", "index.html", "summary.txt"})
     EXPECT_TRUE(fs::is_regular_file(out / f)) << f;
   const auto j = nlohmann::json::parse(hovs::ReadFile(out / "design.json"));
   EXPECT_NEAR(j["integer_mm_optimum"]["a"].get<double>(), 0.048, 1e-12);
@@ -81,8 +82,9 @@ TEST(DesignCli, BadInputGetsOneClearErrorAndNoReport) {
   ExpectRejected(kCamera + "mirror: {rim_diameter: -0.08}\n", "must be positive");
   ExpectRejected(kCamera + "mirror: {rim_diameter: .nan}\n", "finite");
   ExpectRejected(kCamera + "mirror: {rim_diameter: 0.08}\nsearch: {b: [0, 0.08]}\n", "b minimum must be positive");
-  ExpectRejected(kCamera + "mirror: {rim_diameter: 0.08}\nconstraints: {min_rim_radius_px: 1500}\nsearch: {grid: [21, 21]}\n",
-                 "no design in the search box satisfies the constraints");
+  ExpectRejected(
+      kCamera + "mirror: {rim_diameter: 0.08}\nconstraints: {min_rim_radius_px: 1500}\nsearch: {grid: [21, 21]}\n",
+      "no design in the search box satisfies the constraints");
   const CliRun missing = Hovs("design --config /nonexistent.yaml --out /tmp/never");
   EXPECT_EQ(missing.exit_code, 2);
   EXPECT_NE(missing.output.find("/nonexistent.yaml: config file not found"), std::string::npos) << missing.output;

@@ -17,17 +17,18 @@ inline void UseModel(const AnyModel& m, int n = 16) {
   Vec3d bearing;
   Vec2d uv;
   for (int k = 0; k < n; ++k)
-    if (m.MirrorFromImg(Vec2d(k * m.width() / double(n), k * m.height() / double(n)), &bearing)) m.ImgFromMirror(bearing, &uv);
+    if (m.MirrorFromImg(Vec2d(k * m.width() / double(n), k * m.height() / double(n)), &bearing))
+      m.ImgFromMirror(bearing, &uv);
 }
 
 }  // namespace hovs::fuzz
 
-#define HOVS_FUZZ_TARGET(body)                                                        \
-  extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {           \
-    const std::string input(reinterpret_cast<const char*>(data), size);              \
-    try {                                                                             \
-      body(input);                                                                    \
-    } catch (const hovs::Error&) {                                                    \
-    }                                                                                 \
-    return 0;                                                                         \
+#define HOVS_FUZZ_TARGET(body)                                              \
+  extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) { \
+    const std::string input(reinterpret_cast<const char*>(data), size);     \
+    try {                                                                   \
+      body(input);                                                          \
+    } catch (const hovs::Error&) {                                          \
+    }                                                                       \
+    return 0;                                                               \
   }

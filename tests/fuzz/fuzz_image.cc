@@ -14,9 +14,12 @@ void SmallImage(const std::string& where, int width, int height, int channels, i
 void Run(const std::string& input) {
   using namespace hovs::io::internal;
   Decoded d;
-  if (IsPng(input)) d = DecodePng(input, "fuzz.png", true, SmallImage);
-  else if (IsJpeg(input)) d = DecodeJpeg(input, "fuzz.jpg", true, SmallImage);
-  else return;
+  if (IsPng(input))
+    d = DecodePng(input, "fuzz.png", true, SmallImage);
+  else if (IsJpeg(input))
+    d = DecodeJpeg(input, "fuzz.jpg", true, SmallImage);
+  else
+    return;
   if (d.samples.size() != size_t(d.width) * d.height * d.channels * (d.bits / 8)) __builtin_trap();
 }
 

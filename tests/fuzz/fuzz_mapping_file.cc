@@ -18,12 +18,13 @@ void Run(const std::string& input) {
   int64_t out = 0;
   for (const auto& v : table.views) out += int64_t(v.view.width) * v.view.height;
   const int w = table.source_width, h2 = table.source_height;
-  if (int64_t(w) * h2 > 4096 * 4096 || out > 8 * 1024 * 1024) return;   // valid but too large to remap per input
+  if (int64_t(w) * h2 > 4096 * 4096 || out > 8 * 1024 * 1024) return;  // valid but too large to remap per input
   std::vector<uint8_t> frame(size_t(w + w % 2) * (h2 + h2 % 2) * 3, 77);
   hovs::unwrap::Remapper remapper(table);
   std::vector<hovs::unwrap::Image8> views;
   using hovs::unwrap::PixelFormat;
-  remapper.Run({frame.data(), w, h2, size_t(w) * 3, PixelFormat::kRgb8}, hovs::unwrap::Interpolation::kBilinear, &views);
+  remapper.Run({frame.data(), w, h2, size_t(w) * 3, PixelFormat::kRgb8}, hovs::unwrap::Interpolation::kBilinear,
+               &views);
   remapper.Run({frame.data(), w, h2, size_t(w), PixelFormat::kGray8}, hovs::unwrap::Interpolation::kBicubic, &views);
   if (w % 2 == 0 && h2 % 2 == 0)
     remapper.Run({frame.data(), w, h2, size_t(w), PixelFormat::kBayerRggb8}, hovs::unwrap::Interpolation::kBilinear,

@@ -13,7 +13,8 @@ namespace {
 
 const std::filesystem::path& File() {
   static const std::filesystem::path p =
-      (std::filesystem::exists("/dev/shm") ? std::filesystem::path("/dev/shm") : std::filesystem::temp_directory_path()) /
+      (std::filesystem::exists("/dev/shm") ? std::filesystem::path("/dev/shm")
+                                           : std::filesystem::temp_directory_path()) /
       ("hovs-fuzz-model-" + std::to_string(::getpid()) + ".json");
   return p;
 }

@@ -58,9 +58,7 @@ uint32_t Crc32(const std::string& s) {
 }
 
 std::string Chunk(const std::string& type, const std::string& data) {
-  const auto be = [](uint32_t v) {
-    return std::string{char(v >> 24), char(v >> 16), char(v >> 8), char(v)};
-  };
+  const auto be = [](uint32_t v) { return std::string{char(v >> 24), char(v >> 16), char(v >> 8), char(v)}; };
   return be(uint32_t(data.size())) + type + data + be(Crc32(type + data));
 }
 
@@ -95,7 +93,8 @@ class Hardening : public ::testing::Test {
   // One bad command line: exit 2 within the time bound, exactly one line of output, naming `needle`.
   static void Refused(const std::string& args, const std::string& needle, int seconds = 60) {
     const auto t0 = std::chrono::steady_clock::now();
-    const auto r = test::Run("timeout -s KILL " + std::to_string(seconds) + " " + std::string(HOVS_BINARY) + " " + args);
+    const auto r =
+        test::Run("timeout -s KILL " + std::to_string(seconds) + " " + std::string(HOVS_BINARY) + " " + args);
     const double took = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     EXPECT_EQ(r.exit_code, 2) << "hovs " << args << "\n" << r.output;
     EXPECT_LT(took, seconds) << "hovs " << args << " did not end";
@@ -116,13 +115,13 @@ TEST_F(Hardening, OutputsNeverReplaceFilesInputsOrFoldersHovsDidNotWrite) {
   const auto before_config = ReadFile(config);
   const auto before_inputs = Tree(Mono().parent_path());
   const std::string render = "render --scene " + kScenes + "/reference_board.yaml --samples 1 --downscale 10 --out ";
-  Refused("design --config " + config + " --out " + config, "config.yaml");                       // a file, the input
+  Refused("design --config " + config + " --out " + config, "config.yaml");  // a file, the input
   Refused("calibrate --dataset " + Mono().string() + " --out " + Mono().parent_path().string(), "input");  // holds it
-  Refused(render + (w / "mine").string(), "did not write");                                      // unrecognised
-  Refused(render + Mono().parent_path().string(), "not of 'hovs render'");                       // another command's
+  Refused(render + (w / "mine").string(), "did not write");                 // unrecognised
+  Refused(render + Mono().parent_path().string(), "not of 'hovs render'");  // another command's
   Refused("unwrap --model " + Mono().string() + " --input " + Image().string() + " --out " + w.string() +
               "/u --save-map " + config,
-          "not a hovs mapping file");                                                            // a file output
+          "not a hovs mapping file");  // a file output
   Refused("capture --replay " + Mono().parent_path().string() + "/images --out " + (w / "mine").string(), "mine");
   {
     // The working directory and what holds it.
@@ -167,7 +166,8 @@ TEST_F(Hardening, AnInterruptedRunLeavesNoStagingBehind) {
   bool staging = false;
   for (int k = 0; k < 300 && !staging; ++k) {
     std::this_thread::sleep_for(std::chrono::milliseconds(50));
-    for (const auto& e : fs::directory_iterator(w)) staging = staging || e.path().filename().string().find(".set.partial-") == 0;
+    for (const auto& e : fs::directory_iterator(w))
+      staging = staging || e.path().filename().string().find(".set.partial-") == 0;
   }
   ASSERT_TRUE(staging) << ReadFile(log);
   std::this_thread::sleep_for(std::chrono::milliseconds(500));
@@ -188,8 +188,9 @@ TEST_F(Hardening, FilesWithImpossibleSizesAreRefusedBeforeTheyAreRead) {
   WriteFileAtomic(w / "huge.png", std::string("\x89PNG\r\n\x1a\n", 8) + Chunk("IHDR", ihdr) + Chunk("IEND", ""));
   Refused("position -i " + (w / "huge.png").string() + " --design " + Mono().string() + " --out " + (w / "p").string(),
           "huge.png");
-  Refused("unwrap --model " + Mono().string() + " --input " + (w / "huge.png").string() + " --out " + (w / "u").string(),
-          "huge.png");
+  Refused(
+      "unwrap --model " + Mono().string() + " --input " + (w / "huge.png").string() + " --out " + (w / "u").string(),
+      "huge.png");
   // An option that would make a library allocate without bound, and a ground-truth image of the wrong size.
   Refused("depth --dataset " + Street().string() + " --num-disparities 1024000 --out " + (w / "d").string(),
           "--num-disparities", 20);
@@ -198,7 +199,8 @@ TEST_F(Hardening, FilesWithImpossibleSizesAreRefusedBeforeTheyAreRead) {
     const auto m = nlohmann::json::parse(ReadFile(w / "street" / "dataset.json"));
     const auto exr = w / "street" / m["frames"][0]["views"][0]["ground_truth"]["exr"].get<std::string>();
     const std::vector<float> z(8 * 6 * 12, 1.0f);
-    io::WriteExr(exr, 8, 6, {"Z", "P.X", "P.Y", "P.Z", "N.X", "N.Y", "N.Z", "id", "mask", "M.X", "M.Y", "M.Z"}, z.data(), {});
+    io::WriteExr(exr, 8, 6, {"Z", "P.X", "P.Y", "P.Z", "N.X", "N.Y", "N.Z", "id", "mask", "M.X", "M.Y", "M.Z"},
+                 z.data(), {});
     Refused("depth --dataset " + (w / "street" / "dataset.json").string() + " --out " + (w / "d").string(),
             "the ground truth is 8 x 6");
   }
@@ -241,9 +243,15 @@ TEST_F(Hardening, AbsurdModelsManifestsAndTablesAreRefusedByName) {
     return (w / name).string();
   };
   const std::string input = " --input " + Image().string() + " --out " + (w / "u").string();
-  Refused("unwrap --model " + model("zero.json", [](auto* c) { (*c)["polynomial"]["poly"] = {0, 0, 0, 0, 0}; }) + input,
+  Refused("unwrap --model " +
+              model("zero.json",
+                    [](auto* c) {
+                      (*c)["polynomial"]["poly"] = {0, 0, 0, 0, 0};
+                    }) +
+              input,
           "a0 must be non-zero");
-  Refused("unwrap --model " + model("far.json", [](auto* c) { (*c)["polynomial"]["cx"] = 1e9; }) + input, "far outside");
+  Refused("unwrap --model " + model("far.json", [](auto* c) { (*c)["polynomial"]["cx"] = 1e9; }) + input,
+          "far outside");
   Refused("unwrap --model " + model("huge.json", [](auto* c) { (*c)["polynomial"]["c"] = 1e308; }) + input, "affine");
   {
     std::string text = cal.dump();
@@ -261,17 +269,25 @@ TEST_F(Hardening, AbsurdModelsManifestsAndTablesAreRefusedByName) {
     return (w / name / "dataset.json").string();
   };
   const std::string out = " --out " + (w / "c").string();
-  Refused("calibrate --dataset " + variant("abs", [](auto* m) { (*m)["frames"][0]["views"][0]["image"] = "/etc/passwd"; }) + out,
+  Refused("calibrate --dataset " +
+              variant("abs", [](auto* m) { (*m)["frames"][0]["views"][0]["image"] = "/etc/passwd"; }) + out,
           "absolute");
-  Refused("calibrate --dataset " + variant("up", [](auto* m) { (*m)["frames"][0]["views"][0]["image"] = "../../x.png"; }) + out,
+  Refused("calibrate --dataset " +
+              variant("up", [](auto* m) { (*m)["frames"][0]["views"][0]["image"] = "../../x.png"; }) + out,
           "leaves the file's folder");
   Refused("calibrate --dataset " + variant("key", [](auto* m) { (*m)["framez"] = 1; }) + out, "unknown key 'framez'");
   Refused("calibrate --dataset " + variant("ver", [](auto* m) { (*m)["version"] = 9; }) + out, "version");
   Refused("calibrate --dataset " + variant("ids", [](auto* m) { (*m)["frames"][1]["id"] = 0; }) + out, "appears twice");
-  Refused("calibrate --dataset " + variant("board", [](auto* m) { (*m)["boards"][0]["inner_corners"] = {1000000000, 5}; }) + out,
+  Refused("calibrate --dataset " +
+              variant("board",
+                      [](auto* m) {
+                        (*m)["boards"][0]["inner_corners"] = {1000000000, 5};
+                      }) +
+              out,
           "inner_corners");
   // Corner tables: a row given twice.
-  WriteFileAtomic(w / "twice.csv", "image,corner,board_x_mm,board_y_mm,u_px,v_px\na.png,0,0,0,10,10\na.png,0,0,0,10,10\n");
+  WriteFileAtomic(w / "twice.csv",
+                  "image,corner,board_x_mm,board_y_mm,u_px,v_px\na.png,0,0,0,10,10\na.png,0,0,0,10,10\n");
   Refused("calibrate --corners " + (w / "twice.csv").string() + " --size 640x480" + out, "twice.csv:3");
   // Scenes: a negative seed, two units of one name.
   std::string board = ReadFile(kScenes + "/reference_board.yaml");
@@ -304,8 +320,9 @@ TEST_F(Hardening, OptionsAndCommandsAreNamedInOneLine) {
           "--scene-distance");
   Refused("capture --replay " + Mono().parent_path().string() + "/images --region 0x0+0+0 --out " + (w / "c").string(),
           "--region");
-  Refused("position -i " + Image().string() + " --design " + Mono().string() + " --search inf --out " + (w / "p").string(),
-          "--search");
+  Refused(
+      "position -i " + Image().string() + " --design " + Mono().string() + " --search inf --out " + (w / "p").string(),
+      "--search");
 }
 
 }  // namespace

@@ -97,9 +97,9 @@ TEST(CaptureCli, RenderedFramesCrossTheProtocolIntoADatasetThatCalibratesAndUnwr
   const auto c = nlohmann::json::parse(ReadFile(dir / "cal/calibration.json"));
   for (const auto& d : c["detection"]) EXPECT_TRUE(d["complete"].get<bool>()) << d.dump();
   EXPECT_LT(c["polynomial"]["rms_px"].get<double>(), 0.3);
-  const auto uw = test::Hovs("-q unwrap --model " + (dir / "cal/calibration.json").string() +
-                             " --layout article --input " + (dir / "cap/dataset.json").string() + " --out " +
-                             (dir / "views").string());
+  const auto uw =
+      test::Hovs("-q unwrap --model " + (dir / "cal/calibration.json").string() + " --layout article --input " +
+                 (dir / "cap/dataset.json").string() + " --out " + (dir / "views").string());
   ASSERT_EQ(uw.exit_code, 0) << uw.output;
   EXPECT_EQ(nlohmann::json::parse(ReadFile(dir / "views/views.json"))["frames"].size(), 5u);
 
@@ -133,8 +133,9 @@ TEST(CaptureCli, RenderedFramesCrossTheProtocolIntoADatasetThatCalibratesAndUnwr
   // 1 % packet loss (the simulator does not resend; at 1375 x 1100, about 1000 packets a frame, few frames
   // survive): nothing corrupt is written, incomplete frames are listed, the time limit ends the capture; when no
   // frame survived at all, the capture ends with one error line and a manifest whose status says so.
-  const auto lossy = test::Hovs("-q capture --simulate " + (dir / "set/dataset.json").string() +
-                                " --simulate-loss 0.01 --frames 2 --seconds 4 --timeout 10 --out " + (dir / "lossy").string());
+  const auto lossy =
+      test::Hovs("-q capture --simulate " + (dir / "set/dataset.json").string() +
+                 " --simulate-loss 0.01 --frames 2 --seconds 4 --timeout 10 --out " + (dir / "lossy").string());
   const auto ml = nlohmann::json::parse(ReadFile(dir / "lossy/dataset.json"));
   if (lossy.exit_code != 0) {
     EXPECT_EQ(lossy.exit_code, 2) << lossy.output;
@@ -157,22 +158,24 @@ TEST(CaptureCli, RenderedFramesCrossTheProtocolIntoADatasetThatCalibratesAndUnwr
   // ends after --timeout without a complete frame, with one error line and a manifest whose status says so.
   const auto t_hang = std::chrono::steady_clock::now();
   const auto hang = test::Run("timeout -s KILL 60 " + std::string(HOVS_BINARY) + " -q capture --simulate " +
-                              (dir / "set/dataset.json").string() + " --simulate-loss 0.49 --frames 1 --timeout 3 --out " +
-                              (dir / "hang").string());
+                              (dir / "set/dataset.json").string() +
+                              " --simulate-loss 0.49 --frames 1 --timeout 3 --out " + (dir / "hang").string());
   EXPECT_EQ(hang.exit_code, 2) << hang.output;
   EXPECT_LT(std::chrono::duration<double>(std::chrono::steady_clock::now() - t_hang).count(), 30);
   EXPECT_NE(hang.output.find("no complete frame within 3 s"), std::string::npos) << hang.output;
   const auto mh = nlohmann::json::parse(ReadFile(dir / "hang/dataset.json"));
-  EXPECT_NE(mh["status"].get<std::string>().find("stopped by an error after 0 frames"), std::string::npos) << mh["status"];
+  EXPECT_NE(mh["status"].get<std::string>().find("stopped by an error after 0 frames"), std::string::npos)
+      << mh["status"];
 
   // Ctrl-C ends the capture with a valid manifest.
-  const auto intr = test::Run("timeout -s INT --preserve-status 4 " + std::string(HOVS_BINARY) +
-                                       " -q capture --simulate " + (dir / "set/dataset.json").string() +
-                                       " --frames 100000 --out " + (dir / "intr").string());
+  const auto intr =
+      test::Run("timeout -s INT --preserve-status 4 " + std::string(HOVS_BINARY) + " -q capture --simulate " +
+                (dir / "set/dataset.json").string() + " --frames 100000 --out " + (dir / "intr").string());
   EXPECT_EQ(intr.exit_code, 0) << intr.output;
   const auto mi = nlohmann::json::parse(ReadFile(dir / "intr/dataset.json"));
   EXPECT_NE(mi["status"].get<std::string>().find("interrupted"), std::string::npos) << mi["status"];
-  for (const auto& fr : mi["frames"]) EXPECT_TRUE(fs::exists(dir / "intr" / fr["views"][0]["image"].get<std::string>()));
+  for (const auto& fr : mi["frames"])
+    EXPECT_TRUE(fs::exists(dir / "intr" / fr["views"][0]["image"].get<std::string>()));
 
   // A full disk (simulated by a file-size limit: a write beyond it fails with EFBIG instead of killing the
   // process): one clear error, exit 2, the manifest valid and listing no frame, no partial image left behind.
@@ -197,8 +200,9 @@ TEST(CaptureCli, RenderedFramesCrossTheProtocolIntoADatasetThatCalibratesAndUnwr
   rejected("--camera 127.0.0.9 --out " + (dir / "none").string(), "not found");
   rejected("--simulate " + (dir / "set/dataset.json").string() + " --camera x --out " + (dir / "none").string(),
            "exactly one of");
-  rejected("--simulate " + (dir / "set/dataset.json").string() + " --pixel-format RGB10 --out " + (dir / "none").string(),
-           "unsupported pixel format");
+  rejected(
+      "--simulate " + (dir / "set/dataset.json").string() + " --pixel-format RGB10 --out " + (dir / "none").string(),
+      "unsupported pixel format");
   rejected("--simulate " + (dir / "set/dataset.json").string() + " --out " + (dir / "cap").string(), "not empty");
   rejected("--simulate " + (dir / "set/dataset.json").string() + " --timeout nan --out " + (dir / "none").string(),
            "--timeout");

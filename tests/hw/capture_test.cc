@@ -56,7 +56,8 @@ TEST(GigECapture, FramesCrossTheProtocolByteForByte) {
     }
     ASSERT_EQ(f->width, 688);
     ASSERT_EQ(f->height, 550);
-    EXPECT_EQ(f->data, sim.ServedFrame(FakeGigECamera::Stamp(f->data))) << "frame " << k << " differs from what was sent";
+    EXPECT_EQ(f->data, sim.ServedFrame(FakeGigECamera::Stamp(f->data)))
+        << "frame " << k << " differs from what was sent";
     EXPECT_GT(f->device_ns, last_ns);
     last_ns = f->device_ns;
     ++complete;
@@ -64,7 +65,7 @@ TEST(GigECapture, FramesCrossTheProtocolByteForByte) {
   cam->Stop();
   EXPECT_GE(complete, 11) << "more than one of twelve frames incomplete on a loopback";
   const auto st = cam->Stats();
-  EXPECT_GE(st.completed, static_cast<uint64_t>(complete));   // the stream may complete more before Stop
+  EXPECT_GE(st.completed, static_cast<uint64_t>(complete));  // the stream may complete more before Stop
   EXPECT_EQ(st.incomplete_seen, static_cast<uint64_t>(12 - complete));
 }
 
@@ -88,9 +89,10 @@ TEST(GigECapture, WithOnePercentPacketLossEveryFrameIsCompleteAndIdenticalOrCoun
   }
   cam->Stop();
   const auto st = cam->Stats();
-  std::printf("[ figure ] 1 %% GVSP loss, 256 x 200 Mono8: %d complete, %d incomplete; %llu packets missing, %llu resent\n",
-              complete, incomplete, static_cast<unsigned long long>(st.missing_packets),
-              static_cast<unsigned long long>(st.resent_packets));
+  std::printf(
+      "[ figure ] 1 %% GVSP loss, 256 x 200 Mono8: %d complete, %d incomplete; %llu packets missing, %llu resent\n",
+      complete, incomplete, static_cast<unsigned long long>(st.missing_packets),
+      static_cast<unsigned long long>(st.resent_packets));
   EXPECT_EQ(st.incomplete_seen, static_cast<uint64_t>(incomplete));
   EXPECT_GT(st.missing_packets + st.resent_packets, 0u) << "the simulator's loss did not happen";
   EXPECT_GT(incomplete, 0);

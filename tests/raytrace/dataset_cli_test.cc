@@ -84,7 +84,8 @@ TEST(Dataset, DepthSequenceMovesTheRigAndItsGroundTruth) {
     const Rigid3d world_from_rig = scenes::WorldFromRigAt(cfg, o, k);
     // The rig's centroid moves by k x 0.7 m along +y (it turns about itself).
     Vec3d c0 = Vec3d::Zero(), ck = Vec3d::Zero();
-    for (const auto& u : cfg.description.units) c0 += u.world_from_mirror.translation, ck += world_from_rig * u.world_from_mirror.translation;
+    for (const auto& u : cfg.description.units)
+      c0 += u.world_from_mirror.translation, ck += world_from_rig * u.world_from_mirror.translation;
     EXPECT_NEAR(((ck - c0) / 2.0 - Vec3d(0, 0.7 * k, 0)).norm(), 0.0, 1e-9);
     for (size_t u = 0; u < n_units; ++u) {
       const auto& v = fr["views"][u];
@@ -124,7 +125,7 @@ TEST(Dataset, ADepthSequenceDrivenIntoAnObjectIsRefusedBeforeRendering) {
     EXPECT_NE(std::string(e.what()).find("'parked_car'"), std::string::npos) << e.what();
   }
   EXPECT_FALSE(fs::exists(out));
-  o.count = 2;   // frames 0 and 1 stay clear of it
+  o.count = 2;  // frames 0 and 1 stay clear of it
   EXPECT_NO_THROW(scenes::WriteDepthSequence(cfg, o, out, {{"hovs", "test"}}));
 }
 
@@ -166,7 +167,8 @@ TEST(Dataset, CalibrationSetHasManifestImagesAndGroundTruth) {
 
 TEST(Dataset, StereoArucoPairsSeeTheBoardFromBothUnits) {
   auto cfg = scenes::LoadSceneConfig(std::string(HOVS_SOURCE_DIR) + "/scenes/reference_stereo.yaml");
-  for (auto& u : cfg.description.units) u.rig.camera = PinholeCamera<double>::FromPhysical(0.016, 4 * 4.54e-6, 688, 550);
+  for (auto& u : cfg.description.units)
+    u.rig.camera = PinholeCamera<double>::FromPhysical(0.016, 4 * 4.54e-6, 688, 550);
   cfg.render.samples = 1;
   scenes::DatasetOptions o = scenes::DatasetOptions::ForKind("stereo_aruco");
   o.count = 2;
@@ -187,7 +189,6 @@ TEST(Dataset, StereoArucoPairsSeeTheBoardFromBothUnits) {
       const auto side = nlohmann::json::parse(ReadFile(out / v["ground_truth"]["sidecar"].get<std::string>()));
       EXPECT_EQ(side["boards"][0]["corners"].size(), 100u);
       EXPECT_GE(side["boards"][0]["visible_corners"].get<int>(), 60) << v["image"];
-
     }
   }
   o.kind = "stereo_aruco";
@@ -277,9 +278,11 @@ TEST(CalibrateCli, CalibratesASyntheticSetAgainstGroundTruthAndRejectsBadInput) 
   ASSERT_EQ(jd["detection"].size(), 9u);
   EXPECT_TRUE(fs::exists(dir / "cal-det" / "figures" / "unit0_0000.png"));  // reprojection plot per image
   for (const auto& d : jd["detection"]) EXPECT_TRUE(d["complete"].get<bool>()) << d.dump();
-  std::printf("[ figure ] 1375 x 1100, 2 spp: detection RMS %.3f px from the exact corners, calibration RMS %.3f px, "
-              "mean ray angle %.4f deg\n", jd["detection_rms_to_truth_px"].get<double>(),
-              jd["polynomial"]["rms_px"].get<double>(), jd["ground_truth"]["mean_ray_angle_deg"].get<double>());
+  std::printf(
+      "[ figure ] 1375 x 1100, 2 spp: detection RMS %.3f px from the exact corners, calibration RMS %.3f px, "
+      "mean ray angle %.4f deg\n",
+      jd["detection_rms_to_truth_px"].get<double>(), jd["polynomial"]["rms_px"].get<double>(),
+      jd["ground_truth"]["mean_ray_angle_deg"].get<double>());
   EXPECT_LT(jd["detection_rms_to_truth_px"].get<double>(), 0.3);
   EXPECT_LT(jd["polynomial"]["rms_px"].get<double>(), 0.3);
   EXPECT_TRUE(fs::exists(dir / "cal-det" / "figures" / "error_map.png"));
@@ -288,19 +291,20 @@ TEST(CalibrateCli, CalibratesASyntheticSetAgainstGroundTruthAndRejectsBadInput) 
   const std::string unified_yaml = ReadFile(dir / "cal-det" / "unified.yaml");
   EXPECT_NE(unified_yaml.find("camera_matrix"), std::string::npos);
   EXPECT_NE(unified_yaml.find("distortion_coefficients"), std::string::npos);
-  const auto pano = test::Hovs("-q unwrap --model " + (dir / "cal-det" / "unified.yaml").string() + " --layout panorama -i " +
-                               (dir / "half" / "images").string() + " -o " + (dir / "pano").string());
+  const auto pano =
+      test::Hovs("-q unwrap --model " + (dir / "cal-det" / "unified.yaml").string() + " --layout panorama -i " +
+                 (dir / "half" / "images").string() + " -o " + (dir / "pano").string());
   ASSERT_EQ(pano.exit_code, 0) << pano.output;
   EXPECT_NE(ReadFile(dir / "pano" / "views.json").find("unified"), std::string::npos);
   // Visual positioning on one of the images: the unit is aligned, so the camera sits at the design's focus.
   const auto first_image = (dir / "half" / jd["detection"][0]["image"].get<std::string>()).string();
-  const auto pos = test::Hovs("-q position -i " + first_image + " --design " + (dir / "half" / "dataset.json").string() +
-                              " -o " + (dir / "pos").string());
+  const auto pos = test::Hovs("-q position -i " + first_image + " --design " +
+                              (dir / "half" / "dataset.json").string() + " -o " + (dir / "pos").string());
   ASSERT_EQ(pos.exit_code, 0) << pos.output;
   const auto jp = nlohmann::json::parse(ReadFile(dir / "pos" / "position.json"));
   for (int k = 0; k < 3; ++k) EXPECT_LT(std::abs(jp["camera_offset_mm"][k].get<double>()), 0.02) << jp.dump();
-  const auto pos_bad = test::Hovs("position -i " + first_image + " --design " + (dir / "set" / "dataset.json").string() +
-                                  " -o " + (dir / "pos-bad").string());
+  const auto pos_bad = test::Hovs("position -i " + first_image + " --design " +
+                                  (dir / "set" / "dataset.json").string() + " -o " + (dir / "pos-bad").string());
   EXPECT_EQ(pos_bad.exit_code, 2);
   EXPECT_NE(pos_bad.output.find("but the design's camera is 688x550"), std::string::npos) << pos_bad.output;
   EXPECT_FALSE(fs::exists(dir / "pos-bad"));
@@ -314,19 +318,22 @@ TEST(CalibrateCli, CalibratesASyntheticSetAgainstGroundTruthAndRejectsBadInput) 
   const std::string vmr = std::string(HOVS_SHARED_DIR) + "/data/vmr/reference_corners.csv";
   rejected("--corners " + vmr + " --size 1024by768", "expected WxH");
   rejected("--corners " + vmr + " --size 640x480", "lies outside the 640x480 image");
-  rejected("--corners " + vmr + " --size 1024x768 --dataset x.json", "exactly one of --corners, --dataset and --images");
+  rejected("--corners " + vmr + " --size 1024x768 --dataset x.json",
+           "exactly one of --corners, --dataset and --images");
   rejected("--images " + (dir / "set" / "images").string(), "needs --board");
   rejected("--images " + (dir / "set" / "images").string() + " --board 5x4x0.03", "larger than the 5x4 board");
   rejected("--images " + (dir / "set" / "images").string() + " --board 7x5", "expected COLSxROWSxSQUARE");
   rejected("--images " + (dir / "set" / "images").string() + " --board 7x5x0.03x9", "expected COLSxROWSxSQUARE");
   rejected("--corners " + vmr + " --size 1024x768x2", "expected WxH");
-  rejected("--corners " + vmr + " --size 1024x768 --corner-noise 0.5", "needs --truth-corners");   // was ignored
+  rejected("--corners " + vmr + " --size 1024x768 --corner-noise 0.5", "needs --truth-corners");  // was ignored
   // A corrupt ground-truth sidecar: named (it was an uncaught JSON exception, exit 3).
   fs::copy(dir / "set", dir / "set-bad", fs::copy_options::recursive);
   const auto sidecars = nlohmann::json::parse(ReadFile(dir / "set-bad" / "dataset.json"));
-  WriteFileAtomic(dir / "set-bad" / sidecars["frames"][0]["views"][0]["ground_truth"]["sidecar"].get<std::string>(), "{bad");
+  WriteFileAtomic(dir / "set-bad" / sidecars["frames"][0]["views"][0]["ground_truth"]["sidecar"].get<std::string>(),
+                  "{bad");
   rejected("--truth-corners --dataset " + (dir / "set-bad" / "dataset.json").string(), "not valid JSON at line 1");
-  rejected("--truth-corners --dataset " + (dir / "set" / "dataset.json").string() + " --corner-noise -1", "--corner-noise");
+  rejected("--truth-corners --dataset " + (dir / "set" / "dataset.json").string() + " --corner-noise -1",
+           "--corner-noise");
   rejected("--images " + (dir / "set" / "images").string() + " --board 7x5x0.03 --corner-refinement sharp",
            "corner_refinement must be 'edges' or 'subpix'");
   rejected("--corners /nonexistent.csv --size 1024x768", "/nonexistent.csv: file not found");
@@ -341,11 +348,13 @@ TEST(RenderCli, RendersAndRejectsBadInput) {
   fs::create_directories(dir);
   // A small scene: reference unit at low resolution, one board.
   std::string scene = ReadFile(std::string(HOVS_SOURCE_DIR) + "/scenes/reference_board.yaml");
-  const std::string cam = "camera: {focal_length: 0.016, pixel_pitch: 4.54e-6, width: 2750, height: 2200, lens_aperture: 0.020}";
+  const std::string cam =
+      "camera: {focal_length: 0.016, pixel_pitch: 4.54e-6, width: 2750, height: 2200, lens_aperture: 0.020}";
   scene.replace(scene.find(cam), cam.size(),
                 "camera: {focal_length: 0.016, pixel_pitch: 3.632e-5, width: 344, height: 275, lens_aperture: 0.020}");
   std::ofstream(dir / "small.yaml") << scene;
-  const auto ok = test::Hovs("-q render --scene " + (dir / "small.yaml").string() + " --out " + (dir / "out").string() + " --samples 1");
+  const auto ok = test::Hovs("-q render --scene " + (dir / "small.yaml").string() + " --out " + (dir / "out").string() +
+                             " --samples 1");
   ASSERT_EQ(ok.exit_code, 0) << ok.output;
   EXPECT_TRUE(fs::is_regular_file(dir / "out" / "dataset.json"));
   EXPECT_TRUE(fs::is_regular_file(dir / "out" / "truth" / "unit0.exr"));
@@ -355,15 +364,16 @@ TEST(RenderCli, RendersAndRejectsBadInput) {
     EXPECT_EQ(versions.value("embree", ""), RTC_VERSION_STRING);
     EXPECT_EQ(versions.value("opencv", ""), CV_VERSION);
     EXPECT_EQ(versions.value("openimageio", ""), std::to_string(OIIO_VERSION_MAJOR) + "." +
-                                                   std::to_string(OIIO_VERSION_MINOR) + "." +
-                                                   std::to_string(OIIO_VERSION_PATCH));
+                                                     std::to_string(OIIO_VERSION_MINOR) + "." +
+                                                     std::to_string(OIIO_VERSION_PATCH));
     EXPECT_EQ(versions.value("openexr", ""), OPENEXR_VERSION_STRING);
     EXPECT_NE(versions.value("aravis", ""), "") << versions;
   }
 
   const auto rejected = [&](const std::string& yaml, const std::string& needle, const std::string& extra = "") {
     std::ofstream(dir / "bad.yaml") << yaml;
-    const auto r = test::Hovs("render --scene " + (dir / "bad.yaml").string() + " --out " + (dir / "bad_out").string() + extra);
+    const auto r =
+        test::Hovs("render --scene " + (dir / "bad.yaml").string() + " --out " + (dir / "bad_out").string() + extra);
     EXPECT_EQ(r.exit_code, 2) << r.output;
     EXPECT_NE(r.output.find(needle), std::string::npos) << r.output;
     EXPECT_FALSE(fs::exists(dir / "bad_out"));
@@ -378,17 +388,18 @@ TEST(RenderCli, RendersAndRejectsBadInput) {
   rejected(scene, "--samples", " --samples 0");
   rejected(scene, "--seed", " --seed -1");
   std::string far = scene;
-  far.replace(far.find("position: [0, 0, 1.3]"), 21, "position: [0, 0, 1e300]");   // an Embree assertion once
+  far.replace(far.find("position: [0, 0, 1.3]"), 21, "position: [0, 0, 1e300]");  // an Embree assertion once
   rejected(far, "from the world origin");
   std::string huge = scene;
-  huge.replace(huge.find("squares: [8, 6]"), 15, "squares: [800000, 600000]");    // std::bad_alloc once
+  huge.replace(huge.find("squares: [8, 6]"), 15, "squares: [800000, 600000]");  // std::bad_alloc once
   rejected(huge, "at most 1000 x 1000");
   // A lens radius of 1e300 m put ray origins at infinity (an Embree assertion); a unit may not outrun the world.
   std::string lens = scene;
   lens.replace(lens.find("render: {samples: 16"), 20, "render: {lens_radius: 1e300, samples: 16");
   rejected(lens, "lens_radius");
   std::string fast = scene;
-  fast.replace(fast.find("pose: {position: [0, 0, 1.3]}"), 29, "pose: {position: [0, 0, 1.3]}\n    velocity: [1e300, 0, 0]");
+  fast.replace(fast.find("pose: {position: [0, 0, 1.3]}"), 29,
+               "pose: {position: [0, 0, 1.3]}\n    velocity: [1e300, 0, 0]");
   rejected(fast, "at most 1000 m/s");
   std::string away = scene;
   away.replace(away.find("pose: {position: [0, 0, 1.3]}"), 29,
@@ -398,8 +409,8 @@ TEST(RenderCli, RendersAndRejectsBadInput) {
   std::string pitch = scene;
   pitch.replace(pitch.find("pixel_pitch: 3.632e-5"), 21, "pixel_pitch: 1e-300");
   rejected(pitch, "pixel_pitch");
-  const auto no_frames = test::Hovs("dataset --scene " + (dir / "small.yaml").string() + " -n 0 --out " +
-                                    (dir / "bad_out").string());
+  const auto no_frames =
+      test::Hovs("dataset --scene " + (dir / "small.yaml").string() + " -n 0 --out " + (dir / "bad_out").string());
   EXPECT_EQ(no_frames.exit_code, 2) << no_frames.output;
   EXPECT_NE(no_frames.output.find("--count"), std::string::npos) << no_frames.output;
   EXPECT_FALSE(fs::exists(dir / "bad_out"));
@@ -407,9 +418,11 @@ TEST(RenderCli, RendersAndRejectsBadInput) {
   inside.insert(inside.find("    pose: {position: [0, 0, 1.3]}"), "    misalignment: {height_error: -0.2}\n");
   rejected(inside, "inside the mirror");
   std::string missing = scene;
-  missing.replace(missing.find("texture: {noise: {scale: 0.03"), 29, "texture: {image: {path: gone.png, width: 1, height: 1}, noise: {scale: 0.03");
+  missing.replace(missing.find("texture: {noise: {scale: 0.03"), 29,
+                  "texture: {image: {path: gone.png, width: 1, height: 1}, noise: {scale: 0.03");
   rejected(missing, "exactly one of");
-  const auto nofile = test::Hovs("render --scene " + (dir / "nope.yaml").string() + " --out " + (dir / "bad_out").string());
+  const auto nofile =
+      test::Hovs("render --scene " + (dir / "nope.yaml").string() + " --out " + (dir / "bad_out").string());
   EXPECT_EQ(nofile.exit_code, 2);
   EXPECT_NE(nofile.output.find("scene file not found"), std::string::npos);
   fs::remove_all(dir.parent_path());

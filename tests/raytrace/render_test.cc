@@ -35,8 +35,8 @@ SceneConfig BoardScene(bool misaligned) {
   SceneConfig cfg = scenes::LoadSceneConfig(std::string(HOVS_SOURCE_DIR) + "/scenes/reference_board.yaml");
   if (misaligned) {
     auto& rig = cfg.description.units[0].rig;
-    rig.cam_from_mirror = scenes::MisalignedCamFromMirror(rig.mirror, Vec3d(1.0 * kDeg, 0.3 * kDeg, 0),
-                                                          Vec3d(0.001, -0.0005, 0), 0.001);
+    rig.cam_from_mirror =
+        scenes::MisalignedCamFromMirror(rig.mirror, Vec3d(1.0 * kDeg, 0.3 * kDeg, 0), Vec3d(0.001, -0.0005, 0), 0.001);
   }
   return cfg;
 }
@@ -57,7 +57,8 @@ raytrace::RenderOptions::Region CornerRegion(const std::vector<scenes::CornerTru
     x0 = std::min(x0, c.pixel.x()), y0 = std::min(y0, c.pixel.y());
     x1 = std::max(x1, c.pixel.x()), y1 = std::max(y1, c.pixel.y());
   }
-  return {static_cast<int>(x0) - pad, static_cast<int>(y0) - pad, static_cast<int>(x1) + pad, static_cast<int>(y1) + pad};
+  return {static_cast<int>(x0) - pad, static_cast<int>(y0) - pad, static_cast<int>(x1) + pad,
+          static_cast<int>(y1) + pad};
 }
 
 class GroundTruth : public ::testing::TestWithParam<bool> {};
@@ -101,7 +102,8 @@ TEST(Render, CornersFoundInANoiseFreeRenderMatchTheGroundTruth) {
     for (int y = 0; y < f.height; ++y)
       for (int x = 0; x < f.width; ++x) grey.at<float>(y, x) = f.rgb[3 * (static_cast<size_t>(y) * f.width + x)];
     std::vector<cv::Point2f> pts;
-    for (const auto& c : corners) pts.emplace_back(static_cast<float>(c.pixel.x() + 0.6), static_cast<float>(c.pixel.y() - 0.4));
+    for (const auto& c : corners)
+      pts.emplace_back(static_cast<float>(c.pixel.x() + 0.6), static_cast<float>(c.pixel.y() - 0.4));
     cv::cornerSubPix(grey, pts, cv::Size(4, 4), cv::Size(-1, -1),
                      cv::TermCriteria(cv::TermCriteria::EPS + cv::TermCriteria::COUNT, 200, 1e-5));
     double sum2 = 0;
@@ -135,8 +137,10 @@ TEST(Render, CornersFoundInANoiseFreeRenderMatchTheGroundTruth) {
     int from_edges = 0;
     for (size_t k = 0; k < grid.size(); ++k) se += (*grid[k] - truth[k]).squaredNorm(), from_edges += refined[k];
     const double rms_edges = std::sqrt(se / grid.size());
-    std::printf("[ figure ] corner RMS (from the board's edges vs ground truth, 64 spp, %s rig): %.4f px, %d of %zu "
-                "corners from edges\n", misaligned ? "misaligned" : "aligned", rms_edges, from_edges, grid.size());
+    std::printf(
+        "[ figure ] corner RMS (from the board's edges vs ground truth, 64 spp, %s rig): %.4f px, %d of %zu "
+        "corners from edges\n",
+        misaligned ? "misaligned" : "aligned", rms_edges, from_edges, grid.size());
     EXPECT_EQ(from_edges, static_cast<int>(grid.size()));
     EXPECT_LE(rms_edges, 0.05) << (misaligned ? "misaligned" : "aligned");
     EXPECT_LT(rms_edges, rms);
@@ -167,7 +171,7 @@ TEST(Render, RangePointAndNormalChannelsOfAPlaneAreAnalytic) {
       const double range = (X - unit.world_from_mirror.translation).norm();
       worst_rel = std::max(worst_rel, std::abs(g[0] - range) / range);
       worst_point = std::max(worst_point, (Vec3d(g[1], g[2], g[3]) - X).norm());
-      const Vec3d facing = dw.dot(n) < 0 ? n : Vec3d(-n);   // the normal channel faces the ray
+      const Vec3d facing = dw.dot(n) < 0 ? n : Vec3d(-n);  // the normal channel faces the ray
       worst_normal = std::max(worst_normal, (Vec3d(g[4], g[5], g[6]) - facing).norm());
       EXPECT_EQ(g[8], 1.0f);
       ++checked;
@@ -256,7 +260,8 @@ TEST(Render, ThinLensDefocusAndMotionBlurSoftenTheImage) {
   const int instants = 16;
   for (int k = 0; k < instants; ++k) {
     SceneConfig at = cfg;
-    at.description.units[0].world_from_mirror = cfg.description.units[0].WorldFromMirrorAt((k + 0.5) * exposure / instants);
+    at.description.units[0].world_from_mirror =
+        cfg.description.units[0].WorldFromMirrorAt((k + 0.5) * exposure / instants);
     at.description.units[0].angular_velocity = Vec3d::Zero();
     const auto f = raytrace::Render(RayScene(at.description), raytrace::ViewCamera::Unit(0), ro);
     for (size_t i = 0; i < mean.size(); ++i) mean[i] += f.rgb[i] / instants;
@@ -282,10 +287,10 @@ TEST(Sensor, BayerNoiseAndVignettingDoWhatTheySay) {
   int ch = 0;
   auto out = raytrace::ApplySensor(f, s, 1, &ch);
   ASSERT_EQ(ch, 1);
-  EXPECT_FLOAT_EQ(out[0], 0.8f);                  // R at (0, 0)
-  EXPECT_FLOAT_EQ(out[1], 0.4f);                  // G at (1, 0)
-  EXPECT_FLOAT_EQ(out[f.width], 0.4f);            // G at (0, 1)
-  EXPECT_FLOAT_EQ(out[f.width + 1], 0.2f);        // B at (1, 1)
+  EXPECT_FLOAT_EQ(out[0], 0.8f);            // R at (0, 0)
+  EXPECT_FLOAT_EQ(out[1], 0.4f);            // G at (1, 0)
+  EXPECT_FLOAT_EQ(out[f.width], 0.4f);      // G at (0, 1)
+  EXPECT_FLOAT_EQ(out[f.width + 1], 0.2f);  // B at (1, 1)
   // Shot + read noise: the spread matches the electron statistics; the seed makes it repeatable.
   s = {};
   s.full_well = 10000, s.read_noise = 5;
@@ -353,7 +358,8 @@ TEST(Boards, ArucoTextureMatchesTheCornerTruth) {
   cv::Mat img(tex.height, tex.width, CV_8U);
   for (int y = 0; y < tex.height; ++y)
     for (int x = 0; x < tex.width; ++x)
-      img.at<uint8_t>(y, x) = static_cast<uint8_t>(std::lround(255 * tex.pixels[3 * (static_cast<size_t>(y) * tex.width + x)]));
+      img.at<uint8_t>(y, x) =
+          static_cast<uint8_t>(std::lround(255 * tex.pixels[3 * (static_cast<size_t>(y) * tex.width + x)]));
   std::vector<std::vector<cv::Point2f>> found;
   std::vector<int> ids;
   cv::aruco::detectMarkers(img, cv::aruco::getPredefinedDictionary(cv::aruco::DICT_6X6_250), found, ids);
@@ -364,7 +370,8 @@ TEST(Boards, ArucoTextureMatchesTheCornerTruth) {
   for (size_t m = 0; m < ids.size(); ++m)
     for (int k = 0; k < 4; ++k) {
       const Vec2d xy = truth.at(4 * ids[m] + k);
-      const double u = (xy.x() / spec.Width() + 0.5) * tex.width - 0.5, v = (0.5 - xy.y() / spec.Height()) * tex.height - 0.5;
+      const double u = (xy.x() / spec.Width() + 0.5) * tex.width - 0.5,
+                   v = (0.5 - xy.y() / spec.Height()) * tex.height - 0.5;
       worst = std::max(worst, std::hypot(found[m][k].x - u, found[m][k].y - v));
     }
   EXPECT_LT(worst, 1.0) << "texture pixels";
@@ -386,7 +393,9 @@ TEST(SceneConfig, RejectsBadInput) {
   };
   EXPECT_NO_THROW(scenes::ParseSceneConfig(unit, "ok.yaml", "."));
   expect(unit + "lights: []\n", "unknown key 'lights'");
-  expect(unit + "objects:\n  - {type: plane, pose: {position: [1, 0, 1]}, size: [1, 1], texture: {image: {path: nope.png, width: 1, height: 1}}}\n",
+  expect(unit +
+             "objects:\n  - {type: plane, pose: {position: [1, 0, 1]}, size: [1, 1], texture: {image: {path: nope.png, "
+             "width: 1, height: 1}}}\n",
          "texture file not found");
   expect(unit + "objects:\n  - {type: sphere}\n", "unknown object type 'sphere'");
   expect(unit + "render: {samples: 0}\n", "samples");
@@ -394,19 +403,23 @@ TEST(SceneConfig, RejectsBadInput) {
   std::string f0 = unit;
   f0.replace(f0.find("focal_length: 0.016"), 19, "focal_length: 0.0");
   expect(f0, "must be positive");
-  expect(std::string(unit).insert(unit.find("    pose"), "    misalignment: {height_error: -0.2}\n"), "inside the mirror");
-  expect(unit + "objects:\n  - {type: plane, pose: {position: [1, 0, 1], look_at: [2e4, 0, 1]}, size: [1, 1], "
-                "texture: {solid: [1, 1, 1]}}\n",
+  expect(std::string(unit).insert(unit.find("    pose"), "    misalignment: {height_error: -0.2}\n"),
+         "inside the mirror");
+  expect(unit +
+             "objects:\n  - {type: plane, pose: {position: [1, 0, 1], look_at: [2e4, 0, 1]}, size: [1, 1], "
+             "texture: {solid: [1, 1, 1]}}\n",
          "from the world origin");
-  expect(unit + "objects:\n  - {type: plane, pose: {position: [1, 0, 1]}, size: [1, 1], "
-                "texture: {checker: {squares: [0, 3], square: 0.1}}}\n",
+  expect(unit +
+             "objects:\n  - {type: plane, pose: {position: [1, 0, 1]}, size: [1, 1], "
+             "texture: {checker: {squares: [0, 3], square: 0.1}}}\n",
          "at least 1 x 1 squares");
   // Objects that pass through a unit, or enclose it: a wall through its axis, the ground between its camera and
   // its mirror (F1 1.3 m up, the camera 0.13 m below), a box around it, a box cutting its camera body. A box
   // beside it and the ground below it are fine.
   const auto object = [&](const std::string& o) { return unit + "objects:\n  - " + o + "\n"; };
   const std::string solid = "texture: {solid: [1, 1, 1]}}";
-  expect(object("{type: plane, name: wall, pose: {position: [0, 0, 1.3], rotation_deg: [0, 90, 0]}, size: [2, 2], " + solid),
+  expect(object("{type: plane, name: wall, pose: {position: [0, 0, 1.3], rotation_deg: [0, 90, 0]}, size: [2, 2], " +
+                solid),
          "object 'wall' passes through unit 'unit0'");
   expect(object("{type: ground, name: floor, height: 1.22, " + solid), "object 'floor' passes through unit 'unit0'");
   expect(object("{type: box, name: crate, pose: {position: [0, 0, 0]}, size: [1, 1, 2], " + solid),
@@ -438,7 +451,7 @@ TEST(RayScene, RejectsAWorldBeyondSinglePrecision) {
     }
   };
   raytrace::SceneDescription wide = base.description;
-  wide.rects[0].width = 3 * raytrace::kWorldExtent;   // its corners reach past the extent, its centre does not
+  wide.rects[0].width = 3 * raytrace::kWorldExtent;  // its corners reach past the extent, its centre does not
   expect(wide, "'wall'");
   raytrace::SceneDescription big_mirror = base.description;
   big_mirror.units[0].rig.mirror.a = 1e300;
@@ -478,7 +491,7 @@ TEST(Render, ThinLensAndMotionBlurRaysAreTheCoresGeometry) {
   }
   tau[0] = 0;
   for (const double lens : {0.0, 0.003}) {
-    for (const int kind : {0, 1, 2}) {   // still, moving, still with lens distortion
+    for (const int kind : {0, 1, 2}) {  // still, moving, still with lens distortion
       const bool blur = kind == 1;
       const RayScene& scene = kind == 0 ? still : kind == 1 ? moving : distorted;
       const auto& unit = scene.description().units[0];
@@ -498,11 +511,12 @@ TEST(Render, ThinLensAndMotionBlurRaysAreTheCoresGeometry) {
         Vec3d bearing;
         ASSERT_TRUE(cam.CamFromImg(Vec2d(us[i], vs[i]), &bearing));
         const Vec3d origin_cam(lens * dx[i], lens * dy[i], 0);
-        const Vec3d dir_cam = lens > 0 ? Vec3d((bearing * (ro.focus_distance / bearing.z()) - origin_cam).normalized())
-                                       : bearing;
+        const Vec3d dir_cam =
+            lens > 0 ? Vec3d((bearing * (ro.focus_distance / bearing.z()) - origin_cam).normalized()) : bearing;
         const Rigid3d world_from_mirror = unit.WorldFromMirrorAt(blur ? tau[i] : 0.0);
         Vec3d M, d, o_world, d_world;
-        const bool hit = unit.rig.ReflectCameraRay(mirror_from_cam * origin_cam, mirror_from_cam.Rotate(dir_cam), &M, &d);
+        const bool hit =
+            unit.rig.ReflectCameraRay(mirror_from_cam * origin_cam, mirror_from_cam.Rotate(dir_cam), &M, &d);
         if (hit) {
           o_world = world_from_mirror * M, d_world = world_from_mirror.Rotate(d);
           ++on_mirror;
@@ -569,8 +583,8 @@ TEST(Render, ThinLensAndMotionBlurRaysAreTheCoresGeometry) {
   EXPECT_THROW(raytrace::SampleRays(still, raytrace::ViewCamera::Unit(0), {}, static_cast<int>(many.size()),
                                     many.data(), many.data(), nullptr, nullptr, nullptr, &b),
                Error);
-  EXPECT_THROW(raytrace::SampleRays(still, raytrace::ViewCamera::Unit(0), {}, 1, many.data(), many.data(),
-                                    many.data(), nullptr, nullptr, &b),
+  EXPECT_THROW(raytrace::SampleRays(still, raytrace::ViewCamera::Unit(0), {}, 1, many.data(), many.data(), many.data(),
+                                    nullptr, nullptr, &b),
                Error);
 }
 
@@ -681,7 +695,8 @@ TEST(Render, UnderMotionBlurTheCamerasOwnReflectionStaysSharp) {
   // A stereo rig moving as one (both units at the same velocity): each unit sees the other's mirror, mount and
   // body at rest relative to it, so they too stay sharp in its blurred frame.
   SceneConfig pair = scenes::LoadSceneConfig(std::string(HOVS_SOURCE_DIR) + "/scenes/reference_stereo.yaml");
-  for (auto& u : pair.description.units) u.rig.camera = PinholeCamera<double>::FromPhysical(0.016, 4.54e-6 * 5, 550, 440);
+  for (auto& u : pair.description.units)
+    u.rig.camera = PinholeCamera<double>::FromPhysical(0.016, 4.54e-6 * 5, 550, 440);
   const RayScene pair_still(pair.description);
   for (auto& u : pair.description.units) u.velocity = Vec3d(3, 1, 0.2);
   const RayScene pair_moving(pair.description);
@@ -725,13 +740,12 @@ TEST(RayScene, AMovingUnitsOwnRaysMeetItsPartsWhereAStillUnitsDo) {
   const double h = 0.7 * u.rig.occluder_radius, L = u.body_length;
   // (origin, target) in the camera frame: the body's faces +x, -x, +y, -y and bottom, then the lens face and,
   // from the mirror frame, the mount ring from below.
-  std::vector<std::pair<Vec3d, Vec3d>> cam_rays = {
-      {Vec3d(3 * h, 0.2 * h, -0.4 * L), Vec3d(h, 0.1 * h, -0.5 * L)},
-      {Vec3d(-3 * h, -0.2 * h, -0.6 * L), Vec3d(-h, 0, -0.5 * L)},
-      {Vec3d(0.3 * h, 3 * h, -0.5 * L), Vec3d(0, h, -0.3 * L)},
-      {Vec3d(-0.1 * h, -3 * h, -0.2 * L), Vec3d(0.2 * h, -h, -0.7 * L)},
-      {Vec3d(0.1 * h, 0.2 * h, -3 * L), Vec3d(0, 0, -L)},
-      {Vec3d(0.2 * h, 0.1 * h, 0.05), Vec3d(0.3 * h, -0.2 * h, 0)}};
+  std::vector<std::pair<Vec3d, Vec3d>> cam_rays = {{Vec3d(3 * h, 0.2 * h, -0.4 * L), Vec3d(h, 0.1 * h, -0.5 * L)},
+                                                   {Vec3d(-3 * h, -0.2 * h, -0.6 * L), Vec3d(-h, 0, -0.5 * L)},
+                                                   {Vec3d(0.3 * h, 3 * h, -0.5 * L), Vec3d(0, h, -0.3 * L)},
+                                                   {Vec3d(-0.1 * h, -3 * h, -0.2 * L), Vec3d(0.2 * h, -h, -0.7 * L)},
+                                                   {Vec3d(0.1 * h, 0.2 * h, -3 * L), Vec3d(0, 0, -L)},
+                                                   {Vec3d(0.2 * h, 0.1 * h, 0.05), Vec3d(0.3 * h, -0.2 * h, 0)}};
   raytrace::RayBatch b;
   const auto add = [&](const Vec3d& o_w, const Vec3d& target_w) {
     const int i = b.n++;
@@ -776,7 +790,7 @@ TEST(Render, AnExposureBeyondTheMotionHorizonIsRefused) {
   } catch (const Error& e) {
     EXPECT_NE(std::string(e.what()).find("exposure_time"), std::string::npos) << e.what();
   }
-  ro.exposure_time = 1.0;   // within it
+  ro.exposure_time = 1.0;  // within it
   EXPECT_NO_THROW(raytrace::Render(scene, raytrace::ViewCamera::Unit(0), ro));
 }
 
@@ -822,9 +836,9 @@ TEST(Render, SomethingBetweenTheCameraAndItsMountIsSeenInFrontOfIt) {
   const Vec3d dir2 = world_from_cam.Rotate(bearing.normalized());
   raytrace::Rect near_ring = plate;
   near_ring.object_id = 78;
-  near_ring.world_from_rect =
-      Rigid3d(Eigen::Quaterniond::FromTwoVectors(Vec3d::UnitZ(), -dir2), world_from_cam.translation + 0.97 * to_ring * dir2) *
-      off_centre;
+  near_ring.world_from_rect = Rigid3d(Eigen::Quaterniond::FromTwoVectors(Vec3d::UnitZ(), -dir2),
+                                      world_from_cam.translation + 0.97 * to_ring * dir2) *
+                              off_centre;
   near_ring.front.colour_a = {0.2f, 0.8f, 0.4f};
   // Without the plates nothing is in between: the camera rays past the rim skip Embree (RayScene::OwnMount).
   EXPECT_TRUE(RayScene(cfg.description).MountPathClear(0));
@@ -872,10 +886,10 @@ TEST(Render, SomethingAMovingUnitComesNearDuringTheExposureIsSeenInFrontOfItsMou
   Vec3d dir;
   ASSERT_TRUE(CornerRay(cfg, &world_from_cam, &dir));
   const Vec3d c = world_from_cam.translation;
-  ASSERT_GT(dir.z(), 0.5);   // the unit stands upright: the corner's ray goes up to the ring
-  const Vec3d at = c + (0.03 / dir.z()) * dir;   // the ray 3 cm above the camera
+  ASSERT_GT(dir.z(), 0.5);                      // the unit stands upright: the corner's ray goes up to the ring
+  const Vec3d at = c + (0.03 / dir.z()) * dir;  // the ray 3 cm above the camera
   ASSERT_LT(std::abs(at.x() - c.x()), 0.02);
-  raytrace::Rect plate;   // horizontal, 3 cm above the camera, x from c.x + 0.11 to c.x + 0.31
+  raytrace::Rect plate;  // horizontal, 3 cm above the camera, x from c.x + 0.11 to c.x + 0.31
   plate.object_id = 79;
   plate.world_from_rect = Rigid3d::Translation(Vec3d(c.x() + 0.21, at.y(), at.z()));
   plate.width = 0.2, plate.height = 0.1;
@@ -941,8 +955,8 @@ TEST(Render, RaysEndingOnTheMountRingAreNotCountedAsEmbreeRays) {
       }
       border += edge;
     }
-  ASSERT_GT(ring, 2000u);   // the image's corners, past the rim
-  ASSERT_EQ(f.rays, static_cast<uint64_t>(5) * f.width * f.height);   // 4 samples and the ground-truth ray
+  ASSERT_GT(ring, 2000u);                                            // the image's corners, past the rim
+  ASSERT_EQ(f.rays, static_cast<uint64_t>(5) * f.width * f.height);  // 4 samples and the ground-truth ray
   const double expected = static_cast<double>(f.rays) - 5.0 * static_cast<double>(ring);
   EXPECT_NEAR(static_cast<double>(f.embree_rays), expected, 4.0 * static_cast<double>(border))
       << "rays " << f.rays << ", ring pixels " << ring << ", border pixels " << border;
@@ -984,9 +998,9 @@ TEST(Texture, BatchTexturesAreTheScalarTexturesToTheBit) {
   board.colour_a = {0.1f, 0.1f, 0.1f}, board.colour_b = {0.9f, 0.8f, 0.7f}, board.margin = {1.0f, 0.5f, 0.25f};
   std::uniform_real_distribution<double> B(-0.2, 0.2);
   for (int i = 0; i < n; ++i) s[i] = B(rng), t[i] = B(rng);
-  s[1] = 0.03, t[1] = 0.0;   // on an edge between squares
+  s[1] = 0.03, t[1] = 0.0;  // on an edge between squares
   s[2] = 1e30, t[2] = 0.01;
-  s[3] = -0.135, t[3] = -0.105;   // the board's corner: inside
+  s[3] = -0.135, t[3] = -0.105;  // the board's corner: inside
   board.EvalInto(n, s.data(), t.data(), batch.data());
   int margin = 0, dark = 0, light = 0;
   for (int i = 0; i < n; ++i) {
@@ -1006,7 +1020,7 @@ TEST(Render, BatchColoursAgreeWithTheScalarTrace) {
   const RayScene scene(cfg.description);
   const auto& unit = scene.description().units[0];
   raytrace::RayBatch b;
-  raytrace::RayBatchF bf;   // the same rays in single precision (the renderer's colour samples)
+  raytrace::RayBatchF bf;  // the same rays in single precision (the renderer's colour samples)
   std::vector<float> rgb(3 * raytrace::RayBatch::kMax), rgb_f(rgb.size());
   int compared = 0, differ = 0, differ_f = 0;
   for (int y = 50; y < unit.rig.camera.height; y += 37) {
@@ -1030,8 +1044,7 @@ TEST(Render, BatchColoursAgreeWithTheScalarTrace) {
     scene.Colours(b, rgb.data());
     scene.Colours(bf, rgb_f.data());
     for (int i = 0; i < b.n; ++i) {
-      const raytrace::Hit h =
-          scene.Trace(Vec3d(b.ox[i], b.oy[i], b.oz[i]), Vec3d(b.dx[i], b.dy[i], b.dz[i]), 1e-5, 0);
+      const raytrace::Hit h = scene.Trace(Vec3d(b.ox[i], b.oy[i], b.oz[i]), Vec3d(b.dx[i], b.dy[i], b.dz[i]), 1e-5, 0);
       ++compared;
       double worst = 0, worst_f = 0;
       for (int c = 0; c < 3; ++c) {
@@ -1100,7 +1113,7 @@ TEST(RayScene, RawPacketsHitWhatTheDoublePathHits) {
     }
   ASSERT_GT(o.size(), size_t(3000));
   int compared = 0, differ = 0, scalar_differ = 0;
-  std::map<unsigned, int> seen;   // geometry id -> rays
+  std::map<unsigned, int> seen;  // geometry id -> rays
   const int from[16] = {0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0};
   for (size_t p = 0; p + 16 <= o.size(); p += 16) {
     RayScene::RawPacket16 packet;
@@ -1138,7 +1151,7 @@ TEST(RayScene, RawPacketsHitWhatTheDoublePathHits) {
 // memory a frame's buffers already hold counts.
 TEST(Render, FramesLargerThanTheMemoryLeftAreRefusedWithTheirSize) {
   const std::size_t full = raytrace::FrameMemoryBytes(2750, 2200, true);
-  EXPECT_EQ(full, std::size_t(2750) * 2200 * 4 * 18);   // RGB, 12 ground-truth channels, the sensor image
+  EXPECT_EQ(full, std::size_t(2750) * 2200 * 4 * 18);  // RGB, 12 ground-truth channels, the sensor image
   EXPECT_EQ(raytrace::FrameMemoryBytes(2750, 2200, false), std::size_t(2750) * 2200 * 4 * 6);
   try {
     raytrace::CheckFrameMemory("render (unit u)", 2750, 2200, true, 0, full - 1);
@@ -1149,15 +1162,16 @@ TEST(Render, FramesLargerThanTheMemoryLeftAreRefusedWithTheirSize) {
       EXPECT_NE(what.find(needle), std::string::npos) << needle << " in: " << what;
   }
   EXPECT_NO_THROW(raytrace::CheckFrameMemory("render", 2750, 2200, true, 0, full));
-  EXPECT_NO_THROW(raytrace::CheckFrameMemory("render", 2750, 2200, true, full / 2, full / 2));   // reused buffers
+  EXPECT_NO_THROW(raytrace::CheckFrameMemory("render", 2750, 2200, true, full / 2, full / 2));  // reused buffers
   EXPECT_THROW(raytrace::CheckFrameMemory("render", 2750, 2200, true, full / 2, full / 2 - 1), Error);
-  EXPECT_NO_THROW(raytrace::CheckFrameMemory("render", 20000, 20000, true, 0, std::nullopt));   // unknown: no check
+  EXPECT_NO_THROW(raytrace::CheckFrameMemory("render", 20000, 20000, true, 0, std::nullopt));  // unknown: no check
   // This machine's figure exists (Linux) and is no more than its physical memory plus what the process keeps.
   const auto available = AvailableMemoryBytes();
   ASSERT_TRUE(available.has_value());
   EXPECT_GT(*available, std::size_t(0));
-  EXPECT_LE(*available, static_cast<std::size_t>(sysconf(_SC_PHYS_PAGES)) * static_cast<std::size_t>(sysconf(_SC_PAGE_SIZE)) +
-                            KeptLargePageBytes());
+  EXPECT_LE(*available,
+            static_cast<std::size_t>(sysconf(_SC_PHYS_PAGES)) * static_cast<std::size_t>(sysconf(_SC_PAGE_SIZE)) +
+                KeptLargePageBytes());
   // A render of a camera past it is refused by RenderInto itself, before the frame changes.
   SceneConfig cfg = BoardScene(false);
   cfg.description.units[0].rig.camera = PinholeCamera<double>::FromPhysical(0.016, 4.54e-6, 20000, 20000);
@@ -1192,7 +1206,7 @@ TEST(Render, FramesInReusedMemoryAreTheFramesInFreshMemory) {
            std::memcmp(a.rgb.data(), b.rgb.data(), a.rgb.size() * sizeof(float)) == 0 &&
            std::memcmp(a.truth.data.data(), b.truth.data.data(), a.truth.data.size() * sizeof(float)) == 0;
   };
-  const size_t previous_limit = KeepFreedLargePages(0);   // fresh memory for the references
+  const size_t previous_limit = KeepFreedLargePages(0);  // fresh memory for the references
   const auto fresh = raytrace::Render(after, raytrace::ViewCamera::Unit(0), second);
   const auto fresh_region = raytrace::Render(after, raytrace::ViewCamera::Unit(0), region);
   ASSERT_GE(fresh.truth.data.size() * sizeof(float), kLargeBytes);

@@ -55,7 +55,7 @@ raytrace::RenderOptions::Region SourceRegion(const RemapTable& t, int pad) {
 
 struct Comparison {
   double corner_rms = 0, corner_max = 0, psnr = 0, reference_corner_rms = 0;
-  double edges_rms = 0, edges_max = 0, reference_edges_rms = 0;   // corners from the board's edges
+  double edges_rms = 0, edges_max = 0, reference_edges_rms = 0;  // corners from the board's edges
 };
 
 // Unwraps the catadioptric render with `model` into `spec` and compares with the pinhole render.
@@ -90,10 +90,16 @@ Comparison CompareWithPinhole(const SceneConfig& cfg, const AnyModel& model, con
   remapper.Run({cata8.data(), cata.width, cata.height, size_t(cata.width) * 3, PixelFormat::kRgb8}, interp, &out);
   const Image8& u = out[0];
   if (std::getenv("HOVS_DUMP_UNWRAP")) {
-    io::WriteImage(std::string(std::getenv("HOVS_DUMP_UNWRAP")) + "_unwrap.png", u.width, u.height, 3,
-                         [&] { std::vector<float> f(u.data.size()); for (size_t k = 0; k < f.size(); ++k) f[k] = u.data[k] / 255.f; return f; }(), 8);
+    io::WriteImage(
+        std::string(std::getenv("HOVS_DUMP_UNWRAP")) + "_unwrap.png", u.width, u.height, 3,
+        [&] {
+          std::vector<float> f(u.data.size());
+          for (size_t k = 0; k < f.size(); ++k) f[k] = u.data[k] / 255.f;
+          return f;
+        }(),
+        8);
     io::WriteImage(std::string(std::getenv("HOVS_DUMP_UNWRAP")) + "_pinhole.png", pin.width, pin.height, 3,
-                         std::vector<float>(pin.rgb.begin(), pin.rgb.end()), 8);
+                   std::vector<float>(pin.rgb.begin(), pin.rgb.end()), 8);
   }
 
   Comparison c;
@@ -120,7 +126,7 @@ Comparison CompareWithPinhole(const SceneConfig& cfg, const AnyModel& model, con
   const auto& board = cfg.boards[0];
   const Rigid3d view_from_world = world_from_view.Inverse();
   std::vector<Vec2d> truth;
-  std::vector<int> cell;   // grid index (row-major over the board's inner corners) of each truth corner
+  std::vector<int> cell;  // grid index (row-major over the board's inner corners) of each truth corner
   const int cols = board.spec.squares_x - 1;
   for (const auto& [id, p] : board.spec.Corners()) {
     Vec2d uv(-1, -1);
@@ -175,7 +181,7 @@ ViewSpec BoardView(const SceneConfig& cfg) {
   ViewSpec v;
   v.name = "board";
   v.width = 480, v.height = 360, v.hfov_deg = 40;
-  v.yaw_deg = std::atan2(d.y(), d.x()) / kDeg + 2;   // off-centre on purpose
+  v.yaw_deg = std::atan2(d.y(), d.x()) / kDeg + 2;  // off-centre on purpose
   v.pitch_deg = std::atan2(d.z(), d.head<2>().norm()) / kDeg - 1.5;
   v.roll_deg = 4;
   return v;
@@ -191,8 +197,10 @@ void CheckAgainstPinhole(const SceneConfig& cfg, const AnyModel& model, const ch
   for (const auto& [name, c] : {std::pair<const char*, const Comparison&>{"bilinear", bl}, {"bicubic", bc}}) {
     std::printf("[ figure ] %s, %s: corners RMS %.4f px (max %.4f; in the pinhole render itself %.4f), PSNR %.2f dB\n",
                 what, name, c.corner_rms, c.corner_max, c.reference_corner_rms, c.psnr);
-    std::printf("[ figure ] %s, %s: corners from the edges RMS %.4f px (max %.4f; in the pinhole render itself "
-                "%.4f)\n", what, name, c.edges_rms, c.edges_max, c.reference_edges_rms);
+    std::printf(
+        "[ figure ] %s, %s: corners from the edges RMS %.4f px (max %.4f; in the pinhole render itself "
+        "%.4f)\n",
+        what, name, c.edges_rms, c.edges_max, c.reference_edges_rms);
     EXPECT_LE(c.corner_max, 0.2) << what << " " << name;
     // Measured from the edges the corners show the geometry itself (the same figure in the pinhole render):
     // a bar several times tighter than the issue's.
@@ -292,7 +300,8 @@ TEST(UnwrapGeometry, VerticalEdgeStaysVerticalInTheCylindricalPanorama) {
   const std::vector<uint8_t> rgb = ToRgb8(f);
   Remapper remapper(table);
   std::vector<Image8> out;
-  remapper.Run({rgb.data(), f.width, f.height, size_t(f.width) * 3, PixelFormat::kRgb8}, Interpolation::kBilinear, &out);
+  remapper.Run({rgb.data(), f.width, f.height, size_t(f.width) * 3, PixelFormat::kRgb8}, Interpolation::kBilinear,
+               &out);
 
   // Per row: the 50 % crossing between the dark and the light level, interpolated linearly. Rows whose
   // neighbourhood of the edge is not fully on the plane are skipped.
@@ -302,7 +311,7 @@ TEST(UnwrapGeometry, VerticalEdgeStaysVerticalInTheCylindricalPanorama) {
     const uint8_t* row = out[0].data.data() + size_t(v) * p.width * 3;
     const int c0 = int(expect_u) - 10, c1 = int(expect_u) + 10;
     const double dark = row[3 * c0 + 1], light = row[3 * c1 + 1];
-    if (light - dark < 150) continue;   // not on the plane (sky, ground or the plane's border)
+    if (light - dark < 150) continue;  // not on the plane (sky, ground or the plane's border)
     const double mid = 0.5 * (dark + light);
     for (int u = c0; u < c1; ++u) {
       const double a = row[3 * u + 1], b = row[3 * (u + 1) + 1];

@@ -28,16 +28,18 @@ TEST(UnwrapCli, ViewsFromAModelOrAMappingFileAreIdenticalAndBadInputIsRejected) 
   const std::string frame = (dir / "frame/dataset.json").string();
 
   // A small layout: two perspective views and a panorama.
-  std::ofstream(dir / "layout.yaml") << "views:\n"
-                                        "  - {name: a, yaw: 12, pitch: -33, hfov: 40, width: 320, height: 240}\n"
-                                        "  - {name: b, yaw: 200, pitch: -20, hfov: 60, width: 320, height: 200}\n"
-                                        "  - {name: p, type: cylindrical, width: 1440, height: 240, elevation_min: -60, elevation_max: -5}\n";
-  const auto built = Hovs("unwrap --model " + Src("scenes/reference_board.yaml") + " --layout " + (dir / "layout.yaml").string() +
-                          " --input " + frame + " --save-map " + (dir / "map.hmap").string() + " --truth-scene " +
-                          Src("scenes/reference_board.yaml") + " --truth-samples 1 -o " + (dir / "a").string());
+  std::ofstream(dir / "layout.yaml")
+      << "views:\n"
+         "  - {name: a, yaw: 12, pitch: -33, hfov: 40, width: 320, height: 240}\n"
+         "  - {name: b, yaw: 200, pitch: -20, hfov: 60, width: 320, height: 200}\n"
+         "  - {name: p, type: cylindrical, width: 1440, height: 240, elevation_min: -60, elevation_max: -5}\n";
+  const auto built =
+      Hovs("unwrap --model " + Src("scenes/reference_board.yaml") + " --layout " + (dir / "layout.yaml").string() +
+           " --input " + frame + " --save-map " + (dir / "map.hmap").string() + " --truth-scene " +
+           Src("scenes/reference_board.yaml") + " --truth-samples 1 -o " + (dir / "a").string());
   ASSERT_EQ(built.exit_code, 0) << built.output;
-  const auto loaded = Hovs("--quiet unwrap --map " + (dir / "map.hmap").string() + " --input " + frame + " -o " +
-                           (dir / "b").string());
+  const auto loaded =
+      Hovs("--quiet unwrap --map " + (dir / "map.hmap").string() + " --input " + frame + " -o " + (dir / "b").string());
   ASSERT_EQ(loaded.exit_code, 0) << loaded.output;
   for (const char* v : {"a", "b", "p"}) {
     const std::string rel = std::string("frame0/") + v + ".png";
@@ -56,8 +58,8 @@ TEST(UnwrapCli, ViewsFromAModelOrAMappingFileAreIdenticalAndBadInputIsRejected) 
   // Polynomial model from OCamCalib's file.
   const auto rig = test::AlignedRig();
   WriteFileAtomic(dir / "calib_results.txt", calib::FormatOcamCalibResults(PolynomialFromCatadioptric(rig, 5)));
-  const auto poly = Hovs("--quiet unwrap --model " + (dir / "calib_results.txt").string() + " --layout panorama --input " +
-                         frame + " -o " + (dir / "c").string());
+  const auto poly = Hovs("--quiet unwrap --model " + (dir / "calib_results.txt").string() +
+                         " --layout panorama --input " + frame + " -o " + (dir / "c").string());
   ASSERT_EQ(poly.exit_code, 0) << poly.output;
   EXPECT_TRUE(fs::exists(dir / "c/frame0/panorama.png"));
 
@@ -65,17 +67,19 @@ TEST(UnwrapCli, ViewsFromAModelOrAMappingFileAreIdenticalAndBadInputIsRejected) 
   std::string bytes = ReadFile(dir / "map.hmap");
   bytes[bytes.size() / 3] ^= 1;
   WriteFileAtomic(dir / "corrupt.hmap", bytes);
-  const auto corrupt = Hovs("unwrap --map " + (dir / "corrupt.hmap").string() + " --input " + frame + " -o " + (dir / "x").string());
+  const auto corrupt =
+      Hovs("unwrap --map " + (dir / "corrupt.hmap").string() + " --input " + frame + " -o " + (dir / "x").string());
   EXPECT_EQ(corrupt.exit_code, 2) << corrupt.output;
   EXPECT_NE(corrupt.output.find("corrupt.hmap"), std::string::npos) << corrupt.output;
   EXPECT_NE(corrupt.output.find("checksum"), std::string::npos) << corrupt.output;
   EXPECT_FALSE(fs::exists(dir / "x"));
 
-  const auto small = Hovs("--quiet render --scene " + Src("scenes/reference_board.yaml") + " --samples 1 -o " + (dir / "small").string());
+  const auto small = Hovs("--quiet render --scene " + Src("scenes/reference_board.yaml") + " --samples 1 -o " +
+                          (dir / "small").string());
   ASSERT_EQ(small.exit_code, 0);
   std::ofstream(dir / "tiny.pgm") << "P2\n4 3\n255\n0 1 2 3\n4 5 6 7\n8 9 10 11\n";
-  const auto wrong = Hovs("unwrap --map " + (dir / "map.hmap").string() + " --input " + (dir / "tiny.pgm").string() + " -o " +
-                          (dir / "y").string());
+  const auto wrong = Hovs("unwrap --map " + (dir / "map.hmap").string() + " --input " + (dir / "tiny.pgm").string() +
+                          " -o " + (dir / "y").string());
   EXPECT_EQ(wrong.exit_code, 2) << wrong.output;
   EXPECT_NE(wrong.output.find("2750 x 2200"), std::string::npos) << wrong.output;
   EXPECT_FALSE(fs::exists(dir / "y"));
@@ -88,8 +92,8 @@ TEST(UnwrapCli, ViewsFromAModelOrAMappingFileAreIdenticalAndBadInputIsRejected) 
   EXPECT_EQ(wrong_saved.exit_code, 2) << wrong_saved.output;
   EXPECT_FALSE(fs::exists(dir / "wrong.hmap"));
   EXPECT_FALSE(fs::exists(dir / "y"));
-  const auto resave = Hovs("unwrap --map " + (dir / "map.hmap").string() + " --save-map " + (dir / "copy.hmap").string() +
-                           " --input " + frame + " -o " + (dir / "y").string());
+  const auto resave = Hovs("unwrap --map " + (dir / "map.hmap").string() + " --save-map " +
+                           (dir / "copy.hmap").string() + " --input " + frame + " -o " + (dir / "y").string());
   EXPECT_EQ(resave.exit_code, 2) << resave.output;
   EXPECT_NE(resave.output.find("--save-map"), std::string::npos) << resave.output;
   EXPECT_FALSE(fs::exists(dir / "copy.hmap"));
@@ -108,8 +112,8 @@ TEST(UnwrapCli, ViewsFromAModelOrAMappingFileAreIdenticalAndBadInputIsRejected) 
   EXPECT_FALSE(fs::exists(dir / "y"));
 
   std::ofstream(dir / "wide.yaml") << "views:\n  - {name: w, hfov: 180}\n";
-  const auto wide = Hovs("unwrap --model " + Src("scenes/reference_board.yaml") + " --layout " + (dir / "wide.yaml").string() +
-                         " --input " + frame + " -o " + (dir / "z").string());
+  const auto wide = Hovs("unwrap --model " + Src("scenes/reference_board.yaml") + " --layout " +
+                         (dir / "wide.yaml").string() + " --input " + frame + " -o " + (dir / "z").string());
   EXPECT_EQ(wide.exit_code, 2) << wide.output;
   EXPECT_NE(wide.output.find("wide.yaml"), std::string::npos) << wide.output;
   EXPECT_NE(wide.output.find("180"), std::string::npos) << wide.output;

@@ -20,9 +20,7 @@ namespace {
 
 constexpr double kDeg = M_PI / 180;
 
-CatadioptricCamera<double> Rig() {
-  return test::AlignedRig();
-}
+CatadioptricCamera<double> Rig() { return test::AlignedRig(); }
 
 std::filesystem::path TempDir() {
   const auto d = std::filesystem::temp_directory_path() /
@@ -57,13 +55,13 @@ TEST(VirtualView, PerspectiveAndPanoramaRoundTrip) {
 TEST(VirtualView, PerspectiveLooksWhereYawAndPitchSayAndIsUpright) {
   const auto v = VirtualView<double>::Perspective(1201, 701, 60 * kDeg, 60 * kDeg, -30 * kDeg, 0);
   Vec3d b;
-  ASSERT_TRUE(v.MirrorFromImg(Vec2d(600, 350), &b));   // the principal point
+  ASSERT_TRUE(v.MirrorFromImg(Vec2d(600, 350), &b));  // the principal point
   EXPECT_NEAR(std::atan2(b.y(), b.x()), 60 * kDeg, 1e-12);
   EXPECT_NEAR(std::asin(b.z()), -30 * kDeg, 1e-12);
   Vec3d up, right;
   ASSERT_TRUE(v.MirrorFromImg(Vec2d(600, 0), &up));
   ASSERT_TRUE(v.MirrorFromImg(Vec2d(1200, 350), &right));
-  EXPECT_GT(up.z(), b.z());   // image rows go down in the world
+  EXPECT_GT(up.z(), b.z());  // image rows go down in the world
   // Right of the image is clockwise seen from above (azimuth decreases), as for a person looking out.
   EXPECT_LT(std::atan2(right.y(), right.x()), 60 * kDeg);
 }
@@ -119,7 +117,7 @@ TEST(RemapTable, PanoramaHasInvalidPixelsWhereTheMirrorIsNotSeen) {
   layout.name = "wide";
   ViewSpec pano;
   pano.name = "pano", pano.type = ViewProjection::kLongLat, pano.width = 720, pano.height = 400;
-  pano.elevation_min_deg = -89, pano.elevation_max_deg = 20;   // beyond both ends of the mirror's field
+  pano.elevation_min_deg = -89, pano.elevation_max_deg = 20;  // beyond both ends of the mirror's field
   layout.views.push_back(pano);
   const RemapTable t = BuildRemapTable(AnyModel::Exact(Rig()), layout, {});
   std::vector<float> x, y;
@@ -138,7 +136,7 @@ TEST(RemapTable, MinifyingTilesSampleThePyramid) {
   pano.name = "small", pano.type = ViewProjection::kCylindrical, pano.width = 360, pano.height = 120;
   layout.views.push_back(pano);
   const RemapTable t = BuildRemapTable(AnyModel::Exact(Rig()), layout, {});
-  EXPECT_GE(t.views[0].max_level, 1);   // 1 degree per column: several source pixels at the rim
+  EXPECT_GE(t.views[0].max_level, 1);  // 1 degree per column: several source pixels at the rim
   EXPECT_EQ(t.levels, t.views[0].max_level + 1);
   RemapOptions no_aa;
   no_aa.antialias = false;
@@ -183,7 +181,8 @@ TEST(RemapTable, AutomaticTileSizeIsChosenPerView) {
   a.DecodeView(0, &x64, &y64);
   c.DecodeView(0, &x32, &y32);
   double worst = 0;
-  for (size_t k = 0; k < x64.size(); ++k) worst = std::max(worst, std::hypot(double(x64[k]) - x32[k], double(y64[k]) - y32[k]));
+  for (size_t k = 0; k < x64.size(); ++k)
+    worst = std::max(worst, std::hypot(double(x64[k]) - x32[k], double(y64[k]) - y32[k]));
   EXPECT_LT(worst, 2.0 / 64 + 2e-3);
 }
 
@@ -285,7 +284,7 @@ TEST(MappingFile, EditedTilesWithAValidChecksumCannotReadOutsideTheFrame) {
   }
   uint32_t header_length = 0;
   std::memcpy(&header_length, body.data() + 12, 4);
-  const size_t tiles0 = 16 + header_length + 4 + 16;   // view 0's tiles follow its four counts
+  const size_t tiles0 = 16 + header_length + 4 + 16;  // view 0's tiles follow its four counts
   // View 0's first interp tile marked inside (the article view lies well inside the image).
   size_t at = 0;
   for (size_t k = 0; k < t.views[0].tiles.size(); ++k)
@@ -349,7 +348,8 @@ TEST(MappingFile, EditedTilesWithAValidChecksumCannotReadOutsideTheFrame) {
 }
 
 // Random interior coordinates of a row, in 16.16.
-kernels::RowCoords RandomRow(std::mt19937* rng, int n, int w, int h, std::vector<int32_t>* xs, std::vector<int32_t>* ys) {
+kernels::RowCoords RandomRow(std::mt19937* rng, int n, int w, int h, std::vector<int32_t>* xs,
+                             std::vector<int32_t>* ys) {
   std::uniform_real_distribution<double> X(3, w - 5), Y(3, h - 5);
   xs->resize(n), ys->resize(n);
   for (int i = 0; i < n; ++i) (*xs)[i] = int32_t(X(*rng) * 65536), (*ys)[i] = int32_t(Y(*rng) * 65536);
@@ -376,10 +376,10 @@ TEST(Kernels, VectorAndScalarAgreeBitForBit) {
       std::vector<int32_t> xs, ys;
       const int n = 33 + trial;
       kernels::RowCoords c = RandomRow(&rng, n, w, h, &xs, &ys);
-      if (trial % 2) {   // the polynomial form of interp tiles
+      if (trial % 2) {  // the polynomial form of interp tiles
         c.xs = c.ys = nullptr;
-        c.poly = {float((20 + trial) * 65536), 0.9f * 65536, 0.01f * 65536, float((30 + trial) * 65536), 0.3f * 65536,
-                  -0.002f * 65536};
+        c.poly = {float((20 + trial) * 65536), 0.9f * 65536, 0.01f * 65536,
+                  float((30 + trial) * 65536), 0.3f * 65536, -0.002f * 65536};
       }
       const std::string what = std::string(kernels::ToString(isa)) + " trial " + std::to_string(trial);
       std::vector<uint8_t> a(3 * n), b(3 * n);
@@ -414,7 +414,8 @@ TEST(Kernels, VectorAndScalarAgreeBitForBit) {
         for (int q = 0; q < 3; ++q) {
           const float u = 0.5f * T * q, v = 0.5f * T * r;
           t.x[3 * r + q] = x0 + xscale * (1.3f * u - 0.4f * v + 0.01f * u * v * 32 / T);
-          t.y[3 * r + q] = (large ? 30 : 50) + 0.5f * u + (large ? 0.9f : 1.1f) * v - 0.006f * u * u * 32 / T + 0.7f * trial;
+          t.y[3 * r + q] =
+              (large ? 30 : 50) + 0.5f * u + (large ? 0.9f : 1.1f) * v - 0.006f * u * u * 32 / T + 0.7f * trial;
         }
       const ptrdiff_t os = 3 * 72;
       std::vector<uint8_t> got(size_t(os) * T, 7), want(size_t(os) * T, 7), ggot(72 * T, 7), gwant(72 * T, 7);
@@ -430,7 +431,7 @@ TEST(Kernels, VectorAndScalarAgreeBitForBit) {
         kernels::BayerRgbRowScalar(grey.data(), w, c, 0, nu, bwant.data() + j * os);
       }
       const std::string what = std::string(kernels::ToString(isa)) + " tile " + std::to_string(trial);
-      EXPECT_EQ(got, want) << "rgb " << what;   // also: nothing written outside the tile's nu x nv pixels
+      EXPECT_EQ(got, want) << "rgb " << what;  // also: nothing written outside the tile's nu x nv pixels
       EXPECT_EQ(ggot, gwant) << "grey " << what;
       EXPECT_EQ(bgot, bwant) << "bayer " << what;
     }
@@ -473,7 +474,7 @@ TEST(Remap, BayerInputGivesTheRgbResultOnSmoothContent) {
                    b = 128 + 80 * std::sin((x + y) * 0.008);
       uint8_t* p = &rgb[3 * (size_t(y) * W + x)];
       p[0] = uint8_t(std::lround(r)), p[1] = uint8_t(std::lround(g)), p[2] = uint8_t(std::lround(b));
-      mosaic[size_t(y) * W + x] = p[(y % 2) + (x % 2)];   // RGGB: (0,0) R, (1,0)/(0,1) G, (1,1) B
+      mosaic[size_t(y) * W + x] = p[(y % 2) + (x % 2)];  // RGGB: (0,0) R, (1,0)/(0,1) G, (1,1) B
     }
   Remapper remapper(t);
   std::vector<Image8> a, b;
@@ -498,7 +499,7 @@ TEST(Remap, EveryInstructionSetGivesTheSameViews) {
   // perspective view gets 64-pixel tiles, the panorama 32.
   const auto rig = Rig();
   Layout layout = ArticleAndRimPanorama(1, 517, 150);
-  layout.views[0].width = 900, layout.views[0].height = 455;   // partial tiles at the right and bottom edges
+  layout.views[0].width = 900, layout.views[0].height = 455;  // partial tiles at the right and bottom edges
   const RemapTable t = BuildRemapTable(AnyModel::Exact(rig), layout, {});
   ASSERT_EQ(t.views[0].tile, 64);
   ASSERT_EQ(t.views[1].tile, 32);
@@ -526,7 +527,8 @@ TEST(Remap, EveryInstructionSetGivesTheSameViews) {
       remapper.Run(input, Interpolation::kBilinear, &got);
       ASSERT_EQ(got.size(), want.size());
       for (size_t v = 0; v < got.size(); ++v)
-        EXPECT_TRUE(got[v].data == want[v].data) << name << ", view " << v << ", " << kernels::ToString(kernels::ActiveIsa());
+        EXPECT_TRUE(got[v].data == want[v].data)
+            << name << ", view " << v << ", " << kernels::ToString(kernels::ActiveIsa());
     }
   }
   kernels::LimitIsa(kernels::Isa::kAvx512);
@@ -571,8 +573,9 @@ TEST(Remap, PyramidLevelIsTheRoundedBoxMean) {
     int w, h;
     PixelFormat f;
   };
-  for (const Case c : {Case{9, 7, PixelFormat::kGray8}, Case{10, 6, PixelFormat::kGray8}, Case{67, 5, PixelFormat::kRgb8},
-                       Case{66, 9, PixelFormat::kRgb8}, Case{70, 8, PixelFormat::kBayerRggb8}}) {
+  for (const Case c :
+       {Case{9, 7, PixelFormat::kGray8}, Case{10, 6, PixelFormat::kGray8}, Case{67, 5, PixelFormat::kRgb8},
+        Case{66, 9, PixelFormat::kRgb8}, Case{70, 8, PixelFormat::kBayerRggb8}}) {
     const int C = c.f == PixelFormat::kRgb8 ? 3 : 1;
     const size_t stride = size_t(c.w) * C + 5;
     std::vector<uint8_t> in(stride * c.h);
@@ -598,7 +601,8 @@ TEST(Remap, PyramidLevelIsTheRoundedBoxMean) {
                              : (at(2 * i + 1, 2 * j, 0) + at(2 * i, 2 * j + 1, 0) + 1) >> 1;
           } else {
             want = (at(2 * i, 2 * j, ch) + at(2 * i + 1, 2 * j, ch) + at(2 * i, 2 * j + 1, ch) +
-                    at(2 * i + 1, 2 * j + 1, ch) + 2) >> 2;
+                    at(2 * i + 1, 2 * j + 1, ch) + 2) >>
+                   2;
           }
           wrong += out.data[(size_t(j) * out.width + i) * OC + ch] != want;
         }
@@ -664,8 +668,9 @@ TEST(Layout, YamlFileIsValidated) {
     std::ofstream(dir / name) << text;
     return dir / name;
   };
-  const Layout l = LoadLayout(write("ok.yaml", "views:\n  - {name: a, yaw: 10, pitch: -20, hfov: 50, width: 64, height: 48}\n"
-                                               "  - {name: p, type: cylindrical, width: 720, height: 100}\n"));
+  const Layout l = LoadLayout(write("ok.yaml",
+                                    "views:\n  - {name: a, yaw: 10, pitch: -20, hfov: 50, width: 64, height: 48}\n"
+                                    "  - {name: p, type: cylindrical, width: 720, height: 100}\n"));
   ASSERT_EQ(l.views.size(), 2u);
   EXPECT_DOUBLE_EQ(l.views[0].yaw_deg, 10);
   EXPECT_EQ(l.views[1].type, ViewProjection::kCylindrical);

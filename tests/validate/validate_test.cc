@@ -16,8 +16,10 @@ TEST(Validate, ReducedPresetPassesEveryGateEndToEnd) {
   const fs::path out = test::Scratch("validate", "reduced");
   const auto r = test::Hovs("validate --preset reduced --source " + std::string(HOVS_SOURCE_DIR) + " --real " +
                             std::string(HOVS_SHARED_DIR) + "/data/vmr --out " + out.string());
-  std::printf("%s\n", r.output.substr(r.output.find("hovs validate (") == std::string::npos
-                                          ? 0 : r.output.find("hovs validate (")).c_str());
+  std::printf(
+      "%s\n",
+      r.output.substr(r.output.find("hovs validate (") == std::string::npos ? 0 : r.output.find("hovs validate ("))
+          .c_str());
   EXPECT_EQ(r.exit_code, 0);
   const auto m = nlohmann::json::parse(ReadFile(out / "metrics.json"));
   EXPECT_EQ(m["config"]["preset"], "reduced");
@@ -46,7 +48,8 @@ TEST(Validate, BadInputStopsTheRunNamingTheStageAndLeavesTheEarlierReportAlone) 
   // A source tree whose street scene is broken: the render stage fails after the calibration sets are written.
   fs::create_directories(dir / "src" / "scenes");
   fs::create_directories(dir / "src" / "design");
-  fs::copy_file(std::string(HOVS_SOURCE_DIR) + "/scenes/reference_stereo.yaml", dir / "src/scenes/reference_stereo.yaml");
+  fs::copy_file(std::string(HOVS_SOURCE_DIR) + "/scenes/reference_stereo.yaml",
+                dir / "src/scenes/reference_stereo.yaml");
   fs::copy_file(std::string(HOVS_SOURCE_DIR) + "/design/reference.yaml", dir / "src/design/reference.yaml");
   WriteFileAtomic(dir / "src/scenes/street.yaml", "name: street\nunits: 12\n");
   // An earlier report of hovs validate in the output folder.
