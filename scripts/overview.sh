@@ -11,4 +11,4 @@ for v in view0 view60 view120 view240; do oiiotool "$run/views/frame0/$v.png" --
 oiiotool "$tmp/view0.png" "$tmp/view60.png" --mosaic:pad=0 2x1 -o "$tmp/top.png"
 oiiotool "$tmp/view120.png" "$tmp/view240.png" --mosaic:pad=0 2x1 -o "$tmp/bottom.png"
 oiiotool "$tmp/top.png" "$tmp/bottom.png" --mosaic:pad=0 1x2 -o "$tmp/views.png"
-oiiotool "$tmp/unit.png" "$tmp/views.png" --mosaic:pad=0:fit=514x300 2x1 -o docs/overview.jpg
+oiiotool --nosoftwareattrib "$tmp/unit.png" "$tmp/views.png" --mosaic:pad=0:fit=514x300 2x1 -o docs/overview.jpg
