@@ -138,28 +138,17 @@ Runner SetupCalibrate(CLI::App* sub, const GlobalOptions* global) {
                   "edges: corners where the board lines measured along their length cross (default); subpix: "
                   "cv::cornerSubPix alone")
       ->capture_default_str();
-  sub->add_option("--subpix-window", o->subpix, "cornerSubPix half window, px (0: 0.35 x the local square)")
-      ->check(Bounded(0, 100))
-      ->capture_default_str();
+  AddBounded(sub, "--subpix-window", &o->subpix, "cornerSubPix half window, px (0: 0.35 x the local square)", 0, 100);
   sub->add_option("--unit", o->unit, "unit name in the manifest (default: the first)");
-  sub->add_option("--corner-noise", o->noise, "Gaussian noise added to ground-truth corners, px")
-      ->check(Bounded(0, 100))
-      ->capture_default_str();
-  sub->add_option("--seed", o->seed, "seed of the corner noise")
-      ->check(Bounded(0, 9007199254740992.0))
-      ->capture_default_str();
-  sub->add_option("--degree", o->degree, "polynomial degree of the reported model")
-      ->check(Bounded(2, 8))
-      ->capture_default_str();
+  AddBounded(sub, "--corner-noise", &o->noise, "Gaussian noise added to ground-truth corners, px", 0, 100);
+  AddBounded(sub, "--seed", &o->seed, "seed of the corner noise", 0, 9007199254740992.0);
+  AddBounded(sub, "--degree", &o->degree, "polynomial degree of the reported model", 2, 8);
   sub->add_option("--loss", o->loss, "none | huber | cauchy")->capture_default_str();
-  sub->add_option("--loss-scale", o->loss_scale, "robust loss scale, px")
-      ->check(Bounded(0, 1000, true))
-      ->capture_default_str();
+  AddBounded(sub, "--loss-scale", &o->loss_scale, "robust loss scale, px", 0, 1000, true);
   sub->add_flag("--compare-omnidir", o->omnidir, "also run OpenCV omnidir on the same corners");
-  sub->add_option("--outlier-sigmas", o->outlier_sigmas,
-                  "reject corners above this many robust sigmas (at least 0.5 px) after the first solve; 0: keep all")
-      ->check(Bounded(0, 1000))
-      ->capture_default_str();
+  AddBounded(sub, "--outlier-sigmas", &o->outlier_sigmas,
+             "reject corners above this many robust sigmas (at least 0.5 px) after the first solve; 0: keep all", 0,
+             1000);
   sub->add_option("-o,--out", o->out, "report folder (replaced atomically)")->capture_default_str();
   return [o, global]() { return RunCalibrate(*o, *global); };
 }

@@ -28,19 +28,12 @@ Runner SetupCapture(CLI::App* sub, const GlobalOptions* global) {
   };
   auto o = std::make_shared<Options>();
   AddSourceOptions(sub, &o->source);
-  sub->add_option("-n,--frames", o->frames, "frames (pairs) to write")->check(Bounded(1, 1e9))->capture_default_str();
-  sub->add_option("--seconds", o->seconds, "stop after this long (0: no limit)")
-      ->check(Bounded(0, 1e7))
-      ->capture_default_str();
-  sub->add_option("--timeout", o->timeout, "seconds to wait for a frame")
-      ->check(Bounded(0, 3600, true))
-      ->capture_default_str();
-  sub->add_option("--pair-tolerance-ms", o->pair_ms, "two cameras: timestamps of a pair differ by at most this")
-      ->check(Bounded(0, 10000, true))
-      ->capture_default_str();
-  sub->add_option("--write-queue", o->write_queue, "frames (pairs) grabbed but not yet written, at most")
-      ->check(Bounded(1, 4096))
-      ->capture_default_str();
+  AddBounded(sub, "-n,--frames", &o->frames, "frames (pairs) to write", 1, 1e9);
+  AddBounded(sub, "--seconds", &o->seconds, "stop after this long (0: no limit)", 0, 1e7);
+  AddBounded(sub, "--timeout", &o->timeout, "seconds to wait for a frame", 0, 3600, true);
+  AddBounded(sub, "--pair-tolerance-ms", &o->pair_ms, "two cameras: timestamps of a pair differ by at most this", 0,
+             10000, true);
+  AddBounded(sub, "--write-queue", &o->write_queue, "frames (pairs) grabbed but not yet written, at most", 1, 4096);
   sub->add_option("--image-format", o->image_format,
                   "png (compressed) | pgm (uncompressed, written at disk speed for full frame rates)")
       ->capture_default_str();

@@ -230,34 +230,20 @@ Runner SetupDepth(CLI::App* sub, const GlobalOptions* global) {
   sub->add_option("--right-model", o->right_model, "calibrated model of the right unit");
   sub->add_option("--stereo", o->stereo,
                   "relative pose from hovs stereo-calibrate (stereo.json) instead of the manifest's");
-  sub->add_option("--frame", o->frame, "frame index in the manifest")->check(Bounded(0, 1e9))->capture_default_str();
-  sub->add_option("--width", o->width, "rectified width (angle from the baseline)")
-      ->check(Bounded(16, 16384))
-      ->capture_default_str();
-  sub->add_option("--height", o->height, "rectified height (angle around the baseline)")
-      ->check(Bounded(16, 16384))
-      ->capture_default_str();
-  sub->add_option("--num-disparities", o->disparities, "SGBM disparity range, multiple of 16")
-      ->check(Bounded(16, 4096))
-      ->capture_default_str();
-  sub->add_option("--block-size", o->block, "SGBM block size (odd)")->check(Bounded(1, 21))->capture_default_str();
+  AddBounded(sub, "--frame", &o->frame, "frame index in the manifest", 0, 1e9);
+  AddBounded(sub, "--width", &o->width, "rectified width (angle from the baseline)", 16, 16384);
+  AddBounded(sub, "--height", &o->height, "rectified height (angle around the baseline)", 16, 16384);
+  AddBounded(sub, "--num-disparities", &o->disparities, "SGBM disparity range, multiple of 16", 16, 4096);
+  AddBounded(sub, "--block-size", &o->block, "SGBM block size (odd)", 1, 21);
   sub->add_option(
          "--matcher", o->matcher,
          "coarse-to-fine (SGBM at half resolution + block search at full; about 4x faster) | sgbm (full resolution)")
       ->capture_default_str()
       ->check(CLI::IsMember({"coarse-to-fine", "sgbm"}));
-  sub->add_option("--refine-radius", o->refine_radius, "coarse-to-fine: block search radius, columns")
-      ->check(Bounded(2, 16))
-      ->capture_default_str();
-  sub->add_option("--sigma-disparity", o->sigma_px, "matching noise for sigma, px")
-      ->check(Bounded(0, 100, true))
-      ->capture_default_str();
-  sub->add_option("--max-relative-sigma", o->max_rel_sigma, "mask where sigma / range exceeds this")
-      ->check(Bounded(0, 10, true))
-      ->capture_default_str();
-  sub->add_option("--max-points", o->max_points, "points written to PLY / VTP (evenly subsampled)")
-      ->check(Bounded(1, 1e9))
-      ->capture_default_str();
+  AddBounded(sub, "--refine-radius", &o->refine_radius, "coarse-to-fine: block search radius, columns", 2, 16);
+  AddBounded(sub, "--sigma-disparity", &o->sigma_px, "matching noise for sigma, px", 0, 100, true);
+  AddBounded(sub, "--max-relative-sigma", &o->max_rel_sigma, "mask where sigma / range exceeds this", 0, 10, true);
+  AddBounded(sub, "--max-points", &o->max_points, "points written to PLY / VTP (evenly subsampled)", 1, 1e9);
   sub->add_option("-o,--out", o->out, "output folder (replaced atomically)")->capture_default_str();
   return [o, global]() { return RunDepth(*o, *global); };
 }

@@ -151,20 +151,12 @@ Runner SetupLive(CLI::App* sub, const GlobalOptions* global) {
   sub->add_option("--map", o->map, "a mapping file (hovs unwrap --save-map) instead of --model");
   sub->add_option("--layout", o->layout, "article | panorama | longlat | layout YAML")->capture_default_str();
   sub->add_option("--interp", o->interp, "bilinear | bicubic | nearest")->capture_default_str();
-  sub->add_option("-n,--frames", o->frames, "frames to process (0: until Ctrl-C or --seconds)")
-      ->check(Bounded(0, 1e9))
-      ->capture_default_str();
-  sub->add_option("--seconds", o->seconds, "stop after this long (0: no limit)")
-      ->check(Bounded(0, 1e7))
-      ->capture_default_str();
-  sub->add_option("--timeout", o->timeout, "seconds to wait for a frame")
-      ->check(Bounded(0, 3600, true))
-      ->capture_default_str();
+  AddBounded(sub, "-n,--frames", &o->frames, "frames to process (0: until Ctrl-C or --seconds)", 0, 1e9);
+  AddBounded(sub, "--seconds", &o->seconds, "stop after this long (0: no limit)", 0, 1e7);
+  AddBounded(sub, "--timeout", &o->timeout, "seconds to wait for a frame", 0, 3600, true);
   sub->add_flag("--display", o->display, "show the views (needs a display; q or Esc ends)");
   sub->add_option("-o,--out", o->out, "folder for live.json and written views");
-  sub->add_option("--write-every", o->write_every, "write the views of every Nth frame (0: never)")
-      ->check(Bounded(0, 1e9))
-      ->capture_default_str();
+  AddBounded(sub, "--write-every", &o->write_every, "write the views of every Nth frame (0: never)", 0, 1e9);
   return [o, global]() { return RunLiveCommand(*o, *global); };
 }
 

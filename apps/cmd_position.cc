@@ -29,13 +29,9 @@ Runner SetupPosition(CLI::App* sub, const GlobalOptions* global) {
   sub->add_option("--design", o->scene, "the unit's design: scene YAML or dataset.json (its misalignment is ignored)")
       ->required();
   sub->add_option("--unit", o->unit, "unit name (default: the first)");
-  sub->add_option("--rays", o->edge.rays, "rim search rays")->check(Bounded(16, 100000))->capture_default_str();
-  sub->add_option("--search", o->edge.search_px, "rim search half width around the design's rim, px")
-      ->check(Bounded(1, 2000, true))
-      ->capture_default_str();
-  sub->add_option("--min-step", o->edge.min_step, "grey levels across the rim edge, at least")
-      ->check(Bounded(0, 255, true))
-      ->capture_default_str();
+  AddBounded(sub, "--rays", &o->edge.rays, "rim search rays", 16, 100000);
+  AddBounded(sub, "--search", &o->edge.search_px, "rim search half width around the design's rim, px", 1, 2000, true);
+  AddBounded(sub, "--min-step", &o->edge.min_step, "grey levels across the rim edge, at least", 0, 255, true);
   sub->add_option("-o,--out", o->out, "report folder (replaced atomically)")->capture_default_str();
   return [o, global]() {
     o->edge.Check("--rays/--search/--min-step");
@@ -49,8 +45,7 @@ Runner SetupPosition(CLI::App* sub, const GlobalOptions* global) {
       const auto& units = m.at("units");
       size_t k = 0;
       if (!o->unit.empty()) {
-        for (k = 0; k < units.size() && units[k]["name"] != o->unit; ++k) {
-        }
+        for (k = 0; k < units.size() && units[k]["name"] != o->unit; ++k) {}
         HOVS_REQUIRE(k < units.size(), "--unit " + o->unit, "no such unit in ", o->scene);
       }
       const auto u = scenes::UnitFromJson(units[k], o->scene + " (units)");

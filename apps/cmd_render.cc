@@ -21,9 +21,7 @@ Runner SetupRender(CLI::App* sub, const GlobalOptions* global) {
   CLI::Option* samples =
       sub->add_option("--samples", o->samples, "samples per pixel (overrides the scene)")->check(Bounded(1, 4096));
   sub->add_option("--seed", o->seed, "render seed (overrides the scene)")->check(Bounded(0, 9007199254740992.0));
-  sub->add_option("--downscale", o->downscale, "same optics at 1/N of the resolution (quick runs)")
-      ->check(Bounded(1, 100))
-      ->capture_default_str();
+  AddBounded(sub, "--downscale", &o->downscale, "same optics at 1/N of the resolution (quick runs)", 1, 100);
   return [o, global, samples]() {
     scenes::SceneConfig cfg = scenes::LoadSceneConfig(o->scene);
     scenes::DownscaleCameras(&cfg, o->downscale);
@@ -54,25 +52,17 @@ Runner SetupDataset(CLI::App* sub, const GlobalOptions* global) {
       ->capture_default_str();
   sub->add_option("-o,--out", o->out, "output folder (replaced atomically)")->capture_default_str();
   sub->add_option("--kind", o->kind, "mono_calibration | stereo_aruco | depth_sequence")->capture_default_str();
-  sub->add_option("--step", o->step, "depth_sequence: rig motion per frame, m")
-      ->check(Bounded(-100, 100))
-      ->capture_default_str();
-  sub->add_option("--heading", o->heading, "depth_sequence: direction of motion, degrees from world +x towards +y")
-      ->check(Bounded(-360, 360))
-      ->capture_default_str();
-  sub->add_option("--yaw-step", o->yaw_step, "depth_sequence: rig turn per frame about the vertical, degrees")
-      ->check(Bounded(-90, 90))
-      ->capture_default_str();
+  AddBounded(sub, "--step", &o->step, "depth_sequence: rig motion per frame, m", -100, 100);
+  AddBounded(sub, "--heading", &o->heading, "depth_sequence: direction of motion, degrees from world +x towards +y",
+             -360, 360);
+  AddBounded(sub, "--yaw-step", &o->yaw_step, "depth_sequence: rig turn per frame about the vertical, degrees", -90,
+             90);
   CLI::Option* count =
       sub->add_option("-n,--count", o->count, "frames (default: 9 mono, 12 stereo)")->check(Bounded(1, 10000));
-  sub->add_option("--seed", o->seed, "seed of the board poses")
-      ->check(Bounded(0, 9007199254740992.0))
-      ->capture_default_str();
+  AddBounded(sub, "--seed", &o->seed, "seed of the board poses", 0, 9007199254740992.0);
   CLI::Option* samples =
       sub->add_option("--samples", o->samples, "samples per pixel (overrides the scene)")->check(Bounded(1, 4096));
-  sub->add_option("--downscale", o->downscale, "same optics at 1/N of the resolution (quick runs)")
-      ->check(Bounded(1, 100))
-      ->capture_default_str();
+  AddBounded(sub, "--downscale", &o->downscale, "same optics at 1/N of the resolution (quick runs)", 1, 100);
   sub->add_option("--unit", o->unit, "mono_calibration: the unit to calibrate (default: the scene's first)");
   sub->add_option("--elevation", o->elevation, "board centre elevation range MIN MAX, degrees (default: per kind)")
       ->check(Bounded(-90, 90))

@@ -27,11 +27,9 @@ Runner SetupStereoCalibrate(CLI::App* sub, const GlobalOptions* global) {
                   "with calibration.json models: auto (physical if present) | physical | polynomial | unified")
       ->capture_default_str();
   sub->add_option("--right-model", o->right_model, "calibrated model of the second unit");
-  sub->add_option("--huber", o->huber, "robust loss scale, px")->check(Bounded(0, 1000, true))->capture_default_str();
-  sub->add_option("--marker-check", o->marker_check_px,
-                  "drop markers with a corner this far (px) from the board pose of the other corners; 0: keep all")
-      ->check(Bounded(0, 1000))
-      ->capture_default_str();
+  AddBounded(sub, "--huber", &o->huber, "robust loss scale, px", 0, 1000, true);
+  AddBounded(sub, "--marker-check", &o->marker_check_px,
+             "drop markers with a corner this far (px) from the board pose of the other corners; 0: keep all", 0, 1000);
   sub->add_option("--corner-refinement", o->corner_refinement,
                   "marker corners: edges (where the marker's two sides, measured along their length, meet) | "
                   "subpix (cornerSubPix only)")

@@ -249,20 +249,16 @@ Runner SetupUnwrap(CLI::App* sub, const GlobalOptions* global) {
   sub->add_option("-o,--out", o->out, "output folder (replaced atomically)")->capture_default_str();
   sub->add_option("--interp", o->interp, "bilinear | bicubic | nearest")->capture_default_str();
   sub->add_option("--format", o->format, "auto | rgb | gray | bayer_rggb (input pixel format)")->capture_default_str();
-  sub->add_option("--scene-distance", o->scene_distance, "m; depth at which a non-single-viewpoint rig is unwrapped")
-      ->check(Bounded(0, 1e6, true))
-      ->capture_default_str();
-  sub->add_option("--tile", o->tile,
-                  "tile size of the mapping (8, 16, 32, 64; 0: per view, 64 where every tile of the view is "
-                  "interpolated at that size without minifying, else 32)")
-      ->check(Bounded(0, 64))
-      ->capture_default_str();
+  AddBounded(sub, "--scene-distance", &o->scene_distance, "m; depth at which a non-single-viewpoint rig is unwrapped",
+             0, 1e6, true);
+  AddBounded(sub, "--tile", &o->tile,
+             "tile size of the mapping (8, 16, 32, 64; 0: per view, 64 where every tile of the view is interpolated at "
+             "that size without minifying, else 32)",
+             0, 64);
   sub->add_option("--truth-scene", o->truth_scene,
                   "scene YAML the input was rendered from: render each perspective view with a pinhole camera at the "
                   "unit's viewpoint and report PSNR against it");
-  sub->add_option("--truth-samples", o->truth_samples, "samples per pixel of the truth renders")
-      ->check(Bounded(1, 4096))
-      ->capture_default_str();
+  AddBounded(sub, "--truth-samples", &o->truth_samples, "samples per pixel of the truth renders", 1, 4096);
   sub->add_flag("--interactive", o->interactive,
                 "control panel: adjust each view live on the first input frame (needs a display; s saves the layout)");
   sub->add_option("--layout-out", o->layout_out, "where --interactive saves the adjusted layout")

@@ -40,9 +40,7 @@ Runner SetupValidate(CLI::App* sub, const GlobalOptions* global) {
   sub->add_option("--preset", o->preset, "full (the report's run, about 10 min) | reduced (half resolution, CI)")
       ->capture_default_str();
   sub->add_option("-o,--out", o->out, "run folder (default results/validate-<preset>)");
-  sub->add_option("--seed", o->seed, "seed of board poses and renders")
-      ->check(Bounded(0, 9007199254740992.0))
-      ->capture_default_str();
+  AddBounded(sub, "--seed", &o->seed, "seed of board poses and renders", 0, 9007199254740992.0);
   // Each override, when given, must be valid (0 does not mean "the preset").
   sub->add_option("--downscale", o->downscale, "override the preset: render at 1/N resolution (1, 2, 5, 10)")
       ->check(Bounded(1, 16));

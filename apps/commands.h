@@ -32,6 +32,13 @@ const std::vector<Command>& Commands();
 // option of every command carries one of these (its validator is named "bounded"; a test walks the table).
 CLI::Validator Bounded(double lo, double hi, bool low_open = false);
 
+// A numeric option with its bounds (Bounded) and its default shown in the help.
+template <class T>
+CLI::Option* AddBounded(CLI::App* app, const std::string& name, T* value, const std::string& help, double lo, double hi,
+                        bool low_open = false) {
+  return app->add_option(name, *value, help)->check(Bounded(lo, hi, low_open))->capture_default_str();
+}
+
 // Runs a library stage on an input the user named (a dataset, a folder of images, a camera): an error of the
 // stage that does not name that input is given its name, so that the one error line says which input failed
 // ("<input> (<stage>): <problem>").

@@ -103,14 +103,6 @@ AnyModel LoadModelSpec(const std::string& spec, const std::string& unit, double 
   return LoadCalibratedModel(path, "auto", scene_distance);
 }
 
-unwrap::Image8 LoadImage8(const std::filesystem::path& path) {
-  io::Image8Bits in = io::ReadImage8(path);
-  unwrap::Image8 im;
-  im.width = in.width, im.height = in.height, im.channels = in.channels;
-  im.data = std::move(in.data);
-  return im;
-}
-
 std::vector<InputFrame> ListInputs(const std::string& input, const std::string& unit) {
   const std::filesystem::path p(input);
   HOVS_REQUIRE(std::filesystem::exists(p), "--input " + input, "not found");

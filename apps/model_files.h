@@ -34,7 +34,6 @@ struct InputFrame {
 };
 std::vector<InputFrame> ListInputs(const std::string& input, const std::string& unit);
 
-// An image as 8-bit grey (one channel) or RGB (three or more channels: alpha dropped).
-unwrap::Image8 LoadImage8(const std::filesystem::path& path);
+using unwrap::LoadImage8;  // an image file as 8-bit grey or RGB (unwrap/remap.h)
 
 }  // namespace hovs::apps

@@ -49,9 +49,7 @@ void AddSourceOptions(CLI::App* sub, SourceOptions* o) {
   sub->add_option("--simulate", o->simulate,
                   "serve a rendered dataset through Aravis' GigE Vision simulator (127.0.0.1, and 127.0.0.2 for a "
                   "second unit) and take the frames over the protocol");
-  sub->add_option("--simulate-loss", o->loss, "simulator: GVSP packets dropped on purpose (0.01 = 1 %)")
-      ->check(Bounded(0, 0.99))
-      ->capture_default_str();
+  AddBounded(sub, "--simulate-loss", &o->loss, "simulator: GVSP packets dropped on purpose (0.01 = 1 %)", 0, 0.99);
   sub->add_option("--units", o->units, "unit names, one per camera (default: unit0, unit1; --simulate: the dataset's)");
   sub->add_option("--pixel-format", o->pixel_format, "Mono8 | BayerRG8 | Mono16")->capture_default_str();
   sub->add_option("--exposure-us", o->exposure, "exposure time, microseconds (default: the camera's)")
@@ -64,10 +62,8 @@ void AddSourceOptions(CLI::App* sub, SourceOptions* o) {
       ->check(Bounded(64, 65535));
   sub->add_option("--packet-delay-ns", o->packet_delay, "inter-packet delay, ns (default: the camera's)")
       ->check(Bounded(0, 1e9));
-  sub->add_option("--socket-buffer", o->socket_buffer, "receive socket buffer, bytes (0: automatic)")
-      ->check(Bounded(0, 1073741824))
-      ->capture_default_str();
-  sub->add_option("--buffers", o->buffers, "stream buffer pool")->check(Bounded(1, 1024))->capture_default_str();
+  AddBounded(sub, "--socket-buffer", &o->socket_buffer, "receive socket buffer, bytes (0: automatic)", 0, 1073741824);
+  AddBounded(sub, "--buffers", &o->buffers, "stream buffer pool", 1, 1024);
   sub->add_option("--trigger", o->trigger, "free | software | Line0 ...")->capture_default_str();
   sub->add_option("--feature", o->features, "generic GenICam feature NAME=VALUE (repeatable, e.g. PtpEnable=true)");
   sub->add_flag("--packet-socket", o->packet_socket, "use Aravis' packet socket (needs privileges; off in containers)");

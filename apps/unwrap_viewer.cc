@@ -118,9 +118,7 @@ void RunUnwrapViewer(const AnyModel& model, unwrap::Layout layout, const unwrap:
         std::printf("\r%s: %s            ", one.views[0].name.c_str(),
                     LayoutYaml(one).substr(LayoutYaml(one).find("{")).c_str());
         std::fflush(stdout);
-      } catch (const Error& e) {
-        std::fprintf(stderr, "\n%s\n", e.what());
-      }
+      } catch (const Error& e) { std::fprintf(stderr, "\n%s\n", e.what()); }
       if (!shown.empty()) cv::imshow(win, shown);
     }
     const int key = cv::waitKey(30);

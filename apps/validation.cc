@@ -5,6 +5,7 @@
 
 #include "apps/commands.h"
 #include "core/error.h"
+#include "core/format.h"
 #include "core/io.h"
 #include "results/html.h"
 
@@ -13,12 +14,6 @@ namespace fs = std::filesystem;
 using json = nlohmann::json;
 
 namespace {
-
-std::string Fmt(const char* f, double v) {
-  char b[64];
-  std::snprintf(b, sizeof b, f, v);
-  return b;
-}
 
 double Seconds(std::chrono::steady_clock::time_point t0) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
@@ -168,15 +163,15 @@ std::string Validation::Summary() const {
   std::string s = "hovs validate (" + p_.name + "): " + metrics_["status"].get<std::string>() + " -> " +
                   (target_ / "report.html").string() + "\n";
   for (const auto& c : metrics_["checks"]) {
-    const std::string v = c["value"].is_null() ? "n/a" : Fmt("%.4g", c["value"].get<double>());
+    const std::string v = c["value"].is_null() ? "n/a" : FormatNumber("%.4g", c["value"].get<double>());
     const bool gate = c["gate"].get<bool>(), pass = c["pass"].get<bool>();
     s += std::string(gate ? (pass ? "  ok       " : "  FAIL     ") : (pass ? "  met      " : "  not met  ")) +
          c["name"].get<std::string>() + (gate ? "" : " [target]") + ": " + v + " " + c["unit"].get<std::string>() +
-         " (" + (c["kind"] == "max" ? "<= " : ">= ") + Fmt("%.4g", c["limit"].get<double>()) + ")\n";
+         " (" + (c["kind"] == "max" ? "<= " : ">= ") + FormatNumber("%.4g", c["limit"].get<double>()) + ")\n";
   }
   for (const auto& st : metrics_["stages"])
     s += "  stage " + st["name"].get<std::string>() + ": " + st["status"].get<std::string>() + ", " +
-         Fmt("%.1f s", st["seconds"].get<double>()) + "\n";
+         FormatNumber("%.1f s", st["seconds"].get<double>()) + "\n";
   return s;
 }
 

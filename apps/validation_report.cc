@@ -7,6 +7,7 @@
 
 #include "apps/commands.h"
 #include "core/error.h"
+#include "core/format.h"
 #include "core/io.h"
 #include "results/html.h"
 
@@ -15,12 +16,6 @@ namespace fs = std::filesystem;
 using json = nlohmann::json;
 
 namespace {
-
-std::string Fmt(const char* f, double v) {
-  char b[64];
-  std::snprintf(b, sizeof b, f, v);
-  return b;
-}
 
 // The report's later sections (stereo, views, dense depth, real images, configuration), from the figures.
 void LaterSections(results::HtmlPage& page, const json& m, const fs::path& out) {
@@ -32,16 +27,18 @@ void LaterSections(results::HtmlPage& page, const json& m, const fs::path& out) 
   if (f.contains("stereo")) {
     page.Heading("Stereo calibration and sparse depth");
     rows.clear();
-    const auto pct = [](double v) { return std::isfinite(v) ? Fmt("%.3f %%", 100 * v) : std::string("n/a"); };
+    const auto pct = [](double v) { return std::isfinite(v) ? FormatNumber("%.3f %%", 100 * v) : std::string("n/a"); };
     for (const auto& [label, key] :
          {std::pair<std::string, std::string>{"exact models (the calibration alone)", "stereo_exact_models"},
           {"calibrated physical models (the whole chain)", "stereo"}}) {
       if (!f.contains(key)) continue;
       const json& s = f[key];
-      rows.push_back({label, Fmt("%.5f", Num(s, {"baseline_m"})), Fmt("%.4f", 1e3 * Num(s, {"sigma_baseline_m"})),
-                      Fmt("%.3f", Num(s, {"ground_truth", "baseline_error_mm"})),
-                      Fmt("%.4f", Num(s, {"ground_truth", "rotation_error_deg"})), Fmt("%.3f", Num(s, {"rms_px"})),
-                      Fmt("%.0f", Num(s, {"sparse_depth", "points"})),
+      rows.push_back({label, FormatNumber("%.5f", Num(s, {"baseline_m"})),
+                      FormatNumber("%.4f", 1e3 * Num(s, {"sigma_baseline_m"})),
+                      FormatNumber("%.3f", Num(s, {"ground_truth", "baseline_error_mm"})),
+                      FormatNumber("%.4f", Num(s, {"ground_truth", "rotation_error_deg"})),
+                      FormatNumber("%.3f", Num(s, {"rms_px"})),
+                      FormatNumber("%.0f", Num(s, {"sparse_depth", "points"})),
                       pct(Num(s, {"sparse_depth", "median_rel_error"})), pct(Num(s, {"sparse_depth", "p95_rel_error"})),
                       pct(Num(s, {"sparse_depth", "max_rel_error"})),
                       pct(Num(s, {"sparse_depth", "conditioned", "max_rel_error"}))});
@@ -63,7 +60,8 @@ void LaterSections(results::HtmlPage& page, const json& m, const fs::path& out) 
   if (f.contains("views")) {
     page.Heading("Six-view expansion (calibrated left model) beside pinhole truth renders");
     rows.clear();
-    for (const auto& [view, v] : f["views"]["psnr_db"].items()) rows.push_back({view, Fmt("%.2f", v.get<double>())});
+    for (const auto& [view, v] : f["views"]["psnr_db"].items())
+      rows.push_back({view, FormatNumber("%.2f", v.get<double>())});
     page.Table({"view", "PSNR against the truth render (dB)"}, rows);
     for (const auto& [view, v] : f["views"]["files"].items()) {
       fig("views/" + v[0].get<std::string>(), view + ": unwrapped", 360);
@@ -76,14 +74,16 @@ void LaterSections(results::HtmlPage& page, const json& m, const fs::path& out) 
     page.Heading("Dense depth (calibrated models and pose) against the range channel");
     rows.clear();
     for (const auto& b : f["depth"]["bands"])
-      rows.push_back({Fmt("%.0f", b["band_m"][0].get<double>()) + "-" + Fmt("%.0f", b["band_m"][1].get<double>()),
-                      std::to_string(b["pixels"].get<int>()), Fmt("%.1f %%", 100 * b["valid_fraction"].get<double>()),
+      rows.push_back({FormatNumber("%.0f", b["band_m"][0].get<double>()) + "-" +
+                          FormatNumber("%.0f", b["band_m"][1].get<double>()),
+                      std::to_string(b["pixels"].get<int>()),
+                      FormatNumber("%.1f %%", 100 * b["valid_fraction"].get<double>()),
                       b["median_relative_error"].is_null()
                           ? "n/a"
-                          : Fmt("%.2f %%", 100 * b["median_relative_error"].get<double>()),
-                      Fmt("%.1f %%", 100 * b["within_5_percent_fraction"].get<double>())});
+                          : FormatNumber("%.2f %%", 100 * b["median_relative_error"].get<double>()),
+                      FormatNumber("%.1f %%", 100 * b["within_5_percent_fraction"].get<double>())});
     page.Table({"band (m)", "pixels", "valid", "median rel. error", "within 5 % (of all)"}, rows);
-    page.Paragraph("Dense matching time: " + Fmt("%.0f ms", f["depth"]["dense_ms"].get<double>()));
+    page.Paragraph("Dense matching time: " + FormatNumber("%.0f ms", f["depth"]["dense_ms"].get<double>()));
     fig("depth/rectified_left.png", "left unit rectified around the baseline", 900);
     fig("depth/error_map.png", "relative error, 0 (blue) to 5 % or more (red); black: masked", 900);
   }
@@ -93,12 +93,13 @@ void LaterSections(results::HtmlPage& page, const json& m, const fs::path& out) 
         "Checked: detection on every image, calibration residuals, the same corners through OpenCV's "
         "omnidir. Not checkable without ground truth: ray accuracy, the detector's absolute error.");
     const json& r = f["real"];
-    page.Table({"images", "boards found", "corners from the board's edges", "polynomial RMS (px)", "unified RMS (px)",
-                "OpenCV omnidir RMS, same corners (px)", "target (px)"},
-               {{Fmt("%.0f", Num(r, {"images"})), Fmt("%.0f", Num(r, {"boards_found"})),
-                 Fmt("%.0f", Num(r, {"corners_from_edges"})), Fmt("%.4f", Num(r, {"polynomial_rms_px"})),
-                 Fmt("%.4f", Num(r, {"unified_rms_px"})), Fmt("%.4f", Num(r, {"opencv_omnidir_rms_px"})),
-                 Fmt("%.2f", Num(r, {"target_rms_px"}))}});
+    page.Table(
+        {"images", "boards found", "corners from the board's edges", "polynomial RMS (px)", "unified RMS (px)",
+         "OpenCV omnidir RMS, same corners (px)", "target (px)"},
+        {{FormatNumber("%.0f", Num(r, {"images"})), FormatNumber("%.0f", Num(r, {"boards_found"})),
+          FormatNumber("%.0f", Num(r, {"corners_from_edges"})), FormatNumber("%.4f", Num(r, {"polynomial_rms_px"})),
+          FormatNumber("%.4f", Num(r, {"unified_rms_px"})), FormatNumber("%.4f", Num(r, {"opencv_omnidir_rms_px"})),
+          FormatNumber("%.2f", Num(r, {"target_rms_px"}))}});
     page.Link("The calibration's report: ", "real/calib/index.html", "real/calib/index.html", ".");
     fig("real/calib/figures/VMRImage0.png", "VMRImage0: detected corners and reprojection (residuals x20)", 420);
     fig("real/panorama/VMRImage0/panorama.png", "panorama of VMRImage0 with the calibrated model", 900);
@@ -132,9 +133,9 @@ std::string Validation::Report() const {
   page.Heading("Checks");
   std::vector<std::vector<std::string>> rows;
   for (const auto& c : m["checks"])
-    rows.push_back({c["name"], c["value"].is_null() ? "n/a" : Fmt("%.4g", c["value"].get<double>()),
-                    std::string(c["kind"] == "max" ? "<= " : ">= ") + Fmt("%.4g", c["limit"].get<double>()), c["unit"],
-                    c["gate"].get<bool>() ? "gate" : "target",
+    rows.push_back({c["name"], c["value"].is_null() ? "n/a" : FormatNumber("%.4g", c["value"].get<double>()),
+                    std::string(c["kind"] == "max" ? "<= " : ">= ") + FormatNumber("%.4g", c["limit"].get<double>()),
+                    c["unit"], c["gate"].get<bool>() ? "gate" : "target",
                     c["gate"].get<bool>() ? (c["pass"].get<bool>() ? "pass" : "FAIL")
                                           : (c["pass"].get<bool>() ? "met" : "not met yet"),
                     c["source"]});
@@ -145,7 +146,7 @@ std::string Validation::Report() const {
   page.Heading("Stages and timing");
   rows.clear();
   for (const auto& st : m["stages"])
-    rows.push_back({st["name"], st["status"], Fmt("%.1f", st["seconds"].get<double>()),
+    rows.push_back({st["name"], st["status"], FormatNumber("%.1f", st["seconds"].get<double>()),
                     st.contains("error")    ? st["error"].get<std::string>()
                     : st.contains("reason") ? st["reason"].get<std::string>()
                                             : ""});
@@ -167,13 +168,15 @@ std::string Validation::Report() const {
     for (const auto& [unit, c] : f["calibration"].items())
       rows.push_back(
           {unit, std::to_string(c["boards_found"].get<int>()) + " / " + std::to_string(c["images"].get<int>()),
-           Fmt("%.4f", c["detection_rms_px"].get<double>()), Fmt("%.4f", c["rms_px"].get<double>()),
-           Fmt("%.5f", c["mean_ray_angle_deg"].get<double>()), Fmt("%.5f", c["max_ray_angle_deg"].get<double>()),
-           Fmt("%.5f", c["mean_ray_angle_aligned_deg"].get<double>()),
-           Fmt("%.4f", c["frame_rotation_deg"].get<double>()), Fmt("%.4f", c["physical_rms_px"].get<double>()),
-           Fmt("%.5f", c["physical_mean_ray_angle_deg"].get<double>()),
-           Fmt("%.4f", c["physical_tilt_error_deg"].get<double>()),
-           Fmt("%.3f", c["physical_centre_error_mm"].get<double>())});
+           FormatNumber("%.4f", c["detection_rms_px"].get<double>()), FormatNumber("%.4f", c["rms_px"].get<double>()),
+           FormatNumber("%.5f", c["mean_ray_angle_deg"].get<double>()),
+           FormatNumber("%.5f", c["max_ray_angle_deg"].get<double>()),
+           FormatNumber("%.5f", c["mean_ray_angle_aligned_deg"].get<double>()),
+           FormatNumber("%.4f", c["frame_rotation_deg"].get<double>()),
+           FormatNumber("%.4f", c["physical_rms_px"].get<double>()),
+           FormatNumber("%.5f", c["physical_mean_ray_angle_deg"].get<double>()),
+           FormatNumber("%.4f", c["physical_tilt_error_deg"].get<double>()),
+           FormatNumber("%.3f", c["physical_centre_error_mm"].get<double>())});
     page.Table({"unit", "boards found", "detection RMS vs exact corners (px)", "polynomial RMS (px)",
                 "polynomial: mean ray angle vs true rig (deg)", "max (deg)", "mean, frame rotation removed (deg)",
                 "frame rotation (deg)", "physical RMS (px)", "physical: mean ray angle (deg)",

@@ -6,17 +6,12 @@
 #include "calib/ocam_io.h"
 #include "calib/omnidir_io.h"
 #include "core/error.h"
+#include "core/format.h"
 #include "core/io.h"
 #include "results/html.h"
 
 namespace hovs::calib {
 namespace {
-
-std::string F(const char* fmt, double v) {
-  char b[64];
-  std::snprintf(b, sizeof b, fmt, v);
-  return b;
-}
 
 // The reprojection figure of one image (the article's Fig. 19): a crop around the board, detected corners (green
 // circles; rejected corners large magenta), the polynomial model's reprojections (red crosses) and the
@@ -156,11 +151,11 @@ void WriteMonoCalibrationReport(const std::filesystem::path& folder, const Calib
   std::vector<std::vector<std::string>> rows;
   for (size_t i = 0; i < in.observations.size(); ++i) {
     std::vector<std::string> row = {in.observations[i].image};
-    for (const auto& o : r.orders) row.push_back(F("%.4f", o.per_image_mean_px[i]));
+    for (const auto& o : r.orders) row.push_back(FormatNumber("%.4f", o.per_image_mean_px[i]));
     rows.push_back(row);
   }
   std::vector<std::string> all = {"all (RMS)"};
-  for (const auto& o : r.orders) all.push_back(F("%.4f", o.rms_px));
+  for (const auto& o : r.orders) all.push_back(FormatNumber("%.4f", o.rms_px));
   rows.push_back(all);
   page.Table(header, rows);
   std::filesystem::create_directories(folder / "figures");
@@ -171,7 +166,7 @@ void WriteMonoCalibrationReport(const std::filesystem::path& folder, const Calib
       const std::string fig = "figures/" + std::filesystem::path(in.observations[i].image).stem().string() + ".png";
       ReprojectionFigure(in.paths[i], in.observations[i], p.inlier[i], p.model, p.cam_from_board[i], p.per_image_rms[i],
                          folder / fig);
-      page.Figure(fig, in.observations[i].image + ": RMS " + F("%.3f", p.per_image_rms[i]) + " px", 420);
+      page.Figure(fig, in.observations[i].image + ": RMS " + FormatNumber("%.3f", p.per_image_rms[i]) + " px", 420);
     }
   }
   ErrorMapFigure(in.observations, p, folder / "figures/error_map.png");

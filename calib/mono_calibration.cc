@@ -6,17 +6,12 @@
 
 #include "calib/rim_positioning.h"
 #include "core/error.h"
+#include "core/format.h"
 #include "core/io.h"
 #include "io/image_io.h"
 
 namespace hovs::calib {
 namespace {
-
-std::string F(const char* fmt, double v) {
-  char b[64];
-  std::snprintf(b, sizeof b, fmt, v);
-  return b;
-}
 
 nlohmann::json DetectionJson(const ImageDetection& d) {
   nlohmann::json row = {{"image", d.image},           {"status", d.status},
@@ -306,38 +301,43 @@ std::string MonoCalibrationSummary(const CalibrationInput& in, const MonoCalibra
     s += "  detection: board in " + std::to_string(in.observations.size()) + " of " +
          std::to_string(in.detection.size()) + " images (" + std::to_string(t.complete) + " complete), " +
          std::to_string(t.corners) + " corners (" + std::to_string(t.from_edges) + " from the board's edges)";
-    if (t.with_truth) s += ", RMS " + F("%.4f", t.rms_to_truth_px) + " px from the exact corners";
+    if (t.with_truth) s += ", RMS " + FormatNumber("%.4f", t.rms_to_truth_px) + " px from the exact corners";
     s += "\n";
   }
   const auto& p = r.polynomial;
-  s += "  polynomial (degree " + std::to_string(p.model.Degree()) + "): RMS " + F("%.4f", p.rms) + " px, mean " +
-       F("%.4f", p.mean) + " px (linear start " + F("%.3f", p.initial_rms) + " px)\n";
+  s += "  polynomial (degree " + std::to_string(p.model.Degree()) + "): RMS " + FormatNumber("%.4f", p.rms) +
+       " px, mean " + FormatNumber("%.4f", p.mean) + " px (linear start " + FormatNumber("%.3f", p.initial_rms) +
+       " px)\n";
   if (!p.outliers.empty()) {
-    s += "  rejected " + std::to_string(p.outliers.size()) + " corners above " + F("%.3f", p.outlier_threshold_px) +
-         " px:";
+    s += "  rejected " + std::to_string(p.outliers.size()) + " corners above " +
+         FormatNumber("%.3f", p.outlier_threshold_px) + " px:";
     for (const auto& ol : p.outliers)
-      s += " " + ol.image + "#" + std::to_string(ol.corner) + " (" + F("%.2f", ol.residual_px) + ")";
+      s += " " + ol.image + "#" + std::to_string(ol.corner) + " (" + FormatNumber("%.2f", ol.residual_px) + ")";
     s += "\n";
   }
-  s += "  unified + radtan:         RMS " + F("%.4f", r.unified.rms) + " px\n";
-  if (r.omnidir && r.omnidir->ok) s += "  OpenCV omnidir (same corners): RMS " + F("%.4f", r.omnidir->rms) + " px\n";
+  s += "  unified + radtan:         RMS " + FormatNumber("%.4f", r.unified.rms) + " px\n";
+  if (r.omnidir && r.omnidir->ok)
+    s += "  OpenCV omnidir (same corners): RMS " + FormatNumber("%.4f", r.omnidir->rms) + " px\n";
   if (r.polynomial_vs_truth && r.polynomial_vs_truth->pixels == 0)
     s += "  vs ground truth: no pixel of the model's annulus sees the true mirror; nothing to compare\n";
   else if (r.polynomial_vs_truth)
-    s += "  vs ground truth: mean ray angle " + F("%.5f", r.polynomial_vs_truth->mean_deg) + " deg; " +
-         F("%.5f", r.polynomial_vs_truth->mean_aligned_deg) + " deg after removing a frame rotation of " +
-         F("%.4f", r.polynomial_vs_truth->frame_rotation_deg) + " deg\n";
+    s += "  vs ground truth: mean ray angle " + FormatNumber("%.5f", r.polynomial_vs_truth->mean_deg) + " deg; " +
+         FormatNumber("%.5f", r.polynomial_vs_truth->mean_aligned_deg) + " deg after removing a frame rotation of " +
+         FormatNumber("%.4f", r.polynomial_vs_truth->frame_rotation_deg) + " deg\n";
   if (r.physical) {
     const auto& ph = *r.physical;
-    s += "  physical model: RMS " + F("%.4f", ph.rms) + " px, a " + F("%.5f", ph.rig.mirror.a) + " m, b " +
-         F("%.5f", ph.rig.mirror.b) + " m, tilt (" + F("%.3f", ph.tilt.x() * 180 / M_PI) + ", " +
-         F("%.3f", ph.tilt.y() * 180 / M_PI) + ") deg, offset (" + F("%.2f", ph.offset.x() * 1e3) + ", " +
-         F("%.2f", ph.offset.y() * 1e3) + ", " + F("%.2f", ph.offset.z() * 1e3) + ") mm" +
-         (r.rim_points ? ", rim " + std::to_string(r.rim_points) + " points (RMS " + F("%.3f", ph.rim_rms) + " px)"
-                       : "") +
+    s += "  physical model: RMS " + FormatNumber("%.4f", ph.rms) + " px, a " + FormatNumber("%.5f", ph.rig.mirror.a) +
+         " m, b " + FormatNumber("%.5f", ph.rig.mirror.b) + " m, tilt (" +
+         FormatNumber("%.3f", ph.tilt.x() * 180 / M_PI) + ", " + FormatNumber("%.3f", ph.tilt.y() * 180 / M_PI) +
+         ") deg, offset (" + FormatNumber("%.2f", ph.offset.x() * 1e3) + ", " +
+         FormatNumber("%.2f", ph.offset.y() * 1e3) + ", " + FormatNumber("%.2f", ph.offset.z() * 1e3) + ") mm" +
+         (r.rim_points
+              ? ", rim " + std::to_string(r.rim_points) + " points (RMS " + FormatNumber("%.3f", ph.rim_rms) + " px)"
+              : "") +
          "\n";
     if (r.physical_vs_truth && r.physical_vs_truth->pixels)
-      s += "  physical model vs ground truth: mean ray angle " + F("%.5f", r.physical_vs_truth->mean_deg) + " deg\n";
+      s += "  physical model vs ground truth: mean ray angle " + FormatNumber("%.5f", r.physical_vs_truth->mean_deg) +
+           " deg\n";
   }
   for (size_t i = 0; i < in.observations.size(); ++i)
     if (p.per_image_mean[i] > 5.0) s += "  POOR: " + in.observations[i].image + " mean error above 5 px\n";

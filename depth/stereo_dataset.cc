@@ -29,14 +29,6 @@ scenes::BoardSpec ArucoBoardFromJson(const nlohmann::json& b, const std::string&
   return s;
 }
 
-unwrap::Image8 ReadImage8(const std::filesystem::path& path) {
-  io::Image8Bits in = io::ReadImage8(path);
-  unwrap::Image8 im;
-  im.width = in.width, im.height = in.height, im.channels = in.channels;
-  im.data = std::move(in.data);
-  return im;
-}
-
 int FromEdges(const std::vector<CornerObservation>& cs) {
   return static_cast<int>(std::count_if(cs.begin(), cs.end(), [](const auto& c) { return c.from_edges; }));
 }
@@ -90,8 +82,8 @@ std::vector<StereoPairObservation> DetectStereoPairs(const StereoDataset& d, con
   for (const StereoFrame& f : d.frames) {
     StereoPairObservation p;
     p.name = f.name;
-    p.left = dl.Detect(ReadImage8(f.left_image));
-    p.right = dr.Detect(ReadImage8(f.right_image));
+    p.left = dl.Detect(unwrap::LoadImage8(f.left_image));
+    p.right = dr.Detect(unwrap::LoadImage8(f.right_image));
     // Markers whose corners disagree with the unit's board pose (partly hidden, still decoded) are dropped.
     PairDetection rec;
     rec.pair = p.name;

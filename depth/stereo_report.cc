@@ -8,6 +8,7 @@
 #include <opencv2/imgproc.hpp>
 
 #include "core/error.h"
+#include "core/format.h"
 #include "core/io.h"
 #include "io/image_io.h"
 #include "results/html.h"
@@ -16,12 +17,6 @@
 namespace hovs::depth {
 namespace {
 namespace fs = std::filesystem;
-
-std::string F(const char* fmt, double v) {
-  char b[64];
-  std::snprintf(b, sizeof b, fmt, v);
-  return b;
-}
 
 nlohmann::json PoseJson(const Rigid3d& p) {
   const auto& q = p.rotation;
@@ -122,9 +117,7 @@ StereoRun RunStereoCalibration(const StereoDataset& dataset, const AnyModel& lef
     StereoCalibrationOptions s3 = options;
     s3.residual = "3d";
     r.article_3d = CalibrateStereo(left, right, r.pairs, dataset.board, s3);
-  } catch (const Error& e) {
-    r.article_3d_error = e.what();
-  }
+  } catch (const Error& e) { r.article_3d_error = e.what(); }
   // Against the true rig. With calibrated models the relative pose is that of the models' frames, which for
   // these units coincide with the mirror frames up to the calibration's error.
   const Rigid3d truth = dataset.TrueRightFromLeft();
@@ -237,8 +230,9 @@ void WriteStereoReport(const fs::path& folder, const StereoRun& r, const nlohman
   page.Preformatted(summary);
   std::vector<std::vector<std::string>> rows;
   for (size_t k = 0; k < c.pair_names.size(); ++k)
-    rows.push_back({c.pair_names[k], std::to_string(c.pair_corners_left[k]), F("%.3f", c.pair_rms_left_px[k]),
-                    std::to_string(c.pair_corners_right[k]), F("%.3f", c.pair_rms_right_px[k])});
+    rows.push_back({c.pair_names[k], std::to_string(c.pair_corners_left[k]),
+                    FormatNumber("%.3f", c.pair_rms_left_px[k]), std::to_string(c.pair_corners_right[k]),
+                    FormatNumber("%.3f", c.pair_rms_right_px[k])});
   page.Heading("Pairs");
   page.Table({"pair", "corners, left", "RMS left (px)", "corners, right", "RMS right (px)"}, rows);
   if (!r.sparse.points.empty()) {

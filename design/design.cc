@@ -79,12 +79,9 @@ std::vector<ConstraintValue> DescribeConstraints(const std::vector<double>& v, c
 template <class T>
 T ObjectiveOf(const Geometry<T>& g, Objective o) {
   switch (o) {
-    case Objective::kSmallestSystem:
-      return T(2) * g.c;
-    case Objective::kWidestField:
-      return -(g.upper - g.lower) / T(kDeg);
-    case Objective::kLargestRim:
-      return -g.rim_px;
+    case Objective::kSmallestSystem: return T(2) * g.c;
+    case Objective::kWidestField: return -(g.upper - g.lower) / T(kDeg);
+    case Objective::kLargestRim: return -g.rim_px;
   }
   return T(0);
 }
@@ -111,12 +108,9 @@ void CheckFinitePositive(double v, const std::string& where, const std::string& 
 
 const char* ToString(Objective o) {
   switch (o) {
-    case Objective::kSmallestSystem:
-      return "smallest_system";
-    case Objective::kWidestField:
-      return "widest_field";
-    case Objective::kLargestRim:
-      return "largest_rim";
+    case Objective::kSmallestSystem: return "smallest_system";
+    case Objective::kWidestField: return "widest_field";
+    case Objective::kLargestRim: return "largest_rim";
   }
   return "?";
 }
@@ -208,12 +202,9 @@ double MaxViolation(const std::vector<ConstraintValue>& g) {
 
 double ObjectiveValue(const Metrics& m, Objective o) {
   switch (o) {
-    case Objective::kSmallestSystem:
-      return m.system_length;
-    case Objective::kWidestField:
-      return -m.field_deg;
-    case Objective::kLargestRim:
-      return -m.rim_radius_px;
+    case Objective::kSmallestSystem: return m.system_length;
+    case Objective::kWidestField: return -m.field_deg;
+    case Objective::kLargestRim: return -m.rim_radius_px;
   }
   return 0;
 }
@@ -371,20 +362,13 @@ std::string ShortNumber(double v) {
 
 std::string NloptResultName(nlopt::result r) {
   switch (r) {
-    case nlopt::SUCCESS:
-      return "success";
-    case nlopt::STOPVAL_REACHED:
-      return "stopval reached";
-    case nlopt::FTOL_REACHED:
-      return "ftol reached";
-    case nlopt::XTOL_REACHED:
-      return "xtol reached";
-    case nlopt::MAXEVAL_REACHED:
-      return "maxeval reached";
-    case nlopt::MAXTIME_REACHED:
-      return "maxtime reached";
-    default:
-      return "code " + std::to_string(static_cast<int>(r));
+    case nlopt::SUCCESS: return "success";
+    case nlopt::STOPVAL_REACHED: return "stopval reached";
+    case nlopt::FTOL_REACHED: return "ftol reached";
+    case nlopt::XTOL_REACHED: return "xtol reached";
+    case nlopt::MAXEVAL_REACHED: return "maxeval reached";
+    case nlopt::MAXTIME_REACHED: return "maxtime reached";
+    default: return "code " + std::to_string(static_cast<int>(r));
   }
 }
 

@@ -10,6 +10,7 @@
 #include <sstream>
 
 #include "core/error.h"
+#include "core/format.h"
 #include "core/io.h"
 #include "results/html.h"
 #include "results/plot.h"
@@ -19,12 +20,6 @@ namespace {
 
 using Clock = std::chrono::steady_clock;
 double Since(Clock::time_point t) { return std::chrono::duration<double>(Clock::now() - t).count(); }
-
-std::string Fmt(const char* fmt, double v) {
-  char buf[64];
-  std::snprintf(buf, sizeof buf, fmt, v);
-  return buf;
-}
 
 nlohmann::json ToJson(const Metrics& m) {
   nlohmann::json j;
@@ -134,18 +129,18 @@ void AddMarkers(results::HeatMapFigure* f, const DesignStudy& st) {
 std::vector<std::string> MetricsRow(const std::string& label, const Optimum& o) {
   const Metrics& m = o.metrics;
   return {label,
-          Fmt("%.4f", m.p.a * 1e3),
-          Fmt("%.4f", m.p.b * 1e3),
-          Fmt("%.2f", m.p.d * 1e3),
-          Fmt("%.4f", m.system_length * 1e3),
-          Fmt("%.4f", m.upper_deg),
-          Fmt("%.3f", m.lower_deg),
-          Fmt("%.3f", m.field_deg),
-          Fmt("%.2f", m.rim_radius_px),
-          Fmt("%.1f", m.reflection_radius_px),
-          Fmt("%.3f", m.sag * 1e3),
-          Fmt("%.3f", m.ground_radius_inner),
-          std::isfinite(m.ground_radius_outer) ? Fmt("%.2f", m.ground_radius_outer) : "infinite",
+          FormatNumber("%.4f", m.p.a * 1e3),
+          FormatNumber("%.4f", m.p.b * 1e3),
+          FormatNumber("%.2f", m.p.d * 1e3),
+          FormatNumber("%.4f", m.system_length * 1e3),
+          FormatNumber("%.4f", m.upper_deg),
+          FormatNumber("%.3f", m.lower_deg),
+          FormatNumber("%.3f", m.field_deg),
+          FormatNumber("%.2f", m.rim_radius_px),
+          FormatNumber("%.1f", m.reflection_radius_px),
+          FormatNumber("%.3f", m.sag * 1e3),
+          FormatNumber("%.3f", m.ground_radius_inner),
+          std::isfinite(m.ground_radius_outer) ? FormatNumber("%.2f", m.ground_radius_outer) : "infinite",
           o.max_violation <= 0 ? "yes" : "NO"};
 }
 
@@ -222,8 +217,8 @@ std::string WriteDesignReport(const DesignConfig& cfg, const DesignStudy& st, co
     csv << "design,elevation_deg,rho_px,px_per_deg\n";
     const auto put = [&](const char* name, const std::vector<ResolutionSample>& r) {
       for (const auto& x : r)
-        csv << name << ',' << Fmt("%.6f", x.elevation_deg) << ',' << Fmt("%.4f", x.rho_px) << ','
-            << Fmt("%.5f", x.px_per_deg) << '\n';
+        csv << name << ',' << FormatNumber("%.6f", x.elevation_deg) << ',' << FormatNumber("%.4f", x.rho_px) << ','
+            << FormatNumber("%.5f", x.px_per_deg) << '\n';
     };
     put("continuous_optimum", st.resolution_continuous);
     put("marked", st.resolution_marked);
@@ -341,10 +336,12 @@ std::string WriteDesignReport(const DesignConfig& cfg, const DesignStudy& st, co
   sum << "hovs design: " << cfg.name << " (objective " << ToString(cfg.problem.objective) << ")\n";
   const auto line = [&](const std::string& label, const Optimum& o) {
     sum << "  " << label << std::string(label.size() < 20 ? 20 - label.size() : 0, ' ')
-        << " a = " << Fmt("%.4f", o.metrics.p.a * 1e3) << " mm, b = " << Fmt("%.4f", o.metrics.p.b * 1e3)
-        << " mm, d = " << Fmt("%.1f", o.metrics.p.d * 1e3) << " mm, 2c = " << Fmt("%.3f", o.metrics.system_length * 1e3)
-        << " mm, field " << Fmt("%.3f", o.metrics.lower_deg) << " .. " << Fmt("%.3f", o.metrics.upper_deg)
-        << " deg, rim " << Fmt("%.1f", o.metrics.rim_radius_px) << " px"
+        << " a = " << FormatNumber("%.4f", o.metrics.p.a * 1e3)
+        << " mm, b = " << FormatNumber("%.4f", o.metrics.p.b * 1e3)
+        << " mm, d = " << FormatNumber("%.1f", o.metrics.p.d * 1e3)
+        << " mm, 2c = " << FormatNumber("%.3f", o.metrics.system_length * 1e3) << " mm, field "
+        << FormatNumber("%.3f", o.metrics.lower_deg) << " .. " << FormatNumber("%.3f", o.metrics.upper_deg)
+        << " deg, rim " << FormatNumber("%.1f", o.metrics.rim_radius_px) << " px"
         << (o.max_violation <= 0 ? "" : "  [INFEASIBLE]") << "\n";
   };
   line("continuous optimum", st.continuous);
@@ -373,15 +370,15 @@ std::string WriteDesignReport(const DesignConfig& cfg, const DesignStudy& st, co
   std::vector<std::vector<std::string>> crow;
   const auto add_c = [&](const std::string& label, const Optimum& o) {
     for (const auto& c : o.constraints)
-      crow.push_back({label, c.name, Fmt("%.9g", c.value) + " " + c.unit, Fmt("%.6g", c.limit) + " " + c.unit,
-                      c.value <= 0 ? "yes" : "NO"});
+      crow.push_back({label, c.name, FormatNumber("%.9g", c.value) + " " + c.unit,
+                      FormatNumber("%.6g", c.limit) + " " + c.unit, c.value <= 0 ? "yes" : "NO"});
   };
   add_c("continuous optimum", st.continuous);
   if (st.integer_mm) add_c("integer-mm optimum", *st.integer_mm);
   if (st.marked) add_c("marked design", *st.marked);
   page.Table({"design", "constraint", "g", "limit", "satisfied"}, crow);
   page.Heading("Figures");
-  page.Paragraph("Heat maps over (a, b) at d = " + Fmt("%.1f", s.D(slice) * 1e3) +
+  page.Paragraph("Heat maps over (a, b) at d = " + FormatNumber("%.1f", s.D(slice) * 1e3) +
                  " mm; pale regions violate at least one constraint. Markers: red circle the continuous optimum, "
                  "orange square the integer-millimetre optimum, black cross the marked design.");
   page.Figure("figures/vertical_field.png", "Vertical field of view (the article's Fig. 3)", 540);

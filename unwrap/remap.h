@@ -13,6 +13,7 @@
 #pragma once
 
 #include <cstdint>
+#include <filesystem>
 #include <string>
 #include <vector>
 
@@ -40,6 +41,10 @@ struct Image8 {
   std::vector<uint8_t> data;  // rows of width * channels bytes
   ImageView View(PixelFormat f) const { return {data.data(), width, height, size_t(width) * channels, f}; }
 };
+
+// An image file as 8-bit grey (one channel) or RGB (three or more channels: alpha dropped); errors as
+// io::ReadImage (naming the file).
+Image8 LoadImage8(const std::filesystem::path& path);
 
 // One level of the 2 x 2 box pyramid: out becomes ceil(w / 2) x ceil(h / 2) with, per channel,
 // out(i, j) = (in(2i, 2j) + in(2i + 1, 2j) + in(2i, 2j + 1) + in(2i + 1, 2j + 1) + 2) >> 2, the last column or row

@@ -355,32 +355,23 @@ __attribute__((target("avx2"))) void BayerRgbRowAvx2(const uint8_t* data, ptrdif
 
 void BilinearRgbRow(const uint8_t* src, ptrdiff_t stride, const RowCoords& c, int i0, int n, uint8_t* out) {
   switch (ActiveIsa()) {
-    case Isa::kAvx512:
-      return avx512::BilinearRgbRow(src, stride, c, i0, n, out);
-    case Isa::kAvx2:
-      return BilinearRgbRowAvx2(src, stride, c, i0, n, out);
-    default:
-      return BilinearRgbRowScalar(src, stride, c, i0, n, out);
+    case Isa::kAvx512: return avx512::BilinearRgbRow(src, stride, c, i0, n, out);
+    case Isa::kAvx2: return BilinearRgbRowAvx2(src, stride, c, i0, n, out);
+    default: return BilinearRgbRowScalar(src, stride, c, i0, n, out);
   }
 }
 void BilinearGrayRow(const uint8_t* src, ptrdiff_t stride, const RowCoords& c, int i0, int n, uint8_t* out) {
   switch (ActiveIsa()) {
-    case Isa::kAvx512:
-      return avx512::BilinearGrayRow(src, stride, c, i0, n, out);
-    case Isa::kAvx2:
-      return BilinearGrayRowAvx2(src, stride, c, i0, n, out);
-    default:
-      return BilinearGrayRowScalar(src, stride, c, i0, n, out);
+    case Isa::kAvx512: return avx512::BilinearGrayRow(src, stride, c, i0, n, out);
+    case Isa::kAvx2: return BilinearGrayRowAvx2(src, stride, c, i0, n, out);
+    default: return BilinearGrayRowScalar(src, stride, c, i0, n, out);
   }
 }
 void BayerRgbRow(const uint8_t* src, ptrdiff_t stride, const RowCoords& c, int i0, int n, uint8_t* out) {
   switch (ActiveIsa()) {
-    case Isa::kAvx512:
-      return avx512::BayerRgbRow(src, stride, c, i0, n, out);
-    case Isa::kAvx2:
-      return BayerRgbRowAvx2(src, stride, c, i0, n, out);
-    default:
-      return BayerRgbRowScalar(src, stride, c, i0, n, out);
+    case Isa::kAvx512: return avx512::BayerRgbRow(src, stride, c, i0, n, out);
+    case Isa::kAvx2: return BayerRgbRowAvx2(src, stride, c, i0, n, out);
+    default: return BayerRgbRowScalar(src, stride, c, i0, n, out);
   }
 }
 
@@ -672,34 +663,25 @@ __attribute__((target("avx2"), flatten)) void BayerRgbTileAvx2(const uint8_t* sr
 void BilinearRgbTile(const uint8_t* src, ptrdiff_t stride, const Tile& t, int T, int nu, int nv, uint8_t* out,
                      ptrdiff_t ostride) {
   switch (ActiveIsa()) {
-    case Isa::kAvx512:
-      return avx512::BilinearRgbTile(src, stride, t, T, nu, nv, out, ostride);
-    case Isa::kAvx2:
-      return BilinearRgbTileAvx2(src, stride, t, T, nu, nv, out, ostride);
-    default:
-      return TileByRows(BilinearRgbRowScalar, 3, src, stride, t, T, nu, nv, out, ostride);
+    case Isa::kAvx512: return avx512::BilinearRgbTile(src, stride, t, T, nu, nv, out, ostride);
+    case Isa::kAvx2: return BilinearRgbTileAvx2(src, stride, t, T, nu, nv, out, ostride);
+    default: return TileByRows(BilinearRgbRowScalar, 3, src, stride, t, T, nu, nv, out, ostride);
   }
 }
 void BilinearGrayTile(const uint8_t* src, ptrdiff_t stride, const Tile& t, int T, int nu, int nv, uint8_t* out,
                       ptrdiff_t ostride) {
   switch (ActiveIsa()) {
-    case Isa::kAvx512:
-      return avx512::BilinearGrayTile(src, stride, t, T, nu, nv, out, ostride);
-    case Isa::kAvx2:
-      return BilinearGrayTileAvx2(src, stride, t, T, nu, nv, out, ostride);
-    default:
-      return TileByRows(BilinearGrayRowScalar, 1, src, stride, t, T, nu, nv, out, ostride);
+    case Isa::kAvx512: return avx512::BilinearGrayTile(src, stride, t, T, nu, nv, out, ostride);
+    case Isa::kAvx2: return BilinearGrayTileAvx2(src, stride, t, T, nu, nv, out, ostride);
+    default: return TileByRows(BilinearGrayRowScalar, 1, src, stride, t, T, nu, nv, out, ostride);
   }
 }
 void BayerRgbTile(const uint8_t* src, ptrdiff_t stride, const Tile& t, int T, int nu, int nv, uint8_t* out,
                   ptrdiff_t ostride) {
   switch (ActiveIsa()) {
-    case Isa::kAvx512:
-      return avx512::BayerRgbTile(src, stride, t, T, nu, nv, out, ostride);
-    case Isa::kAvx2:
-      return BayerRgbTileAvx2(src, stride, t, T, nu, nv, out, ostride);
-    default:
-      return TileByRows(BayerRgbRowScalar, 3, src, stride, t, T, nu, nv, out, ostride);
+    case Isa::kAvx512: return avx512::BayerRgbTile(src, stride, t, T, nu, nv, out, ostride);
+    case Isa::kAvx2: return BayerRgbTileAvx2(src, stride, t, T, nu, nv, out, ostride);
+    default: return TileByRows(BayerRgbRowScalar, 3, src, stride, t, T, nu, nv, out, ostride);
   }
 }
 
