@@ -118,10 +118,8 @@ class AnyModel {
       case Kind::kExact:
         return (svp_ ? unbounded_.ImgFromMirrorSvp(X, uv) : unbounded_.ImgFromMirrorGeneral(X, uv)) ==
                ProjectionStatus::kOk;
-      case Kind::kPolynomial:
-        return poly_.ImgFromCam(X, uv);
-      case Kind::kUnified:
-        return unified_.ImgFromCam(X, uv);
+      case Kind::kPolynomial: return poly_.ImgFromCam(X, uv);
+      case Kind::kUnified: return unified_.ImgFromCam(X, uv);
     }
     return false;
   }
@@ -141,8 +139,7 @@ class AnyModel {
         if (rho < poly_.rho_min || rho > poly_.rho_max) return false;
         return poly_.CamFromImg(uv, bearing);
       }
-      case Kind::kUnified:
-        return InAnnulus(uv) && unified_.CamFromImg(uv, bearing);
+      case Kind::kUnified: return InAnnulus(uv) && unified_.CamFromImg(uv, bearing);
     }
     return false;
   }

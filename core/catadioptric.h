@@ -42,20 +42,13 @@ enum class ProjectionStatus {
 
 inline const char* ToString(ProjectionStatus s) {
   switch (s) {
-    case ProjectionStatus::kOk:
-      return "ok";
-    case ProjectionStatus::kMissesMirror:
-      return "misses the mirror";
-    case ProjectionStatus::kInsideMirror:
-      return "behind the mirror surface";
-    case ProjectionStatus::kOccluded:
-      return "occluded by the camera";
-    case ProjectionStatus::kBehindCamera:
-      return "behind the camera";
-    case ProjectionStatus::kOutsideImage:
-      return "outside the image";
-    case ProjectionStatus::kNoSolution:
-      return "no law-of-reflection solution";
+    case ProjectionStatus::kOk: return "ok";
+    case ProjectionStatus::kMissesMirror: return "misses the mirror";
+    case ProjectionStatus::kInsideMirror: return "behind the mirror surface";
+    case ProjectionStatus::kOccluded: return "occluded by the camera";
+    case ProjectionStatus::kBehindCamera: return "behind the camera";
+    case ProjectionStatus::kOutsideImage: return "outside the image";
+    case ProjectionStatus::kNoSolution: return "no law-of-reflection solution";
   }
   return "unknown";
 }

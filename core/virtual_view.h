@@ -47,14 +47,10 @@ enum class ViewProjection { kPerspective, kCylindrical, kLongLat, kEpipolar };
 
 inline const char* ToString(ViewProjection p) {
   switch (p) {
-    case ViewProjection::kPerspective:
-      return "perspective";
-    case ViewProjection::kCylindrical:
-      return "cylindrical";
-    case ViewProjection::kLongLat:
-      return "longlat";
-    case ViewProjection::kEpipolar:
-      return "epipolar";
+    case ViewProjection::kPerspective: return "perspective";
+    case ViewProjection::kCylindrical: return "cylindrical";
+    case ViewProjection::kLongLat: return "longlat";
+    case ViewProjection::kEpipolar: return "epipolar";
   }
   return "?";
 }

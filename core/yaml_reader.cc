@@ -50,9 +50,7 @@ double YamlReader::Number(const YAML::Node& n, const std::string& key) const {
   double v = 0;
   try {
     v = n.as<double>();
-  } catch (const YAML::Exception&) {
-    throw Error(Where(n, key), "expected a number, got '" + n.Scalar() + "'");
-  }
+  } catch (const YAML::Exception&) { throw Error(Where(n, key), "expected a number, got '" + n.Scalar() + "'"); }
   HOVS_REQUIRE(std::isfinite(v), Where(n, key), "must be a finite number (got ", n.Scalar(), ")");
   return v;
 }
@@ -89,9 +87,7 @@ std::string YamlReader::Name(const YAML::Node& n, const std::string& key) const 
 bool YamlReader::Bool(const YAML::Node& n, const std::string& key) const {
   try {
     return n.as<bool>();
-  } catch (const YAML::Exception&) {
-    throw Error(Where(n, key), "expected true or false");
-  }
+  } catch (const YAML::Exception&) { throw Error(Where(n, key), "expected true or false"); }
 }
 
 std::string YamlReader::String(const YAML::Node& n, const std::string& key) const {

@@ -20,9 +20,7 @@ template <class F>
 auto WithYamlErrors(const std::string& source, F&& parse) -> decltype(parse()) {
   try {
     return parse();
-  } catch (const YAML::Exception& e) {
-    throw Error(source, std::string("malformed YAML: ") + e.what());
-  }
+  } catch (const YAML::Exception& e) { throw Error(source, std::string("malformed YAML: ") + e.what()); }
 }
 
 class YamlReader {

@@ -81,24 +81,15 @@ int PresizeStreamSocket(uint16_t port, int bytes) {
 
 const char* StatusName(ArvBufferStatus s) {
   switch (s) {
-    case ARV_BUFFER_STATUS_SUCCESS:
-      return "success";
-    case ARV_BUFFER_STATUS_CLEARED:
-      return "cleared";
-    case ARV_BUFFER_STATUS_TIMEOUT:
-      return "timeout";
-    case ARV_BUFFER_STATUS_MISSING_PACKETS:
-      return "missing packets";
-    case ARV_BUFFER_STATUS_WRONG_PACKET_ID:
-      return "wrong packet id";
-    case ARV_BUFFER_STATUS_SIZE_MISMATCH:
-      return "size mismatch";
-    case ARV_BUFFER_STATUS_FILLING:
-      return "filling";
-    case ARV_BUFFER_STATUS_ABORTED:
-      return "aborted";
-    default:
-      return "unknown";
+    case ARV_BUFFER_STATUS_SUCCESS: return "success";
+    case ARV_BUFFER_STATUS_CLEARED: return "cleared";
+    case ARV_BUFFER_STATUS_TIMEOUT: return "timeout";
+    case ARV_BUFFER_STATUS_MISSING_PACKETS: return "missing packets";
+    case ARV_BUFFER_STATUS_WRONG_PACKET_ID: return "wrong packet id";
+    case ARV_BUFFER_STATUS_SIZE_MISMATCH: return "size mismatch";
+    case ARV_BUFFER_STATUS_FILLING: return "filling";
+    case ARV_BUFFER_STATUS_ABORTED: return "aborted";
+    default: return "unknown";
   }
 }
 
@@ -190,8 +181,7 @@ class AravisCamera : public CameraSource {
   ~AravisCamera() override {
     try {
       Stop();
-    } catch (...) {
-    }
+    } catch (...) {}
     if (stream_) g_object_unref(stream_);
     if (camera_) g_object_unref(camera_);
   }

@@ -255,15 +255,12 @@ CaptureResult CaptureDataset(const std::vector<CameraSource*>& sources, const Ca
     std::string why;
     try {
       throw;
-    } catch (const std::exception& e) {
-      why = std::string(": ") + e.what();
-    } catch (...) {
+    } catch (const std::exception& e) { why = std::string(": ") + e.what(); } catch (...) {
     }
     m["status"] = "stopped by an error after " + std::to_string(r.written) + " frames" + why;
     try {
       write_manifest_locked();
-    } catch (...) {
-    }
+    } catch (...) {}
     throw;
   }
   if (o.progress) std::fprintf(stderr, "\n");

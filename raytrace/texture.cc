@@ -121,8 +121,7 @@ Rgb Mix(const Rgb& a, const Rgb& b, double t) {
 
 Rgb Texture::Eval(double s, double t) const {
   switch (kind) {
-    case Kind::kSolid:
-      return colour_a;
+    case Kind::kSolid: return colour_a;
     case Kind::kChecker: {
       // Square (0, 0) is the one at the board's (-x, -y) corner; it is dark.
       const double x = s / square + 0.5 * squares_x, y = t / square + 0.5 * squares_y;

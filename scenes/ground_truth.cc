@@ -111,9 +111,7 @@ raytrace::CatadioptricUnit UnitFromJson(const nlohmann::json& j, const std::stri
     u.rig.occluder_radius = JsonNumber(j, "occluder_radius", where);
     u.rig.Check(where);
     return u;
-  } catch (const nlohmann::json::exception& e) {
-    throw Error(where, std::string("bad unit description: ") + e.what());
-  }
+  } catch (const nlohmann::json::exception& e) { throw Error(where, std::string("bad unit description: ") + e.what()); }
 }
 
 nlohmann::json BoardToJson(const BoardInstance& b) {

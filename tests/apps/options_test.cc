@@ -29,9 +29,7 @@ TEST(Options, EveryNumericOptionOfEveryCommandIsBounded) {
       bool bounded = true;
       try {
         opt->get_validator("bounded");
-      } catch (const CLI::OptionNotFound&) {
-        bounded = false;
-      }
+      } catch (const CLI::OptionNotFound&) { bounded = false; }
       EXPECT_TRUE(bounded) << "hovs " << cmd.name << " " << opt->get_name() << " (" << opt->get_type_name()
                            << ") has no bounds: add ->check(Bounded(lo, hi))";
     }

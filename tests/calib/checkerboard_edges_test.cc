@@ -152,9 +152,7 @@ TEST(CheckerboardEdges, SmallSquaresKeepTheirCorners) {
   for (size_t q = 0; q < grid.size(); ++q) {
     EXPECT_FALSE(refined[q]);
     EXPECT_EQ(grid[q].has_value(), before[q].has_value());
-    if (grid[q]) {
-      EXPECT_EQ(*grid[q], *before[q]);
-    }
+    if (grid[q]) { EXPECT_EQ(*grid[q], *before[q]); }
   }
 }
 

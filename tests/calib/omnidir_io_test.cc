@@ -88,9 +88,7 @@ TEST(OmnidirIo, BadFilesAreRefusedByName) {
   try {
     ParseOmnidirYaml(no_xi, "no_xi.yaml");
     FAIL() << "a file without xi was accepted";
-  } catch (const Error& e) {
-    EXPECT_NE(std::string(e.what()).find("(xi): missing"), std::string::npos) << e.what();
-  }
+  } catch (const Error& e) { EXPECT_NE(std::string(e.what()).find("(xi): missing"), std::string::npos) << e.what(); }
   std::string bad_f = good;
   const size_t at = bad_f.find("data: [ ") + 8;
   bad_f.replace(at, 1, "-");  // fx negative

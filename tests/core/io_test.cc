@@ -87,9 +87,7 @@ TEST(Io, StagingLeftByAKilledRunIsRemovedByTheNextOne) {
 std::string ErrorOf(const std::function<void()>& f) {
   try {
     f();
-  } catch (const Error& e) {
-    return e.what();
-  }
+  } catch (const Error& e) { return e.what(); }
   return "";
 }
 

@@ -68,9 +68,7 @@ TEST(LargePages, MappingIsAdvisedForTransparentHugePages) {
     std::istringstream head(line);
     if (head >> std::hex >> lo >> dash >> hi && dash == '-') {
       in_mapping = lo <= addr && addr < hi;
-      if (in_mapping) {
-        EXPECT_GE(hi - addr, bytes);
-      }
+      if (in_mapping) { EXPECT_GE(hi - addr, bytes); }
     } else if (in_mapping && line.rfind("THPeligible:", 0) == 0) {
       eligible = std::stoi(line.substr(12));
     }

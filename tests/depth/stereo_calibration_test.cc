@@ -170,9 +170,7 @@ TEST(StereoCalibration, RejectsTooFewPairsAndPairsWithoutCommonMarkers) {
   try {
     CalibrateStereo(left, right, disjoint, board, {});
     ADD_FAILURE() << "no error";
-  } catch (const Error& e) {
-    EXPECT_NE(std::string(e.what()).find("common markers"), std::string::npos) << e.what();
-  }
+  } catch (const Error& e) { EXPECT_NE(std::string(e.what()).find("common markers"), std::string::npos) << e.what(); }
 }
 
 // Sparse depth through the exact models: the misaligned right unit's rays start on its mirror, not at F1, so

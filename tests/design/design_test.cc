@@ -83,9 +83,7 @@ TEST(DesignStudy, ArticleAcceptance) {
   EXPECT_GT(opt.constraints[1].value, -1e-3);
   // No feasible grid point beats it.
   for (size_t i = 0; i < sweep.size(); ++i) {
-    if (sweep.violated[i] == 0) {
-      ASSERT_GE(sweep.objective[i], opt.objective - 1e-12) << "grid point " << i;
-    }
+    if (sweep.violated[i] == 0) { ASSERT_GE(sweep.objective[i], opt.objective - 1e-12) << "grid point " << i; }
   }
   // The best integer-millimetre design is the article's a = 48, b = 44.
   const auto mm = OptimizeIntegerMillimetre(cfg.problem);
@@ -119,9 +117,7 @@ TEST(DesignStudy, OptimisesTheRimDiameterWhenAsked) {
   const Optimum opt = OptimizeContinuous(cfg.problem, sweep);
   EXPECT_LE(opt.max_violation, 0.0);
   for (size_t i = 0; i < sweep.size(); ++i) {
-    if (sweep.violated[i] == 0) {
-      ASSERT_GE(sweep.objective[i], opt.objective - 1e-12);
-    }
+    if (sweep.violated[i] == 0) { ASSERT_GE(sweep.objective[i], opt.objective - 1e-12); }
   }
   // A smaller rim allows a smaller system.
   EXPECT_LT(opt.metrics.p.d, 0.080);

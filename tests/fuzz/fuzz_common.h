@@ -28,7 +28,6 @@ inline void UseModel(const AnyModel& m, int n = 16) {
     const std::string input(reinterpret_cast<const char*>(data), size);     \
     try {                                                                   \
       body(input);                                                          \
-    } catch (const hovs::Error&) {                                          \
-    }                                                                       \
+    } catch (const hovs::Error&) {}                                         \
     return 0;                                                               \
   }

@@ -18,8 +18,7 @@ void Run(const std::string& input) {
     if (j["units"][i].contains("mirror")) {
       try {
         hovs::scenes::UnitFromJson(j["units"][i], "dataset.json (units)");
-      } catch (const hovs::Error&) {
-      }
+      } catch (const hovs::Error&) {}
     }
 }
 

@@ -24,8 +24,7 @@ void Run(const std::string& input) {
   for (const char* kind : {"auto", "polynomial"}) {
     try {
       hovs::fuzz::UseModel(hovs::apps::LoadCalibratedModel(File(), kind), 8);
-    } catch (const hovs::Error&) {
-    }
+    } catch (const hovs::Error&) {}
   }
   hovs::apps::LoadModelSpec(File().string(), "", 10.0);
 }

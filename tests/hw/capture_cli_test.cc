@@ -65,9 +65,7 @@ TEST(CaptureCli, RenderedFramesCrossTheProtocolIntoADatasetThatCalibratesAndUnwr
     auto got = Grey8(dir / "cap" / v["image"].get<std::string>(), &w, &h);
     const uint64_t k = Stamp(got);
     // Nothing is lost at the start: the first frame written is the first one the simulator served.
-    if (&fr == &m["frames"][0]) {
-      EXPECT_EQ(k, 0u) << "the first captured frame is served frame " << k;
-    }
+    if (&fr == &m["frames"][0]) { EXPECT_EQ(k, 0u) << "the first captured frame is served frame " << k; }
     auto sent = Grey8(dir / "set" / src["frames"][k % 5]["views"][0]["image"].get<std::string>(), &ws, &hs);
     ASSERT_EQ(w, ws);
     for (int i = 0; i < 8; ++i) sent[i] = static_cast<uint8_t>(k >> (8 * i));

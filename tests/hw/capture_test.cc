@@ -152,9 +152,7 @@ TEST(GigECapture, BadInputIsOneClearError) {
   try {
     OpenAravisCamera("127.0.0.9", Settings());
     FAIL() << "a missing camera was opened";
-  } catch (const Error& e) {
-    EXPECT_NE(std::string(e.what()).find("not found"), std::string::npos) << e.what();
-  }
+  } catch (const Error& e) { EXPECT_NE(std::string(e.what()).find("not found"), std::string::npos) << e.what(); }
   // Grab times out cleanly when the camera waits for a trigger that never comes.
   s = Settings();
   s.trigger = "software";

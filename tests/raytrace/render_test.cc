@@ -446,9 +446,7 @@ TEST(RayScene, RejectsAWorldBeyondSinglePrecision) {
     try {
       raytrace::RayScene scene(std::move(d));
       ADD_FAILURE() << "accepted";
-    } catch (const Error& e) {
-      EXPECT_NE(std::string(e.what()).find(needle), std::string::npos) << e.what();
-    }
+    } catch (const Error& e) { EXPECT_NE(std::string(e.what()).find(needle), std::string::npos) << e.what(); }
   };
   raytrace::SceneDescription wide = base.description;
   wide.rects[0].width = 3 * raytrace::kWorldExtent;  // its corners reach past the extent, its centre does not
@@ -534,9 +532,7 @@ TEST(Render, ThinLensAndMotionBlurRaysAreTheCoresGeometry) {
           EXPECT_NEAR(b.mount_t[i], ring ? t : 0.0, 1e-12) << "sample " << i;
           rings += ring;
         }
-        if (hit) {
-          EXPECT_EQ(b.from_camera[i], -1) << "sample " << i;
-        }
+        if (hit) { EXPECT_EQ(b.from_camera[i], -1) << "sample " << i; }
         ASSERT_EQ(b.from_mirror[i], hit ? 0 : -1) << "sample " << i;
         EXPECT_EQ(b.valid[i], 1);
         EXPECT_EQ(b.tnear[i], 1e-5f);
@@ -787,9 +783,7 @@ TEST(Render, AnExposureBeyondTheMotionHorizonIsRefused) {
   try {
     raytrace::Render(scene, raytrace::ViewCamera::Unit(0), ro);
     ADD_FAILURE() << "an exposure beyond the horizon was rendered";
-  } catch (const Error& e) {
-    EXPECT_NE(std::string(e.what()).find("exposure_time"), std::string::npos) << e.what();
-  }
+  } catch (const Error& e) { EXPECT_NE(std::string(e.what()).find("exposure_time"), std::string::npos) << e.what(); }
   ro.exposure_time = 1.0;  // within it
   EXPECT_NO_THROW(raytrace::Render(scene, raytrace::ViewCamera::Unit(0), ro));
 }

@@ -340,8 +340,7 @@ TEST(MappingFile, EditedTilesWithAValidChecksumCannotReadOutsideTheFrame) {
       r.Run(frame.View(PixelFormat::kRgb8), Interpolation::kBilinear, &views);
       r.Run(frame.View(PixelFormat::kBayerRggb8), Interpolation::kBilinear, &views);
       ++loaded;
-    } catch (const Error&) {
-    }
+    } catch (const Error&) {}
   }
   EXPECT_GT(loaded, 0) << "some edits (pixel values of dense tiles) leave a consistent file";
   std::filesystem::remove_all(dir);
@@ -624,9 +623,7 @@ TEST(Remap, RejectsBadInput) {
   try {
     r.Run({img.data(), 100, 100, 300, PixelFormat::kRgb8}, Interpolation::kBilinear, &out);
     ADD_FAILURE() << "no error";
-  } catch (const Error& e) {
-    EXPECT_NE(std::string(e.what()).find("2750 x 2200"), std::string::npos) << e.what();
-  }
+  } catch (const Error& e) { EXPECT_NE(std::string(e.what()).find("2750 x 2200"), std::string::npos) << e.what(); }
   ViewSpec wide;
   wide.name = "wide", wide.hfov_deg = 180;
   EXPECT_THROW(wide.Check("test"), Error);
