@@ -1,6 +1,7 @@
 #include <iostream>
 
 #include "apps/commands.h"
+#include "calib/mono_calibration.h"
 #include "core/error.h"
 #include "scenes/dataset.h"
 #include "scenes/scene_config.h"
@@ -45,7 +46,8 @@ Runner SetupDataset(CLI::App* sub, const GlobalOptions* global) {
     int samples = 0;
     int downscale = 1;
     std::string unit;
-    std::vector<double> elevation;
+    std::vector<double> elevation, distance;
+    std::string board;
   };
   auto o = std::make_shared<Options>();
   sub->add_option("-s,--scene", o->scene, "base scene: units, background (its boards are replaced)")
@@ -67,6 +69,11 @@ Runner SetupDataset(CLI::App* sub, const GlobalOptions* global) {
   sub->add_option("--elevation", o->elevation, "board centre elevation range MIN MAX, degrees (default: per kind)")
       ->check(Bounded(-90, 90))
       ->expected(2);
+  sub->add_option("--distance", o->distance, "board centre distance range MIN MAX, m (default: per kind)")
+      ->check(Bounded(0.01, 1000))
+      ->expected(2);
+  sub->add_option("--board", o->board,
+                  "mono_calibration: checkerboard COLSxROWSxSQUARE, inner corners and square (m), e.g. 7x11x0.03");
   return [o, global, samples, count]() {
     scenes::SceneConfig cfg = scenes::LoadSceneConfig(o->scene);
     scenes::DownscaleCameras(&cfg, o->downscale);
@@ -76,6 +83,14 @@ Runner SetupDataset(CLI::App* sub, const GlobalOptions* global) {
     scenes::DatasetOptions d = scenes::DatasetOptions::ForKind(o->kind);
     if (count->count() > 0) d.count = o->count;
     if (!o->elevation.empty()) d.min_elevation_deg = o->elevation[0], d.max_elevation_deg = o->elevation[1];
+    if (!o->distance.empty()) d.min_distance = o->distance[0], d.max_distance = o->distance[1];
+    if (!o->board.empty()) {
+      HOVS_REQUIRE(d.kind == "mono_calibration", "--board", "sets the checkerboard of a mono_calibration dataset");
+      const calib::CheckerboardSpec spec = calib::ParseBoardSpec(o->board, "--board");
+      d.board.kind = scenes::BoardSpec::Kind::kChecker;
+      d.board.squares_x = spec.cols + 1, d.board.squares_y = spec.rows + 1, d.board.square = spec.square;
+    }
+    d.Check("dataset options");
     d.seed = o->seed;
     d.progress = !global->quiet;
     d.step_m = o->step, d.heading_deg = o->heading, d.yaw_step_deg = o->yaw_step;

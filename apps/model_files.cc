@@ -31,6 +31,13 @@ PolynomialModel<double> LoadPolynomialModelFile(const std::filesystem::path& pat
   m.c = JsonNumber(p, "c", where), m.d = JsonNumber(p, "d", where), m.e = JsonNumber(p, "e", where);
   m.poly = JsonNumbers(p, "poly", 2, 21, where);
   m.inv_poly = JsonNumbers(p, "inv_poly", 0, 64, where);
+  if (p.contains("inverse")) {
+    const auto& inv = p["inverse"];
+    m.inv_cheb = JsonNumbers(inv, "chebyshev", 1, 64, where + ".inverse");
+    const std::vector<double> range = JsonNumbers(inv, "theta_range", 2, 2, where + ".inverse");
+    m.inv_theta_lo = range[0], m.inv_theta_hi = range[1];
+    m.inv_error_px = JsonNumber(inv, "max_error_px", where + ".inverse");
+  }
   const std::vector<double> rho = JsonNumbers(p, "rho_range", 2, 2, where);
   m.rho_min = rho[0], m.rho_max = rho[1];
   m.Check(path.string());

@@ -7,6 +7,7 @@
 
 #include "calib/checkerboard_edges.h"
 #include "core/error.h"
+#include "core/format.h"
 
 namespace hovs::calib {
 
@@ -27,6 +28,7 @@ void CheckerboardDetectOptions::Check(const std::string& where) const {
   HOVS_REQUIRE(subpix_half_window >= 0 && subpix_half_window <= 30, where, "subpix_half_window must lie in [0, 30]");
   HOVS_REQUIRE(corner_refinement == "edges" || corner_refinement == "subpix", where,
                "corner_refinement must be 'edges' or 'subpix' (got '", corner_refinement, "')");
+  HOVS_REQUIRE(max_label_error > 0 && max_label_error <= 1, where, "max_label_error must lie in (0, 1]");
 }
 
 namespace {
@@ -337,6 +339,63 @@ std::vector<Candidate> Candidates(const cv::Mat& grey, const CheckerboardDetectO
 
 }  // namespace
 
+std::vector<char> ProveGridLabels(const std::vector<Vec2d>& p, int cols, int rows, double max_fraction, double min_px,
+                                  std::vector<double>* removed_errors, double* worst) {
+  std::vector<char> keep(p.size(), 1);
+  const auto at = [&](int i, int j) -> const Vec2d* {
+    if (i < 0 || j < 0 || i >= cols || j >= rows || !keep[j * cols + i]) return nullptr;
+    return &p[j * cols + i];
+  };
+  // Prediction along direction (di, dj) and the local square size there; false if the line has too few corners.
+  const auto predict = [&](int i, int j, int di, int dj, Vec2d* out, double* square) {
+    const Vec2d *m1 = at(i - di, j - dj), *p1 = at(i + di, j + dj);
+    const Vec2d *m2 = at(i - 2 * di, j - 2 * dj), *p2 = at(i + 2 * di, j + 2 * dj);
+    const Vec2d *m3 = at(i - 3 * di, j - 3 * dj), *p3 = at(i + 3 * di, j + 3 * dj);
+    if (m1 && p1 && m2 && p2) {
+      *out = (-*m2 + 4 * *m1 + 4 * *p1 - *p2) / 6, *square = 0.5 * (*p1 - *m1).norm();
+    } else if (m1 && p1) {
+      *out = 0.5 * (*m1 + *p1), *square = 0.5 * (*p1 - *m1).norm();
+    } else if (m1 && m2 && m3) {
+      *out = 3 * *m1 - 3 * *m2 + *m3, *square = (*m1 - *m2).norm();
+    } else if (p1 && p2 && p3) {
+      *out = 3 * *p1 - 3 * *p2 + *p3, *square = (*p1 - *p2).norm();
+    } else {
+      return false;
+    }
+    return true;
+  };
+  // Relative error of corner (i, j) (the smaller of its two lines'), and the same counting only misses above
+  // min_px (what the check acts on: on squares of a few pixels, the corners' own noise is a large fraction).
+  const auto error_of = [&](int i, int j, double* acted) {
+    double best = HUGE_VAL, best_acted = HUGE_VAL;
+    for (const auto& [di, dj] : {std::pair(1, 0), std::pair(0, 1)}) {
+      Vec2d pred;
+      double square = 0;
+      if (!predict(i, j, di, dj, &pred, &square) || !(square > 0)) continue;
+      const double miss = (p[j * cols + i] - pred).norm();
+      best = std::min(best, miss / square), best_acted = std::min(best_acted, miss <= min_px ? 0.0 : miss / square);
+    }
+    *acted = best_acted == HUGE_VAL ? 0.0 : best_acted;  // a corner no line predicts cannot be checked
+    return best == HUGE_VAL ? 0.0 : best;
+  };
+  for (;;) {
+    int worst_k = -1;
+    double worst_e = 0;
+    *worst = 0;
+    for (int j = 0; j < rows; ++j)
+      for (int i = 0; i < cols; ++i) {
+        if (!keep[j * cols + i]) continue;
+        double acted = 0;
+        *worst = std::max(*worst, error_of(i, j, &acted));
+        if (acted > worst_e) worst_e = acted, worst_k = j * cols + i;
+      }
+    if (worst_k < 0 || worst_e <= max_fraction) break;
+    keep[worst_k] = 0;
+    removed_errors->push_back(worst_e);
+  }
+  return keep;
+}
+
 CheckerboardDetection DetectCheckerboard(const cv::Mat& image, const CheckerboardDetectOptions& o) {
   o.Check("checkerboard detection options");
   HOVS_REQUIRE(!image.empty() && image.type() == CV_8UC1, "checkerboard detection",
@@ -433,26 +492,52 @@ CheckerboardDetection DetectCheckerboard(const cv::Mat& image, const Checkerboar
     }
   // Then from the board's edges (calib/checkerboard_edges.h); corners whose lines cannot be measured keep
   // their cornerSubPix position.
+  std::vector<char> by_edges(det.pixels.size(), 0);
   if (o.corner_refinement == "edges") {
     std::vector<std::optional<Vec2d>> grid(det.pixels.begin(), det.pixels.end());
     CheckerboardEdgeOptions eo;
     eo.min_contrast = 255.0 * o.min_contrast;
     const auto refined = RefineCheckerboardCornersByEdges(image, cols, rows, &grid, eo);
-    for (size_t k = 0; k < grid.size(); ++k) det.pixels[k] = *grid[k], det.from_edges += refined[k];
+    for (size_t k = 0; k < grid.size(); ++k) det.pixels[k] = *grid[k], by_edges[k] = refined[k];
   }
+  // Labels proved: corners off their row or column are removed; a grid that loses too many is refused.
+  std::vector<double> removed;
+  const std::vector<char> keep =
+      ProveGridLabels(det.pixels, cols, rows, o.max_label_error, 1.0, &removed, &det.worst_label_error);
   const std::string dims = std::to_string(cols) + "x" + std::to_string(rows);
+  if (!removed.empty()) {
+    det.rejected = static_cast<int>(removed.size());
+    det.rejected_reason = std::to_string(removed.size()) + " off their row or column (up to " +
+                          FormatNumber("%.2f", *std::max_element(removed.begin(), removed.end())) + " of a square)";
+    if (det.rejected * 5 > n) {
+      det.status = "grid " + dims + " refused: " + det.rejected_reason + ", its labels are not consistent";
+      det.pixels.clear(), det.board_points.clear(), det.indices.clear();
+      return det;
+    }
+    size_t w = 0;
+    for (size_t k = 0; k < keep.size(); ++k)
+      if (keep[k]) {
+        det.pixels[w] = det.pixels[k], det.board_points[w] = det.board_points[k], det.indices[w] = det.indices[k];
+        by_edges[w] = by_edges[k], ++w;
+      }
+    det.pixels.resize(w), det.board_points.resize(w), det.indices.resize(w), by_edges.resize(w);
+    det.complete = false;
+  }
+  for (char b : by_edges) det.from_edges += b;
+  const int kept = static_cast<int>(det.pixels.size());
+  const std::string trimmed = det.rejected > 0 ? ", " + det.rejected_reason + " removed" : "";
   if (det.complete) {
     det.found = true;
     det.status = "complete " + dims;
-  } else if (n < o.min_corners) {
-    det.status = "grid " + dims + " too small (" + std::to_string(n) + " corners, at least " +
-                 std::to_string(o.min_corners) + " needed)";
+  } else if (kept < o.min_corners) {
+    det.status = "grid " + dims + " too small (" + std::to_string(kept) + " corners, at least " +
+                 std::to_string(o.min_corners) + " needed" + trimmed + ")";
   } else if (!o.allow_partial) {
-    det.status = "partial " + dims + " (" + std::to_string(n) + " of " + std::to_string(total) +
+    det.status = "partial " + dims + " (" + std::to_string(kept) + " of " + std::to_string(total) + trimmed +
                  ") and partial boards are not allowed";
   } else {
     det.found = true;
-    det.status = "partial " + dims + " (" + std::to_string(n) + " of " + std::to_string(total) + ")";
+    det.status = "partial " + dims + " (" + std::to_string(kept) + " of " + std::to_string(total) + trimmed + ")";
   }
   if (!det.found) det.pixels.clear(), det.board_points.clear(), det.indices.clear();
   return det;

@@ -20,6 +20,9 @@
 //  5. Sub-pixel refinement (cv::cornerSubPix) with a window scaled to the local square size, then (by default)
 //     each corner where the two board lines through it, measured along their length, cross
 //     (calib/checkerboard_edges.h).
+//  6. The labels are proved: each corner must lie where its row and its column put it (predicted from its
+//     neighbours on both lines); corners off by more than a fraction of the local square are removed, and a
+//     grid that loses more than a fifth of its corners is refused, with the reason in the status.
 // An optional validity predicate (from a prior model: outside the rim, the camera's reflection) drops candidates.
 // Every image gets a status: what was found, or why nothing was.
 #pragma once
@@ -56,6 +59,9 @@ struct CheckerboardDetectOptions {
   // (calib/checkerboard_edges.h); "subpix": cornerSubPix alone.
   std::string corner_refinement = "edges";
   std::function<bool(const Vec2d&)> valid;  // optional: pixels where the board can be seen (prior model)
+  // Labels proved at detection: a corner further than this fraction of the local square from where its row and
+  // column put it is removed; a grid losing more than a fifth of its corners is refused.
+  double max_label_error = 0.25;
   void Check(const std::string& where) const;
 };
 
@@ -67,12 +73,25 @@ struct CheckerboardDetection {
   int grid_cols = 0, grid_rows = 0;
   std::vector<Vec2d> pixels;             // refined corners (u, v)
   int from_edges = 0;                    // corners refined from the board's edges (the others: cornerSubPix)
+  int rejected = 0;                      // corners removed by the label check
+  std::string rejected_reason;           // e.g. "2 off their row or column (up to 0.61 of a square)"
+  double worst_label_error = 0;          // largest row/column error among the kept corners (fraction of a square)
   std::vector<Vec3d> board_points;       // board frame, metres, z = 0
   std::vector<Eigen::Vector2i> indices;  // (column, row) on the board
 };
 
 // image: 8-bit grey (CV_8UC1). Throws hovs::Error for an empty or non-grey image or bad options.
 CheckerboardDetection DetectCheckerboard(const cv::Mat& image, const CheckerboardDetectOptions& options);
+
+// The labels' proof: every corner must lie where its row and its column put it. Along each grid line through a
+// corner its position is predicted from the neighbours on that line (cubic through two on each side, else the
+// midpoint of one on each side, else quadratic extrapolation from three on one side); its error is the smaller
+// of the two lines' predictions, relative to the local square. A corner off by more than max_fraction of the
+// square (at least min_px) is not on its row or column: a wrong candidate or a mislabelled corner. The worst such
+// corner is removed and the others re-checked without it (a wrong corner spoils its neighbours' predictions).
+// Returns, per corner, whether it is kept; *worst is the largest relative error among the kept corners.
+std::vector<char> ProveGridLabels(const std::vector<Vec2d>& pixels, int cols, int rows, double max_fraction,
+                                  double min_px, std::vector<double>* removed_errors, double* worst);
 
 // Convenience: a detection as a calibration observation.
 BoardObservation ToObservation(const CheckerboardDetection& detection, const std::string& image_name);

@@ -14,10 +14,17 @@ namespace hovs::calib {
 namespace {
 
 nlohmann::json DetectionJson(const ImageDetection& d) {
-  nlohmann::json row = {{"image", d.image},           {"status", d.status},
-                        {"found", d.found},           {"complete", d.complete},
-                        {"corners", d.corners},       {"from_edges", d.from_edges},
-                        {"candidates", d.candidates}, {"corner_refinement", d.corner_refinement}};
+  nlohmann::json row = {{"image", d.image},
+                        {"status", d.status},
+                        {"found", d.found},
+                        {"complete", d.complete},
+                        {"corners", d.corners},
+                        {"from_edges", d.from_edges},
+                        {"candidates", d.candidates},
+                        {"corner_refinement", d.corner_refinement},
+                        {"rejected", d.rejected},
+                        {"rejected_reason", d.rejected_reason},
+                        {"worst_label_error", d.worst_label_error}};
   if (d.to_truth) row["rms_to_truth_px"] = d.to_truth->rms_px, row["max_to_truth_px"] = d.to_truth->max_px;
   return row;
 }
@@ -32,6 +39,11 @@ nlohmann::json PolynomialJson(const PolynomialCalibration& r, const std::vector<
                       {"e", m.e},
                       {"poly", m.poly},
                       {"inv_poly", m.inv_poly},
+                      {"inv_poly_max_error_px", m.inv_poly_error_px},
+                      {"inverse",
+                       {{"chebyshev", m.inv_cheb},
+                        {"theta_range", {m.inv_theta_lo, m.inv_theta_hi}},
+                        {"max_error_px", m.inv_error_px}}},
                       {"rho_range", {m.rho_min, m.rho_max}},
                       {"width", m.width},
                       {"height", m.height},
@@ -123,6 +135,7 @@ void DetectInto(const std::filesystem::path& path, const std::string& name, cons
   d.image = name, d.status = det.status, d.corner_refinement = o.corner_refinement;
   d.found = det.found, d.complete = det.complete;
   d.corners = static_cast<int>(det.pixels.size()), d.from_edges = det.from_edges, d.candidates = det.candidates;
+  d.rejected = det.rejected, d.rejected_reason = det.rejected_reason, d.worst_label_error = det.worst_label_error;
   if (truth && det.found) d.to_truth = CompareWithTruth(det.pixels, *truth);
   in->detection.push_back(d);
   if (det.found) in->observations.push_back(ToObservation(det, name)), in->paths.push_back(path);

@@ -25,6 +25,9 @@ struct ImageDetection {
   std::string image, status, corner_refinement;
   bool found = false, complete = false;
   int corners = 0, from_edges = 0, candidates = 0;
+  int rejected = 0;  // corners removed by the detector's label check, and why
+  std::string rejected_reason;
+  double worst_label_error = 0;            // of the kept corners, in squares
   std::optional<CornerAccuracy> to_truth;  // with the exact corners of a synthetic image
 };
 

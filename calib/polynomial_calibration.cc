@@ -18,6 +18,7 @@
 
 #include "calib/solver_util.h"
 #include "core/error.h"
+#include "core/format.h"
 #include "core/io.h"
 
 namespace hovs::calib {
@@ -359,7 +360,11 @@ PolynomialCalibration CalibratePolynomial(const std::vector<BoardObservation>& o
       const double rho = m.SensorFromImg(p).norm();
       rho_min = std::min(rho_min, rho), rho_max = std::max(rho_max, rho);
     }
-  m.rho_min = std::max(0.0, 0.9 * rho_min), m.rho_max = 1.05 * rho_max;
+  // The valid annulus: the observed radii, widened by 10 % inwards and 5 % outwards where the fitted theta(rho)
+  // stays monotonic (a low-degree fit can fold just past the data).
+  HOVS_REQUIRE(m.SetAnnulusWithin(rho_min, rho_max, 0.1 * rho_min, 0.05 * rho_max), "polynomial model",
+               "the fitted elevation is not monotonic over the observed radii ", FormatNumber("%.1f", rho_min), "..",
+               FormatNumber("%.1f", rho_max), " px: the corners do not constrain the model (try --degree 3)");
   m.FitInverse(0.01);
   for (size_t i = 0; i < obs.size(); ++i) out.cam_from_board.push_back(ParamsToPose(pose_params[i].data()));
   evaluate(&out.per_image_rms, &out.per_image_mean, &out.rms, &out.mean);

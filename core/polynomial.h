@@ -8,10 +8,11 @@
 // OCamCalib's cam2world returns (p_r, p_c, f(rho)): hovs swaps the first two components so that the frame is
 // right-handed and matches the exact model's. a0 < 0: the image centre looks down, at the camera.
 //
-// world2cam: theta = atan2(z, |(x, y)|), rho = g(theta) with g the inverse polynomial fitted over the valid
-// annulus [rho_min, rho_max] (OCamCalib's invpol). ImgFromCamFast uses g alone (round trip below the fit's
-// tolerance, 0.01 px by default); ImgFromCam refines rho with Newton on f(rho) |(x, y)| - z rho = 0 and is
-// exact to rounding.
+// world2cam: theta = atan2(z, |(x, y)|), rho = g(theta) with g the inverse fitted over the valid annulus
+// [rho_min, rho_max]: a Chebyshev series in the normalised elevation (stable at any degree), and OCamCalib's
+// monomial invpol for its file format. ImgFromCamFast uses g alone (its round trip error is recorded,
+// inv_error_px, 0.01 px or better where a degree up to 40 reaches it); ImgFromCam refines rho with Newton on
+// f(rho) |(x, y)| - z rho = 0 and is exact to rounding whatever g's accuracy.
 //
 // Parameters, in order: cx, cy, c, d, e, a0, a1 (held at 0), a2, ..., aN.
 // Valid domain: rho_min <= rho <= rho_max, where theta(rho) = atan2(f(rho), rho) is monotonic.
@@ -33,11 +34,14 @@ namespace hovs {
 template <class T>
 struct PolynomialModel {
   int width = 0, height = 0;
-  T cx = T(0), cy = T(0);           // centre: column, row (pixels)
-  T c = T(1), d = T(0), e = T(0);   // affine
-  std::vector<T> poly;              // a0, a1 (= 0), a2, ..., aN
-  std::vector<double> inv_poly;     // rho = sum inv_poly[i] theta^i
-  double rho_min = 0, rho_max = 0;  // valid annulus (pixels, in the affine-corrected plane)
+  T cx = T(0), cy = T(0);          // centre: column, row (pixels)
+  T c = T(1), d = T(0), e = T(0);  // affine
+  std::vector<T> poly;             // a0, a1 (= 0), a2, ..., aN
+  std::vector<double> inv_poly;    // OCamCalib's invpol: rho = sum inv_poly[i] theta^i
+  std::vector<double> inv_cheb;    // rho = sum inv_cheb[i] T_i(t), t = theta mapped from [inv_theta_lo, hi] to [-1, 1]
+  double inv_theta_lo = 0, inv_theta_hi = 0;
+  double inv_error_px = 0, inv_poly_error_px = 0;  // worst round trip of each inverse over the annulus (pixels)
+  double rho_min = 0, rho_max = 0;                 // valid annulus (pixels, in the affine-corrected plane)
 
   int Degree() const { return static_cast<int>(poly.size()) - 1; }
 
@@ -94,7 +98,7 @@ struct PolynomialModel {
     return true;
   }
 
-  // OCamCalib's world2cam: the inverse polynomial only (no refinement).
+  // OCamCalib's world2cam: the fitted inverse only (no refinement; within inv_error_px of ImgFromCam).
   bool ImgFromCamFast(const Vec3<T>& X, Vec2<T>* uv) const {
     using std::atan2;
     using std::sqrt;
@@ -103,50 +107,113 @@ struct PolynomialModel {
       *uv = ImgFromSensor(Vec2<T>(T(0), T(0)));
       return true;
     }
-    const T theta = atan2(X(2), n);
-    T rho = T(0);
-    for (int i = static_cast<int>(inv_poly.size()) - 1; i >= 0; --i) rho = rho * theta + T(inv_poly[i]);
+    const T rho = InverseRho(atan2(X(2), n));
     *uv = ImgFromSensor(Vec2<T>(X(1) / n * rho, X(0) / n * rho));
     return true;
   }
 
-  // Fits inv_poly over [rho_min, rho_max] with increasing degree until the worst pixel round-trip error is
-  // below max_error_px. Returns the error reached. Throws if theta(rho) is not monotonic or the fit fails.
-  double FitInverse(double max_error_px = 0.01, int max_degree = 24) {
+  // Fits the inverse over [rho_min, rho_max]: a Chebyshev series in theta normalised to the annulus' elevation
+  // range (inv_cheb, stable at any degree; the starting point of ImgFromCam's Newton and what ImgFromCamFast
+  // evaluates), and OCamCalib's monomial invpol in raw theta (inv_poly, for calib_results.txt). Each takes the
+  // lowest degree whose worst round trip is below max_error_px; where none is, the most accurate one is kept and
+  // its error recorded (inv_error_px, inv_poly_error_px): ImgFromCam stays exact either way. Returns
+  // inv_error_px. Throws only when theta(rho) is not monotonic over the annulus (no inverse exists).
+  double FitInverse(double max_error_px = 0.01, int max_degree = 40) {
     static_assert(std::is_same_v<T, double>, "FitInverse works on a double model");
     HOVS_REQUIRE(rho_max > rho_min && rho_min >= 0, "polynomial model", "invalid annulus [", rho_min, ", ", rho_max,
                  "]");
-    const int n = 4000;
+    const int n = 2000;
     std::vector<double> theta(n), rho(n);
     for (int i = 0; i < n; ++i) {
       rho[i] = rho_min + (rho_max - rho_min) * i / (n - 1);
       theta[i] = std::atan2(F(rho[i]), rho[i]);
     }
-    for (int i = 1; i < n; ++i)
-      HOVS_REQUIRE((theta[i] - theta[i - 1]) * (theta[n - 1] - theta[0]) > 0, "polynomial model",
-                   "theta(rho) is not monotonic over [", rho_min, ", ", rho_max, "] px: no inverse exists");
-    // Scale of pixel errors: the affine map's largest singular value.
+    HOVS_REQUIRE(MonotonicOver(rho_min, rho_max), "polynomial model", "theta(rho) is not monotonic over [", rho_min,
+                 ", ", rho_max, "] px: no inverse exists");
+    // Pixel errors: rho errors scaled by the affine map's largest singular value.
     Eigen::Matrix2d A;
     A << c, d, e, 1;
     const double scale = Eigen::JacobiSVD<Eigen::Matrix2d>(A).singularValues()(0);
-    double err = HUGE_VAL;
-    for (int deg = 2; deg <= max_degree; ++deg) {
+    const Eigen::Map<const Eigen::VectorXd> b(rho.data(), n);
+    const auto fit = [&](const auto& basis, int deg, std::vector<double>* coef) {
       Eigen::MatrixXd V(n, deg + 1);
-      Eigen::VectorXd b(n);
-      for (int i = 0; i < n; ++i) {
-        double p = 1;
-        for (int k = 0; k <= deg; ++k, p *= theta[i]) V(i, k) = p;
-        b(i) = rho[i];
+      for (int i = 0; i < n; ++i) basis(theta[i], deg, &V(i, 0), V.outerStride());
+      const Eigen::VectorXd x = V.colPivHouseholderQr().solve(b);
+      coef->assign(x.data(), x.data() + x.size());
+      const double err = (V * x - b).cwiseAbs().maxCoeff() * scale;
+      return std::isfinite(err) ? err : HUGE_VAL;
+    };
+    const auto best_fit = [&](const auto& basis, int max_deg, std::vector<double>* out) {
+      double best = HUGE_VAL;
+      std::vector<double> coef;
+      for (int deg = 2; deg <= max_deg; ++deg) {
+        const double err = fit(basis, deg, &coef);
+        if (err < best) best = err, *out = coef;
+        if (best < max_error_px) break;
       }
-      const Eigen::VectorXd coef = V.colPivHouseholderQr().solve(b);
-      err = ((V * coef - b).cwiseAbs().maxCoeff()) * scale;
-      if (err < max_error_px) {
-        inv_poly.assign(coef.data(), coef.data() + coef.size());
-        return err;
+      return best;
+    };
+    inv_theta_lo = std::min(theta.front(), theta.back());
+    inv_theta_hi = std::max(theta.front(), theta.back());
+    const double mid = 0.5 * (inv_theta_lo + inv_theta_hi), half = 0.5 * (inv_theta_hi - inv_theta_lo);
+    const auto chebyshev = [&](double th, int deg, double* row, Eigen::Index stride) {
+      const double t = (th - mid) / half;
+      double t0 = 1, t1 = t;
+      row[0] = 1;
+      if (deg >= 1) row[stride] = t;
+      for (int k = 2; k <= deg; ++k) {
+        const double t2 = 2 * t * t1 - t0;
+        row[k * stride] = t2, t0 = t1, t1 = t2;
       }
+    };
+    const auto monomial = [](double th, int deg, double* row, Eigen::Index stride) {
+      double p = 1;
+      for (int k = 0; k <= deg; ++k, p *= th) row[k * stride] = p;
+    };
+    inv_error_px = best_fit(chebyshev, max_degree, &inv_cheb);
+    inv_poly_error_px = best_fit(monomial, std::min(max_degree, 24), &inv_poly);
+    return inv_error_px;
+  }
+
+  // True if theta(rho) is strictly monotonic over [lo, hi] with |dtheta/drho| >= min_slope (rad/px), sampled
+  // every half pixel at most.
+  bool MonotonicOver(double lo, double hi, double min_slope = 0) const {
+    const int n = std::clamp(static_cast<int>(2 * (hi - lo)), 64, 100000);
+    const double dr = (hi - lo) / n;
+    double prev = std::atan2(ScalarPart(F(T(lo))), lo), sign = 0;
+    for (int i = 1; i <= n; ++i) {
+      const double r = lo + dr * i, th = std::atan2(ScalarPart(F(T(r))), r);
+      const double step = th - prev;
+      if (!(std::abs(step) > min_slope * dr) || (sign != 0 && step * sign < 0)) return false;
+      sign = step > 0 ? 1 : -1, prev = th;
     }
-    throw Error("polynomial model", "the inverse polynomial did not reach " + std::to_string(max_error_px) +
-                                        " px up to degree " + std::to_string(max_degree));
+    return true;
+  }
+
+  // Sets the annulus to [lo, hi] widened by up to the margins where theta(rho) stays monotonic and not flatter
+  // than a quarter of its flattest slope over [lo, hi] (a low-degree fit can fold just past the data, and
+  // where theta is nearly flat a pixel's elevation is ill-defined). Returns false, leaving the annulus
+  // unchanged, when theta is not monotonic over [lo, hi] itself.
+  bool SetAnnulusWithin(double lo, double hi, double margin_lo, double margin_hi) {
+    if (!(hi > lo && lo >= 0) || !MonotonicOver(lo, hi)) return false;
+    double flattest = HUGE_VAL;
+    for (int i = 0; i < 256; ++i) {
+      const double r0 = lo + (hi - lo) * i / 256, r1 = lo + (hi - lo) * (i + 1) / 256;
+      flattest = std::min(
+          flattest, std::abs(std::atan2(ScalarPart(F(T(r1))), r1) - std::atan2(ScalarPart(F(T(r0))), r0)) / (r1 - r0));
+    }
+    const auto widen = [&](double from, double limit) {
+      double best = from;
+      for (int k = 1; k <= 32; ++k) {
+        const double to = from + (limit - from) * k / 32;
+        if (!MonotonicOver(std::min(from, to), std::max(from, to), 0.25 * flattest)) break;
+        best = to;
+      }
+      return best;
+    };
+    rho_max = widen(hi, hi + margin_hi);
+    rho_min = widen(lo, std::max(0.0, lo - margin_lo));
+    return true;
   }
 
   // Throws hovs::Error(where) for a model that cannot be a camera: non-finite or absurd numbers, a centre far
@@ -165,7 +232,13 @@ struct PolynomialModel {
     CheckImageAndCentre(width, height, ScalarPart(cx), ScalarPart(cy), where);
     HOVS_REQUIRE(inv_poly.size() <= 64, where, "the inverse polynomial has ", inv_poly.size(),
                  " coefficients (at most 64)");
+    HOVS_REQUIRE(inv_cheb.size() <= 64, where, "the Chebyshev inverse has ", inv_cheb.size(),
+                 " coefficients (at most 64)");
     for (double a : inv_poly) HOVS_REQUIRE(std::isfinite(a), where, "inverse polynomial coefficients must be finite");
+    for (double a : inv_cheb) HOVS_REQUIRE(std::isfinite(a), where, "Chebyshev inverse coefficients must be finite");
+    HOVS_REQUIRE(inv_cheb.empty() || (std::isfinite(inv_theta_lo) && std::isfinite(inv_theta_hi) &&
+                                      inv_theta_lo < inv_theta_hi && inv_theta_lo >= -M_PI && inv_theta_hi <= M_PI),
+                 where, "the Chebyshev inverse needs an elevation range -pi <= lo < hi <= pi");
     HOVS_REQUIRE(std::isfinite(rho_min) && std::isfinite(rho_max) && rho_min >= 0 && rho_max >= rho_min &&
                      (width == 0 || rho_max <= 2.0 * (width + height)),
                  where, "the annulus [", rho_min, ", ", rho_max, "] px does not fit the image");
@@ -182,17 +255,36 @@ struct PolynomialModel {
     m.cx = ConvertScalar<U>(cx), m.cy = ConvertScalar<U>(cy);
     m.c = ConvertScalar<U>(c), m.d = ConvertScalar<U>(d), m.e = ConvertScalar<U>(e);
     for (const auto& a : poly) m.poly.push_back(ConvertScalar<U>(a));
-    m.inv_poly = inv_poly;
+    m.inv_poly = inv_poly, m.inv_cheb = inv_cheb;
+    m.inv_theta_lo = inv_theta_lo, m.inv_theta_hi = inv_theta_hi;
+    m.inv_error_px = inv_error_px, m.inv_poly_error_px = inv_poly_error_px;
     m.rho_min = rho_min, m.rho_max = rho_max;
     return m;
   }
 
  private:
-  // Starting rho for Newton: the inverse polynomial if fitted, else a bracketed search over the annulus.
+  // rho(theta) from the Chebyshev inverse (Clenshaw), else OCamCalib's monomial one.
+  template <class S>
+  S InverseRho(const S& theta) const {
+    if (!inv_cheb.empty() && inv_theta_hi > inv_theta_lo) {
+      const double mid = 0.5 * (inv_theta_lo + inv_theta_hi), half = 0.5 * (inv_theta_hi - inv_theta_lo);
+      const S t = (theta - S(mid)) / S(half);
+      S b1 = S(0), b2 = S(0);
+      for (int k = static_cast<int>(inv_cheb.size()) - 1; k >= 1; --k) {
+        const S b0 = S(2) * t * b1 - b2 + S(inv_cheb[k]);
+        b2 = b1, b1 = b0;
+      }
+      return t * b1 - b2 + S(inv_cheb[0]);
+    }
+    S rho = S(0);
+    for (int i = static_cast<int>(inv_poly.size()) - 1; i >= 0; --i) rho = rho * theta + S(inv_poly[i]);
+    return rho;
+  }
+
+  // Starting rho for Newton: the fitted inverse if there is one, else a bracketed search over the annulus.
   double EstimateRho(double theta) const {
-    if (!inv_poly.empty()) {
-      double r = 0;
-      for (int i = static_cast<int>(inv_poly.size()) - 1; i >= 0; --i) r = r * theta + inv_poly[i];
+    if (!inv_cheb.empty() || !inv_poly.empty()) {
+      const double r = InverseRho(theta);
       if (std::isfinite(r) && r >= 0) return r;
     }
     const double hi = rho_max > 0 ? rho_max : 1000.0;

@@ -242,7 +242,7 @@ SceneConfig ParseSceneConfigUnguarded(const std::string& text, const std::string
                    "' (unit names name the dataset's images)");
     YAML::Node m, c, pose;
     r.Require(u, k, "mirror", &m);
-    r.OnlyKeys(m, k + ".mirror", {"a", "b", "rim_diameter"});
+    r.OnlyKeys(m, k + ".mirror", {"a", "b", "rim_diameter", "mount_width"});
     YAML::Node a, b, d;
     HyperboloidMirror<double> mirror{
         r.Positive(r.Require(m, k + ".mirror", "a", &a), k + ".mirror.a"),
@@ -284,6 +284,9 @@ SceneConfig ParseSceneConfigUnguarded(const std::string& text, const std::string
       const double he = mis["height_error"] ? r.Number(mis["height_error"], km + ".height_error") : 0.0;
       unit.rig.cam_from_mirror = MisalignedCamFromMirror(mirror, tilt, off, he);
     }
+    // The mount ring's width beyond the rim (default 15 mm): it bounds the field above the horizon.
+    if (m["mount_width"])
+      unit.mount_outer_radius = mirror.RimRadius() + r.Positive(m["mount_width"], k + ".mirror.mount_width");
     unit.world_from_mirror = ReadPose(r, r.Require(u, k, "pose", &pose), k + ".pose");
     if (u["body_length"]) unit.body_length = r.Positive(u["body_length"], k + ".body_length");
     if (u["velocity"]) {

@@ -8,6 +8,8 @@
 #include <opencv2/imgproc.hpp>
 
 #include "calib/checkerboard_detector.h"
+#include "tests/calib/synthetic_boards.h"
+#include "tests/core/test_rigs.h"
 #include "core/error.h"
 
 namespace hovs::calib {
@@ -157,6 +159,44 @@ TEST(CheckerboardDetector, ReportsWhyNothingWasFound) {
   EXPECT_THROW(DetectCheckerboard(cv::Mat(), o), Error);
   o.board.square = -1;
   EXPECT_THROW(DetectCheckerboard(img, o), Error);
+}
+
+}  // namespace
+}  // namespace hovs::calib
+
+namespace hovs::calib {
+namespace {
+
+// Boards through the exact reference rig (rows bent into arcs, squares changing size): every corner proved;
+// one corner moved half a square along its row, or swapped with its neighbour, is the one removed.
+TEST(GridLabels, ProvesCurvedGridsAndRemovesTheMislabelledCorner) {
+  const auto obs = SyntheticObservations(test::AlignedRig(), 12, 0.1, 7);
+  int removed_total = 0;
+  for (const auto& o : obs) {
+    std::vector<double> removed;
+    double worst = 0;
+    auto keep = ProveGridLabels(o.pixels, 7, 5, 0.25, 1.0, &removed, &worst);
+    EXPECT_TRUE(removed.empty()) << o.image << ": a good grid lost " << removed.size() << " corners";
+    EXPECT_LT(worst, 0.2) << o.image;
+    // Corner (3, 2) moved half a square along its row.
+    std::vector<Vec2d> moved = o.pixels;
+    const int k = 2 * 7 + 3;
+    moved[k] += 0.5 * (o.pixels[k + 1] - o.pixels[k]);
+    removed.clear();
+    keep = ProveGridLabels(moved, 7, 5, 0.25, 1.0, &removed, &worst);
+    ASSERT_EQ(removed.size(), 1u) << o.image;
+    EXPECT_FALSE(keep[k]);
+    // Two corners of a row swapped (a labelling error): both are removed, nothing else.
+    std::vector<Vec2d> swapped = o.pixels;
+    std::swap(swapped[k], swapped[k + 1]);
+    removed.clear();
+    keep = ProveGridLabels(swapped, 7, 5, 0.25, 1.0, &removed, &worst);
+    EXPECT_EQ(removed.size(), 2u) << o.image;
+    EXPECT_FALSE(keep[k]);
+    EXPECT_FALSE(keep[k + 1]);
+    removed_total += static_cast<int>(removed.size());
+  }
+  EXPECT_EQ(removed_total, 24);
 }
 
 }  // namespace

@@ -122,8 +122,8 @@ TYPED_TEST(ModelContract, JacobianMatchesFiniteDifferences) {
   using J = ceres::Jet<double, 3>;
   const auto model_j = c.model.template Cast<J>();
   int compared = 0;
-  for (const Vec2d uv : {Vec2d(0.3 * c.width(), 0.5 * c.height()), Vec2d(0.5 * c.width(), 0.8 * c.height()),
-                         Vec2d(0.62 * c.width(), 0.31 * c.height())}) {
+  for (const Vec2d& uv : {Vec2d(0.3 * c.width(), 0.5 * c.height()), Vec2d(0.5 * c.width(), 0.8 * c.height()),
+                          Vec2d(0.62 * c.width(), 0.31 * c.height())}) {
     Vec3d origin, d;
     if (!c.InDomain(uv) || !c.Ray(uv, &origin, &d)) continue;
     const Vec3d X = origin + 2.0 * d;
@@ -155,7 +155,7 @@ TYPED_TEST(ModelContract, DomainEdges) {
   const Vec2d corner(0.5, 0.5);
   EXPECT_FALSE(c.InDomain(corner));
   Vec3d origin, d;
-  if (TypeParam::kRayRefusesOutside) EXPECT_FALSE(c.Ray(corner, &origin, &d));
+  if (TypeParam::kRayRefusesOutside) { EXPECT_FALSE(c.Ray(corner, &origin, &d)); }
 }
 
 }  // namespace

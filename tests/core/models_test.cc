@@ -173,6 +173,53 @@ TEST(Polynomial, ExactAndFastWorldToCamRoundTrips) {
   EXPECT_LT(worst_fast, 0.01);
 }
 
+// A near-parabolic camera whose field reaches 40 degrees above the horizon (xi = 1: f(rho) is exactly
+// quadratic), and the same with a quartic term that makes theta(rho) fold just past the annulus: the inverse's
+// fit never throws, records its accuracy, and ImgFromCam stays exact.
+TEST(Polynomial, InverseOfAWideFieldModelIsStableAndNeverFatal) {
+  const auto check = [](PolynomialModel<double>* model, double expect_fast_below_px) {
+    PolynomialModel<double>& m = *model;
+    m.width = 700, m.height = 700, m.cx = 349.5, m.cy = 349.5;
+    ASSERT_NO_THROW(m.FitInverse(0.01));
+    EXPECT_TRUE(std::isfinite(m.inv_error_px));
+    EXPECT_LT(m.inv_error_px, expect_fast_below_px);
+    EXPECT_LE(m.inv_error_px, m.inv_poly_error_px + 1e-12) << "Chebyshev is at least as good as monomials";
+    double worst = 0, worst_fast = 0;
+    int n = 0;
+    for (int k = 0; k <= 200; ++k) {
+      const double rho = m.rho_min + (m.rho_max - m.rho_min) * k / 200, phi = 0.37 * k;
+      const Vec2d uv(m.cx + rho * std::cos(phi), m.cy + rho * std::sin(phi));
+      Vec3d b;
+      Vec2d back, fast;
+      ASSERT_TRUE(m.CamFromImg(uv, &b));
+      ASSERT_TRUE(m.ImgFromCam(b, &back)) << "rho " << rho;
+      ASSERT_TRUE(m.ImgFromCamFast(b, &fast));
+      worst = std::max(worst, (back - uv).norm()), worst_fast = std::max(worst_fast, (fast - uv).norm());
+      ++n;
+    }
+    EXPECT_LT(worst, 1e-7);
+    EXPECT_LE(worst_fast, m.inv_error_px + 1e-6);
+  };
+  PolynomialModel<double> parabolic;
+  parabolic.poly = {-75, 0, 1.0 / 300};  // h = 150 px; theta = +40 deg at rho = h (1 + sin 40) / cos 40 = 322 px
+  parabolic.rho_min = 2, parabolic.rho_max = 322;
+  check(&parabolic, 0.01);
+  EXPECT_GT(parabolic.inv_theta_hi * 180 / M_PI, 39.9);
+  // dtheta/drho = 0 at rho = 300 px (f' rho = f): the inverse is vertical there.
+  PolynomialModel<double> folding;
+  folding.poly = {-75, 0, 1.0 / 300, 0, -375.0 / (3 * 8.1e9)};
+  folding.rho_min = 2, folding.rho_max = 299.9;
+  check(&folding, 5.0);
+  // The calibration's annulus stops short of the fold, where theta is still well defined.
+  folding.rho_min = 2, folding.rho_max = 299.9;
+  ASSERT_TRUE(folding.SetAnnulusWithin(20, 280, 2, 14));
+  EXPECT_GT(folding.rho_max, 280);
+  EXPECT_LT(folding.rho_max, 299);
+  EXPECT_NEAR(folding.rho_min, 18, 1e-9);
+  check(&folding, 1.0);
+  EXPECT_FALSE(folding.SetAnnulusWithin(20, 320, 2, 14)) << "folds inside the data";
+}
+
 TEST(Polynomial, CheckAndInverseRejectBadModels) {
   PolynomialModel<double> m;
   m.poly = {-200, 0.1, 1e-3};
