@@ -343,6 +343,67 @@ TEST(CalibrateCli, CalibratesASyntheticSetAgainstGroundTruthAndRejectsBadInput) 
   fs::remove_all(dir.parent_path());
 }
 
+// A camera unlike the reference unit (scenes/stress_parabolic.yaml): near-parabolic mirror (xi = 0.994) whose
+// field reaches +30 degrees, 640 x 480, a 7 x 11-corner board of 30 mm squares (6 to 20 px) held below and
+// above the horizon. Every calibration completes: on the exact corners with 0.05 px noise at the noise floor
+// (0.071 px), and from hovs' own detection.
+TEST(CalibrateCli, ANearParabolicSmallCameraWithAFieldAboveTheHorizonCalibrates) {
+  const fs::path dir = test::Scratch("calibrate-cli", "stress");
+  const std::string scene = std::string(HOVS_SOURCE_DIR) + "/scenes/stress_parabolic.yaml";
+  const auto set = test::Hovs("-q dataset --scene " + scene +
+                              " --board 7x11x0.03 --elevation -30 25 --distance 0.35 0.8 -n 16 -o " +
+                              (dir / "set").string());
+  ASSERT_EQ(set.exit_code, 0) << set.output;
+  const std::string manifest = (dir / "set" / "dataset.json").string();
+  const auto noisy = test::Hovs("-q calibrate --truth-corners --corner-noise 0.05 --seed 3 --dataset " + manifest +
+                                " --out " + (dir / "noisy").string());
+  ASSERT_EQ(noisy.exit_code, 0) << noisy.output;
+  const auto jn = nlohmann::json::parse(ReadFile(dir / "noisy" / "calibration.json"));
+  EXPECT_LT(jn["polynomial"]["rms_px"].get<double>(), 0.1);
+  EXPECT_LT(jn["unified"]["rms_px"].get<double>(), 0.1);
+  EXPECT_LT(jn["ground_truth"]["mean_ray_angle_deg"].get<double>(), 0.08);
+  EXPECT_LT(jn["polynomial"]["inverse"]["max_error_px"].get<double>(), 0.05);
+  const auto det = test::Hovs("-q calibrate --dataset " + manifest + " --out " + (dir / "det").string());
+  ASSERT_EQ(det.exit_code, 0) << det.output;
+  const auto jd = nlohmann::json::parse(ReadFile(dir / "det" / "calibration.json"));
+  int found = 0;
+  for (const auto& d : jd["detection"]) found += d["found"].get<bool>();
+  std::printf("[ figure ] stress set: %d of 16 boards, detection RMS %.3f px, polynomial %.3f px, unified %.3f px, "
+              "mean ray angle %.4f deg\n",
+              found, jd["detection_rms_to_truth_px"].get<double>(), jd["polynomial"]["rms_px"].get<double>(),
+              jd["unified"]["rms_px"].get<double>(), jd["ground_truth"]["mean_ray_angle_deg"].get<double>());
+  EXPECT_GE(found, 10);
+  EXPECT_LT(jd["detection_rms_to_truth_px"].get<double>(), 0.15);
+  EXPECT_LT(jd["polynomial"]["rms_px"].get<double>(), 0.15);
+  EXPECT_LT(jd["ground_truth"]["mean_ray_angle_deg"].get<double>(), 0.1);
+  // Bad input from image folders: one clear error each, exit 2, nothing written.
+  const auto rejected = [&](const fs::path& images, const std::string& board, const std::string& needle) {
+    const auto r = test::Hovs("calibrate --images " + images.string() + " --board " + board + " --out " +
+                              (dir / "bad").string());
+    EXPECT_EQ(r.exit_code, 2) << r.output;
+    EXPECT_NE(r.output.find(needle), std::string::npos) << r.output;
+    EXPECT_EQ(std::count(r.output.begin(), r.output.end(), '\n'), 1) << r.output;
+    EXPECT_FALSE(fs::exists(dir / "bad"));
+  };
+  const fs::path first = dir / "set" / jd["detection"][0]["image"].get<std::string>();
+  fs::create_directories(dir / "one");
+  fs::copy_file(first, dir / "one" / "a.png");
+  rejected(dir / "one", "7x11x0.03", "only 1 of 1 images have a usable board (at least 3 needed)");
+  fs::create_directories(dir / "sizes");
+  for (const auto& d : jd["detection"]) {
+    const fs::path image = dir / "set" / d["image"].get<std::string>();
+    fs::copy_file(image, dir / "sizes" / image.filename());
+  }
+  fs::copy_file(std::string(HOVS_SOURCE_DIR) + "/tests/data/golden_reference_board.png",
+                dir / "sizes" / "zz_other.png");
+  rejected(dir / "sizes", "7x11x0.03", "differs from the first image's 640x480");
+  rejected(dir / "set" / "images", "5x4x0.03", "the board description does not match the image");
+  fs::create_directories(dir / "empty");
+  std::ofstream(dir / "empty" / "notes.txt") << "no images here\n";
+  rejected(dir / "empty", "7x11x0.03", "the folder holds no images");
+  fs::remove_all(dir);
+}
+
 TEST(RenderCli, RendersAndRejectsBadInput) {
   const fs::path dir = test::Scratch("render-cli", "work");
   fs::create_directories(dir);
