@@ -32,7 +32,7 @@ struct Options {
   std::string model, unit, map, layout = "article", interp = "bilinear", out;
   int frames = 100, write_every = 0;
   double seconds = 0, timeout = 3, scene_distance = 10;
-  bool display = false;
+  bool display = false, fixed_elevation = false;
 };
 
 nlohmann::json Latency(const std::vector<double>& v) {
@@ -78,8 +78,11 @@ int RunLiveCommand(const Options& o, const GlobalOptions& global) {
   const auto tb = std::chrono::steady_clock::now();
   const unwrap::RemapTable table =
       o.map.empty()
-          ? unwrap::BuildRemapTable(LoadModelSpec(o.model, o.unit, o.scene_distance), unwrap::ResolveLayout(o.layout),
-                                    unwrap::RemapOptions(), nlohmann::json(Versions()).dump())
+          ? [&] {
+              const AnyModel model = LoadModelSpec(o.model, o.unit, o.scene_distance);
+              return unwrap::BuildRemapTable(model, unwrap::ResolveLayout(o.layout, o.fixed_elevation ? nullptr : &model),
+                                             unwrap::RemapOptions(), nlohmann::json(Versions()).dump());
+            }()
           : unwrap::LoadRemapTable(o.map);
   const double table_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - tb).count();
   OpenedSources src = OpenSources(o.source);
@@ -150,6 +153,8 @@ Runner SetupLive(CLI::App* sub, const GlobalOptions* global) {
   sub->add_option("--unit", o->unit, "unit of a scene or manifest model");
   sub->add_option("--map", o->map, "a mapping file (hovs unwrap --save-map) instead of --model");
   sub->add_option("--layout", o->layout, "article | panorama | longlat | layout YAML")->capture_default_str();
+  sub->add_flag("--fixed-elevation", o->fixed_elevation,
+                "presets keep their fixed elevations instead of following the model's field");
   sub->add_option("--interp", o->interp, "bilinear | bicubic | nearest")->capture_default_str();
   AddBounded(sub, "-n,--frames", &o->frames, "frames to process (0: until Ctrl-C or --seconds)", 0, 1e9);
   AddBounded(sub, "--seconds", &o->seconds, "stop after this long (0: no limit)", 0, 1e7);

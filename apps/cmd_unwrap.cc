@@ -42,7 +42,7 @@ struct Options {
   int tile = 0;
   std::string truth_scene;
   int truth_samples = 4;
-  bool interactive = false;
+  bool interactive = false, fixed_elevation = false;
   std::string layout_out = "layout.yaml";
 };
 
@@ -84,7 +84,7 @@ unwrap::RemapTable Mapping(const Options& o, const std::vector<InputFrame>& fram
   CheckSizes(frames, headers, model.width(), model.height());
   unwrap::RemapOptions ro;
   ro.tile = o.tile;
-  const unwrap::Layout layout = unwrap::ResolveLayout(o.layout);
+  const unwrap::Layout layout = unwrap::ResolveLayout(o.layout, o.fixed_elevation ? nullptr : &model);
   unwrap::CheckViewsMemory("--layout " + o.layout, layout.views, AvailableMemoryBytes());
   *source = std::string("built from the ") + model.KindName() + " model in " + o.model;
   return unwrap::BuildRemapTable(model, layout, ro, nlohmann::json(Versions()).dump());
@@ -173,7 +173,7 @@ int RunUnwrap(const Options& o, const GlobalOptions& global) {
                  "needs --model (views are rebuilt as you move them) and --input");
     const AnyModel model = LoadModelSpec(o.model, o.unit, o.scene_distance);
     const unwrap::Image8 im = LoadImage8(ListInputs(o.input, o.unit).front().image);
-    RunUnwrapViewer(model, unwrap::ResolveLayout(o.layout),
+    RunUnwrapViewer(model, unwrap::ResolveLayout(o.layout, o.fixed_elevation ? nullptr : &model),
                     im.View(im.channels == 1 ? unwrap::PixelFormat::kGray8 : unwrap::PixelFormat::kRgb8), o.layout_out);
     return 0;
   }
@@ -243,6 +243,9 @@ Runner SetupUnwrap(CLI::App* sub, const GlobalOptions* global) {
   sub->add_option("--model", o->model, "scene YAML or dataset.json (exact rig), calib_results.txt or calibration.json");
   sub->add_option("--unit", o->unit, "unit name in a scene or manifest (default: the first)");
   sub->add_option("--layout", o->layout, "article | panorama | longlat | a layout YAML")->capture_default_str();
+  sub->add_flag("--fixed-elevation", o->fixed_elevation,
+                "presets keep their fixed elevations (panorama -75..-2, article pitch -30) instead of following the "
+                "model's field");
   sub->add_option("--map", o->map, "load a mapping file instead of building from --model");
   sub->add_option("--save-map", o->save_map, "save the mapping file built from --model");
   sub->add_option("-i,--input", o->input, "an image, a folder of images or a dataset manifest");

@@ -227,7 +227,7 @@ void RealImages(Validation& v, const std::string& real) {
   if (!real.empty() && p.real && fs::is_directory(real)) {
     v.Stage("real images: detect + calibrate + panorama",
             {{"calibrate", "--images", real, "--board", "7x6x0.03", "--compare-omnidir", "--out", v.Out("real/calib")},
-             {"unwrap", "--model", v.Out("real/calib/calib_results.txt"), "--layout", "panorama", "--input",
+             {"unwrap", "--model", v.Out("real/calib/calibration.json"), "--layout", "panorama", "--input",
               (fs::path(real) / "VMRImage0.jpg").string(), "--out", v.Out("real/panorama")}},
             [&]() {
               const json c = ReadJson(out / "real" / "calib" / "calibration.json");

@@ -1,6 +1,7 @@
 #include "unwrap/layout.h"
 
 #include <algorithm>
+#include <cmath>
 #include <cstdio>
 #include <set>
 
@@ -171,9 +172,51 @@ Layout ParseLayout(const std::string& text, const std::string& source, const std
   return WithYamlErrors(source, [&] { return ParseLayoutUnguarded(text, source, name); });
 }
 
-Layout ResolveLayout(const std::string& name_or_path) {
+ModelField FieldOfModel(const AnyModel& model) {
+  const int w = model.width(), h = model.height();
+  const int step = std::max(1, static_cast<int>(std::sqrt(static_cast<double>(w) * h / 250000.0)));
+  std::vector<double> el;
+  for (int v = 0; v < h; v += step)
+    for (int u = 0; u < w; u += step) {
+      Vec3d b;
+      if (model.MirrorFromImg(Vec2d(u, v), &b)) el.push_back(std::asin(std::clamp(b.z(), -1.0, 1.0)) * 180 / M_PI);
+    }
+  ModelField f;
+  f.pixels = static_cast<int>(el.size());
+  HOVS_REQUIRE(f.pixels >= 100, "the model's field", "only ", f.pixels, " valid pixels in the ", w, "x", h,
+               " image: no field to fit the views to");
+  const auto at = [&](double q) {
+    const size_t k = std::min(el.size() - 1, static_cast<size_t>(q * (el.size() - 1)));
+    std::nth_element(el.begin(), el.begin() + k, el.end());
+    return el[k];
+  };
+  f.elevation_min_deg = at(0.001), f.elevation_max_deg = at(0.999);
+  return f;
+}
+
+Layout PresetLayout(const std::string& name, const AnyModel& model) {
+  Layout l = PresetLayout(name);
+  if (name == "longlat") return l;
+  const ModelField f = FieldOfModel(model);
+  for (ViewSpec& v : l.views) {
+    if (v.type == ViewProjection::kCylindrical) {
+      v.elevation_min_deg = f.elevation_min_deg, v.elevation_max_deg = f.elevation_max_deg;
+    } else if (v.type == ViewProjection::kPerspective) {
+      // Half the vertical field of the view; pitch moved only as far as needed to keep it inside the field.
+      const double half_v = std::atan(std::tan(0.5 * v.hfov_deg * M_PI / 180) * v.height / v.width) * 180 / M_PI;
+      const double lo = f.elevation_min_deg + half_v, hi = f.elevation_max_deg - half_v;
+      if (lo <= hi)
+        v.pitch_deg = std::clamp(v.pitch_deg, lo, hi);
+      else
+        v.pitch_deg = 0.5 * (f.elevation_min_deg + f.elevation_max_deg);
+    }
+  }
+  return l;
+}
+
+Layout ResolveLayout(const std::string& name_or_path, const AnyModel* model) {
   for (const auto& n : PresetNames())
-    if (n == name_or_path) return PresetLayout(n);
+    if (n == name_or_path) return model ? PresetLayout(n, *model) : PresetLayout(n);
   HOVS_REQUIRE(std::filesystem::exists(name_or_path), "layout '" + name_or_path + "'",
                "neither a preset nor an existing YAML file");
   return LoadLayout(name_or_path);

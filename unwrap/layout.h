@@ -11,6 +11,10 @@
 //               (neighbours overlap by 5 degrees), the layout of its Figs 30-31
 //   panorama    one cylindrical panorama, 3600 x 900, elevation -75 .. -2 degrees, azimuth centred on +x
 //   longlat     one longitude-latitude panorama, 3600 x 1800, the whole sphere
+// Given a model (ResolveLayout's second argument), the panorama preset takes its elevation range from the
+// model's field instead (FieldOfModel: the elevations its valid pixels see, which leaves out the camera's own
+// reflection where the model has an inner bound), and the article's views keep pitch -30 unless that puts them
+// partly outside the field, in which case they are pitched the least amount that brings them inside it.
 #pragma once
 
 #include <cstddef>
@@ -19,6 +23,7 @@
 #include <string>
 #include <vector>
 
+#include "core/any_model.h"
 #include "core/virtual_view.h"
 
 namespace hovs::unwrap {
@@ -55,12 +60,23 @@ std::size_t ViewsMemoryBytes(const std::vector<ViewSpec>& views);
 void CheckViewsMemory(const std::string& where, const std::vector<ViewSpec>& views,
                       std::optional<std::size_t> available);
 
-Layout PresetLayout(const std::string& name);          // throws listing the known presets
+// The elevations (degrees, mirror frame) a model's valid pixels see: the 0.1 and 99.9 percentiles over a grid of
+// about 250,000 pixels of its domain (polynomial: the calibrated annulus; exact: the mirror outside the
+// camera's reflection; unified: its annulus if it has one, else the whole image).
+struct ModelField {
+  double elevation_min_deg = 0, elevation_max_deg = 0;
+  int pixels = 0;  // valid pixels sampled
+};
+ModelField FieldOfModel(const AnyModel& model);
+
+Layout PresetLayout(const std::string& name);  // throws listing the known presets
+// A preset fitted to a model's field (see above); a preset's fixed numbers when fixed_elevation.
+Layout PresetLayout(const std::string& name, const AnyModel& model);
 Layout LoadLayout(const std::filesystem::path& path);  // YAML, validated (file:line)
 // The same from the file's text; `name` is the layout's name when the text gives none.
 Layout ParseLayout(const std::string& text, const std::string& source, const std::string& name);
-// A preset name or a YAML file.
-Layout ResolveLayout(const std::string& name_or_path);
+// A preset name or a YAML file; with a model, presets follow its field (PresetLayout(name, model)).
+Layout ResolveLayout(const std::string& name_or_path, const AnyModel* model = nullptr);
 std::vector<std::string> PresetNames();
 
 }  // namespace hovs::unwrap

@@ -350,9 +350,9 @@ TEST(CalibrateCli, CalibratesASyntheticSetAgainstGroundTruthAndRejectsBadInput) 
 TEST(CalibrateCli, ANearParabolicSmallCameraWithAFieldAboveTheHorizonCalibrates) {
   const fs::path dir = test::Scratch("calibrate-cli", "stress");
   const std::string scene = std::string(HOVS_SOURCE_DIR) + "/scenes/stress_parabolic.yaml";
-  const auto set = test::Hovs("-q dataset --scene " + scene +
-                              " --board 7x11x0.03 --elevation -30 25 --distance 0.35 0.8 -n 16 -o " +
-                              (dir / "set").string());
+  const auto set =
+      test::Hovs("-q dataset --scene " + scene + " --board 7x11x0.03 --elevation -30 25 --distance 0.35 0.8 -n 16 -o " +
+                 (dir / "set").string());
   ASSERT_EQ(set.exit_code, 0) << set.output;
   const std::string manifest = (dir / "set" / "dataset.json").string();
   const auto noisy = test::Hovs("-q calibrate --truth-corners --corner-noise 0.05 --seed 3 --dataset " + manifest +
@@ -368,18 +368,19 @@ TEST(CalibrateCli, ANearParabolicSmallCameraWithAFieldAboveTheHorizonCalibrates)
   const auto jd = nlohmann::json::parse(ReadFile(dir / "det" / "calibration.json"));
   int found = 0;
   for (const auto& d : jd["detection"]) found += d["found"].get<bool>();
-  std::printf("[ figure ] stress set: %d of 16 boards, detection RMS %.3f px, polynomial %.3f px, unified %.3f px, "
-              "mean ray angle %.4f deg\n",
-              found, jd["detection_rms_to_truth_px"].get<double>(), jd["polynomial"]["rms_px"].get<double>(),
-              jd["unified"]["rms_px"].get<double>(), jd["ground_truth"]["mean_ray_angle_deg"].get<double>());
+  std::printf(
+      "[ figure ] stress set: %d of 16 boards, detection RMS %.3f px, polynomial %.3f px, unified %.3f px, "
+      "mean ray angle %.4f deg\n",
+      found, jd["detection_rms_to_truth_px"].get<double>(), jd["polynomial"]["rms_px"].get<double>(),
+      jd["unified"]["rms_px"].get<double>(), jd["ground_truth"]["mean_ray_angle_deg"].get<double>());
   EXPECT_GE(found, 10);
   EXPECT_LT(jd["detection_rms_to_truth_px"].get<double>(), 0.15);
   EXPECT_LT(jd["polynomial"]["rms_px"].get<double>(), 0.15);
   EXPECT_LT(jd["ground_truth"]["mean_ray_angle_deg"].get<double>(), 0.1);
   // Bad input from image folders: one clear error each, exit 2, nothing written.
   const auto rejected = [&](const fs::path& images, const std::string& board, const std::string& needle) {
-    const auto r = test::Hovs("calibrate --images " + images.string() + " --board " + board + " --out " +
-                              (dir / "bad").string());
+    const auto r =
+        test::Hovs("calibrate --images " + images.string() + " --board " + board + " --out " + (dir / "bad").string());
     EXPECT_EQ(r.exit_code, 2) << r.output;
     EXPECT_NE(r.output.find(needle), std::string::npos) << r.output;
     EXPECT_EQ(std::count(r.output.begin(), r.output.end(), '\n'), 1) << r.output;

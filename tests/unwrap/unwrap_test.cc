@@ -690,3 +690,46 @@ TEST(Layout, YamlFileIsValidated) {
 
 }  // namespace
 }  // namespace hovs::unwrap
+
+namespace hovs::unwrap {
+namespace {
+
+// Presets follow the model's field: for the reference rig the panorama spans the mirror from the camera's
+// reflection to the rim (whose elevation the design gives); a calibrated polynomial model's panorama spans its
+// annulus; the article's views stay at pitch -30 where they fit and are pitched up only as far as needed where
+// the field reaches higher (a camera that sees above the horizon).
+TEST(Layout, PresetsFollowTheModelsField) {
+  const auto rig = test::AlignedRig();
+  const AnyModel exact = AnyModel::Exact(rig);
+  const ModelField f = FieldOfModel(exact);
+  const double rim_el = std::atan2(rig.mirror.RimZ(), rig.mirror.RimRadius()) * 180 / M_PI;
+  EXPECT_NEAR(f.elevation_max_deg, rim_el, 0.3);
+  EXPECT_GT(f.elevation_min_deg, -88) << "the camera's reflection is left out";
+  EXPECT_LT(f.elevation_min_deg, -60);
+  const Layout pano = PresetLayout("panorama", exact);
+  EXPECT_EQ(pano.views[0].elevation_min_deg, f.elevation_min_deg);
+  EXPECT_EQ(pano.views[0].elevation_max_deg, f.elevation_max_deg);
+  for (const auto& v : PresetLayout("article", exact).views) EXPECT_EQ(v.pitch_deg, -30);
+  // A polynomial model of the same rig with an annulus reaching 20 degrees above the horizon.
+  PolynomialModel<double> poly = PolynomialFromCatadioptric(rig, 5);
+  const auto rho_at = [&](double el_deg) {  // the radius whose elevation is el_deg (bisection)
+    double lo = poly.rho_min, hi = 3 * poly.rho_max;
+    for (int k = 0; k < 100; ++k) {
+      const double mid = 0.5 * (lo + hi);
+      (std::atan2(poly.F(mid), mid) * 180 / M_PI < el_deg ? lo : hi) = mid;
+    }
+    return lo;
+  };
+  poly.rho_min = rho_at(-50), poly.rho_max = rho_at(20);
+  poly.FitInverse();
+  const ModelField fp = FieldOfModel(AnyModel::Polynomial(poly));
+  EXPECT_NEAR(fp.elevation_min_deg, -50, 0.3);
+  EXPECT_NEAR(fp.elevation_max_deg, 20, 0.3);
+  const Layout article = PresetLayout("article", AnyModel::Polynomial(poly));
+  const double half_v = std::atan(std::tan(32.5 * M_PI / 180) * 700 / 1200) * 180 / M_PI;
+  for (const auto& v : article.views) EXPECT_NEAR(v.pitch_deg, fp.elevation_min_deg + half_v, 1e-9);
+  EXPECT_EQ(PresetLayout("longlat", exact).views[0].elevation_max_deg, 90);
+}
+
+}  // namespace
+}  // namespace hovs::unwrap
