@@ -396,6 +396,53 @@ std::vector<char> ProveGridLabels(const std::vector<Vec2d>& p, int cols, int row
   return keep;
 }
 
+namespace {
+
+// Removes the corners ProveGridLabels rejects from the detection (and their by_edges flags); false, leaving
+// the detection to be refused, when more than a fifth of them go.
+bool ApplyLabelProof(int cols, int rows, double max_label_error, CheckerboardDetection* det,
+                     std::vector<char>* by_edges) {
+  std::vector<double> removed;
+  const std::vector<char> keep =
+      ProveGridLabels(det->pixels, cols, rows, max_label_error, 1.0, &removed, &det->worst_label_error);
+  if (removed.empty()) return true;
+  det->rejected = static_cast<int>(removed.size());
+  det->rejected_reason = std::to_string(removed.size()) + " off their row or column (up to " +
+                         FormatNumber("%.2f", *std::max_element(removed.begin(), removed.end())) + " of a square)";
+  if (det->rejected * 5 > cols * rows) return false;
+  size_t w = 0;
+  for (size_t k = 0; k < keep.size(); ++k)
+    if (keep[k]) {
+      det->pixels[w] = det->pixels[k], det->board_points[w] = det->board_points[k];
+      det->indices[w] = det->indices[k], (*by_edges)[w] = (*by_edges)[k], ++w;
+    }
+  det->pixels.resize(w), det->board_points.resize(w), det->indices.resize(w), by_edges->resize(w);
+  det->complete = false;
+  return true;
+}
+
+// found and status of a labelled grid: complete, partial (when allowed) or too small.
+void SetFoundAndStatus(const std::string& dims, int total, const CheckerboardDetectOptions& o,
+                       CheckerboardDetection* det) {
+  const int kept = static_cast<int>(det->pixels.size());
+  const std::string trimmed = det->rejected > 0 ? ", " + det->rejected_reason + " removed" : "";
+  if (det->complete) {
+    det->found = true;
+    det->status = "complete " + dims;
+  } else if (kept < o.min_corners) {
+    det->status = "grid " + dims + " too small (" + std::to_string(kept) + " corners, at least " +
+                  std::to_string(o.min_corners) + " needed" + trimmed + ")";
+  } else if (!o.allow_partial) {
+    det->status = "partial " + dims + " (" + std::to_string(kept) + " of " + std::to_string(total) + trimmed +
+                  ") and partial boards are not allowed";
+  } else {
+    det->found = true;
+    det->status = "partial " + dims + " (" + std::to_string(kept) + " of " + std::to_string(total) + trimmed + ")";
+  }
+}
+
+}  // namespace
+
 CheckerboardDetection DetectCheckerboard(const cv::Mat& image, const CheckerboardDetectOptions& o) {
   o.Check("checkerboard detection options");
   HOVS_REQUIRE(!image.empty() && image.type() == CV_8UC1, "checkerboard detection",
@@ -500,45 +547,14 @@ CheckerboardDetection DetectCheckerboard(const cv::Mat& image, const Checkerboar
     const auto refined = RefineCheckerboardCornersByEdges(image, cols, rows, &grid, eo);
     for (size_t k = 0; k < grid.size(); ++k) det.pixels[k] = *grid[k], by_edges[k] = refined[k];
   }
-  // Labels proved: corners off their row or column are removed; a grid that loses too many is refused.
-  std::vector<double> removed;
-  const std::vector<char> keep =
-      ProveGridLabels(det.pixels, cols, rows, o.max_label_error, 1.0, &removed, &det.worst_label_error);
   const std::string dims = std::to_string(cols) + "x" + std::to_string(rows);
-  if (!removed.empty()) {
-    det.rejected = static_cast<int>(removed.size());
-    det.rejected_reason = std::to_string(removed.size()) + " off their row or column (up to " +
-                          FormatNumber("%.2f", *std::max_element(removed.begin(), removed.end())) + " of a square)";
-    if (det.rejected * 5 > n) {
-      det.status = "grid " + dims + " refused: " + det.rejected_reason + ", its labels are not consistent";
-      det.pixels.clear(), det.board_points.clear(), det.indices.clear();
-      return det;
-    }
-    size_t w = 0;
-    for (size_t k = 0; k < keep.size(); ++k)
-      if (keep[k]) {
-        det.pixels[w] = det.pixels[k], det.board_points[w] = det.board_points[k], det.indices[w] = det.indices[k];
-        by_edges[w] = by_edges[k], ++w;
-      }
-    det.pixels.resize(w), det.board_points.resize(w), det.indices.resize(w), by_edges.resize(w);
-    det.complete = false;
+  if (!ApplyLabelProof(cols, rows, o.max_label_error, &det, &by_edges)) {
+    det.status = "grid " + dims + " refused: " + det.rejected_reason + ", its labels are not consistent";
+    det.pixels.clear(), det.board_points.clear(), det.indices.clear();
+    return det;
   }
   for (char b : by_edges) det.from_edges += b;
-  const int kept = static_cast<int>(det.pixels.size());
-  const std::string trimmed = det.rejected > 0 ? ", " + det.rejected_reason + " removed" : "";
-  if (det.complete) {
-    det.found = true;
-    det.status = "complete " + dims;
-  } else if (kept < o.min_corners) {
-    det.status = "grid " + dims + " too small (" + std::to_string(kept) + " corners, at least " +
-                 std::to_string(o.min_corners) + " needed" + trimmed + ")";
-  } else if (!o.allow_partial) {
-    det.status = "partial " + dims + " (" + std::to_string(kept) + " of " + std::to_string(total) + trimmed +
-                 ") and partial boards are not allowed";
-  } else {
-    det.found = true;
-    det.status = "partial " + dims + " (" + std::to_string(kept) + " of " + std::to_string(total) + trimmed + ")";
-  }
+  SetFoundAndStatus(dims, total, o, &det);
   if (!det.found) det.pixels.clear(), det.board_points.clear(), det.indices.clear();
   return det;
 }
