@@ -10,6 +10,15 @@
 
 namespace hovs::calib {
 
+// Rotation of a board centred at c whose z axis points at the viewpoint (the origin), x horizontal.
+inline Mat3<double> FacingViewpoint(const Vec3d& c) {
+  const Vec3d z = -c.normalized();
+  const Vec3d x = Vec3d(0, 0, 1).cross(z).normalized(), y = z.cross(x);
+  Mat3<double> R;
+  R.col(0) = x, R.col(1) = y, R.col(2) = z;
+  return R;
+}
+
 // The article's board (7 x 5 inner corners, 30 mm) at random poses around the reference unit, projected by the
 // core's exact model; every corner visible.
 inline std::vector<BoardObservation> SyntheticObservations(const CatadioptricCamera<double>& rig, int images,
@@ -24,13 +33,8 @@ inline std::vector<BoardObservation> SyntheticObservations(const CatadioptricCam
     const double az = U(rng) * 2 * M_PI, el = (-50 + 38 * U(rng)) * kDeg, dist = 0.3 + 0.3 * U(rng);
     const Vec3d c = dist * Vec3d(std::cos(el) * std::cos(az), std::cos(el) * std::sin(az), std::sin(el));
     // Board facing the viewpoint, tilted a little, rolled.
-    const Vec3d z = -c.normalized();
-    Vec3d x = Vec3d(0, 0, 1).cross(z).normalized();
-    const Vec3d y = z.cross(x);
-    Mat3<double> R;
-    R.col(0) = x, R.col(1) = y, R.col(2) = z;
     const Eigen::Quaterniond q =
-        Eigen::Quaterniond(R) *
+        Eigen::Quaterniond(FacingViewpoint(c)) *
         Eigen::Quaterniond(Eigen::AngleAxisd((U(rng) - 0.5) * 0.6, Vec3d(U(rng), U(rng), 0).normalized())) *
         Eigen::Quaterniond(Eigen::AngleAxisd(U(rng) * 2 * M_PI, Vec3d::UnitZ()));
     const Rigid3d mirror_from_board(q, c);
@@ -68,12 +72,8 @@ std::vector<BoardObservation> SyntheticBoardsThrough(const Model& model, int wid
     const double az = U(rng) * 2 * M_PI, el = (el_lo + (el_hi - el_lo) * U(rng)) * kDeg;
     const double dist = d_lo + (d_hi - d_lo) * U(rng);
     const Vec3d c = dist * Vec3d(std::cos(el) * std::cos(az), std::cos(el) * std::sin(az), std::sin(el));
-    const Vec3d z = -c.normalized();
-    const Vec3d x = Vec3d(0, 0, 1).cross(z).normalized(), y = z.cross(x);
-    Mat3<double> R;
-    R.col(0) = x, R.col(1) = y, R.col(2) = z;
     const Eigen::Quaterniond q =
-        Eigen::Quaterniond(R) *
+        Eigen::Quaterniond(FacingViewpoint(c)) *
         Eigen::Quaterniond(Eigen::AngleAxisd((U(rng) - 0.5) * 0.8, Vec3d(U(rng), U(rng), 0).normalized())) *
         Eigen::Quaterniond(Eigen::AngleAxisd(U(rng) * 2 * M_PI, Vec3d::UnitZ()));
     const Rigid3d cam_from_board(q, c);
