@@ -38,6 +38,7 @@ struct Options {
   double loss_scale = 1.0, noise = 0.0, outlier_sigmas = 5.0;
   uint64_t seed = 1;
   bool omnidir = false;
+  int cross_validate = 0;
 };
 
 int RunCalibrate(const Options& o, const GlobalOptions& global) {
@@ -74,6 +75,7 @@ int RunCalibrate(const Options& o, const GlobalOptions& global) {
   mo.polynomial.degree = o.degree, mo.polynomial.loss = o.loss, mo.polynomial.loss_scale = o.loss_scale;
   mo.polynomial.outlier_sigmas = o.outlier_sigmas;
   mo.omnidir = o.omnidir;
+  mo.cross_validate = o.cross_validate;
   std::optional<raytrace::CatadioptricUnit> design;
   if (o.physical) {
     if (!o.nominal.empty()) {
@@ -146,6 +148,10 @@ Runner SetupCalibrate(CLI::App* sub, const GlobalOptions* global) {
   sub->add_option("--loss", o->loss, "none | huber | cauchy")->capture_default_str();
   AddBounded(sub, "--loss-scale", &o->loss_scale, "robust loss scale, px", 0, 1000, true);
   sub->add_flag("--compare-omnidir", o->omnidir, "also run OpenCV omnidir on the same corners");
+  AddBounded(sub, "--cross-validate", &o->cross_validate,
+             "K-fold cross-validation (image i in fold i mod K; K = the image count: leave one out): held-out "
+             "error and the map of the folds' model differences (0: off)",
+             0, 10000);
   AddBounded(sub, "--outlier-sigmas", &o->outlier_sigmas,
              "reject corners above this many robust sigmas (at least 0.5 px) after the first solve; 0: keep all", 0,
              1000);

@@ -100,6 +100,8 @@ const std::vector<Command>& Commands() {
       {"capture",
        "Capture frames from GigE Vision cameras (Aravis), a replay or the GigE Vision simulator into a dataset",
        SetupCapture},
+      {"compare", "The difference between two models of one camera as a map over the image (px and degrees)",
+       SetupCompare},
       {"position", "Visual positioning: the camera's offset from the mirror design, from the rim in one image",
        SetupPosition},
       {"live",

@@ -76,5 +76,6 @@ Runner SetupValidate(CLI::App* sub, const GlobalOptions* global);
 Runner SetupCapture(CLI::App* sub, const GlobalOptions* global);
 Runner SetupLive(CLI::App* sub, const GlobalOptions* global);
 Runner SetupPosition(CLI::App* sub, const GlobalOptions* global);
+Runner SetupCompare(CLI::App* sub, const GlobalOptions* global);
 
 }  // namespace hovs::apps

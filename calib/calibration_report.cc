@@ -175,6 +175,20 @@ void WriteMonoCalibrationReport(const std::filesystem::path& folder, const Calib
               "left: (du, dv) of every corner, one colour per image, rejected corners as "
               "crosses; right: where in the image, colour = error length",
               900);
+  if (r.cross_validation) {
+    const auto& cv = *r.cross_validation;
+    WriteModelDiffFigures(cv.spread, "folds vs all images", folder / "figures/cross_validation_px.png",
+                          folder / "figures/cross_validation_deg.png");
+    page.Heading("Cross-validation (" + std::to_string(cv.folds) + " folds, polynomial model)");
+    page.Paragraph("Held-out reprojection RMS " + FormatNumber("%.4f", cv.held_out_rms) +
+                   " px (each held-out board "
+                   "posed with its fold's model), against " +
+                   FormatNumber("%.4f", cv.train_rms) +
+                   " px on the images each fold was fitted to. The maps: per pixel, the RMS over the folds of the "
+                   "difference between the fold's model and the model of all images, after the best rotation.");
+    page.Figure("figures/cross_validation_px.png", "difference, pixels", 700);
+    page.Figure("figures/cross_validation_deg.png", "difference, degrees", 700);
+  }
   page.Heading("Files");
   page.Link("Every figure above, the solver reports and the standard deviations: ", "calibration.json",
             "calibration.json", ".");

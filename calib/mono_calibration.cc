@@ -209,6 +209,9 @@ MonoCalibration CalibrateMono(const CalibrationInput& in, const MonoCalibrationO
     r.rim_points = popt.rim_points.size();
   }
   if (options.omnidir) r.omnidir = RunOpenCvOmnidir(r.inliers, in.width, in.height);
+  if (options.cross_validate > 0)
+    r.cross_validation = CrossValidatePolynomial(r.inliers, in.width, in.height, options.polynomial,
+                                                 options.cross_validate, r.polynomial.model);
   if (in.truth) {
     r.polynomial_vs_truth = CompareWithTruth(*in.truth, r.polynomial.model);
     if (r.physical) r.physical_vs_truth = CompareWithTruth(*in.truth, r.physical->rig);
@@ -268,6 +271,7 @@ nlohmann::json MonoCalibrationJson(const CalibrationInput& in, const MonoCalibra
                      {"rim_points", static_cast<int>(r.rim_points)},
                      {"rim_rms_px", p.rim_rms}};
   }
+  if (r.cross_validation) j["cross_validation"] = CrossValidationJson(*r.cross_validation);
   if (r.omnidir) {
     const auto& cv = *r.omnidir;
     j["opencv_omnidir"] = cv.ok ? nlohmann::json{{"rms_px", cv.rms},
@@ -331,6 +335,13 @@ std::string MonoCalibrationSummary(const CalibrationInput& in, const MonoCalibra
   s += "  unified + radtan:         RMS " + FormatNumber("%.4f", r.unified.rms) + " px\n";
   if (r.omnidir && r.omnidir->ok)
     s += "  OpenCV omnidir (same corners): RMS " + FormatNumber("%.4f", r.omnidir->rms) + " px\n";
+  if (r.cross_validation) {
+    const auto& cv = *r.cross_validation;
+    s += "  cross-validation (" + std::to_string(cv.folds) + " folds): held-out RMS " +
+         FormatNumber("%.4f", cv.held_out_rms) + " px (fit " + FormatNumber("%.4f", cv.train_rms) +
+         " px); the folds' models differ from the full one by " + FormatNumber("%.3f", cv.spread.px_stats.median) +
+         " px median, " + FormatNumber("%.3f", cv.spread.px_stats.p95) + " px 95 %\n";
+  }
   if (r.polynomial_vs_truth && r.polynomial_vs_truth->pixels == 0)
     s += "  vs ground truth: no pixel of the model's annulus sees the true mirror; nothing to compare\n";
   else if (r.polynomial_vs_truth)

@@ -15,6 +15,7 @@
 #include "calib/evaluation.h"
 #include "calib/omnidir_reference.h"
 #include "calib/physical_calibration.h"
+#include "calib/cross_validation.h"
 #include "calib/polynomial_calibration.h"
 #include "core/catadioptric.h"
 
@@ -71,7 +72,8 @@ struct MonoCalibrationOptions {
   // The physical model, from this design (mirror, camera, occluder; aligned) when set.
   std::optional<CatadioptricCamera<double>> physical_nominal;
   PhysicalCalibrationOptions physical;
-  bool rim = true;  // fit the rim of the mirror image in every image (with paths)
+  bool rim = true;         // fit the rim of the mirror image in every image (with paths)
+  int cross_validate = 0;  // K >= 2: K-fold cross-validation of the polynomial model (calib/cross_validation.h)
 };
 
 struct OrderRow {
@@ -91,6 +93,7 @@ struct MonoCalibration {
   std::optional<OmnidirResult> omnidir;
   std::optional<RayAccuracy> polynomial_vs_truth;
   std::optional<PhysicalAccuracy> physical_vs_truth;
+  std::optional<CrossValidation> cross_validation;
 };
 
 // Runs every stage. `warn` receives what a user should know but that does not stop the calibration (an image

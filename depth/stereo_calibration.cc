@@ -1,5 +1,7 @@
 #include "depth/stereo_calibration.h"
 
+#include "calib/board_pose.h"
+
 #include <ceres/ceres.h>
 
 #include <opencv2/aruco.hpp>
@@ -241,60 +243,13 @@ std::vector<CornerObservation> MarkerDetector::Detect(const unwrap::Image8& imag
 
 bool BoardPose(const AnyModel& model, const std::vector<CornerObservation>& corners, const std::map<int, Vec3d>& board,
                Rigid3d* mirror_from_board, double* rms_px) {
-  std::vector<Vec3d> bearings, pts;
+  std::vector<Vec3d> pts;
   std::vector<Vec2d> obs;
   for (const auto& c : corners) {
     const auto it = board.find(c.id);
-    Vec3d b;
-    if (it == board.end() || !model.MirrorFromImg(c.pixel, &b)) continue;
-    bearings.push_back(b.normalized());
-    pts.push_back(it->second);
-    obs.push_back(c.pixel);
+    if (it != board.end()) pts.push_back(it->second), obs.push_back(c.pixel);
   }
-  if (bearings.size() < 4) return false;
-  // A virtual pinhole looking along the mean bearing: PnP on the bearings' normalised coordinates.
-  Vec3d z = Vec3d::Zero();
-  for (const auto& b : bearings) z += b;
-  z.normalize();
-  const Vec3d x = (std::abs(z.z()) < 0.9 ? Vec3d::UnitZ() : Vec3d::UnitX()).cross(z).normalized();
-  const Vec3d y = z.cross(x);
-  Mat3<double> R;
-  R.col(0) = x, R.col(1) = y, R.col(2) = z;  // mirror_from_virtual
-  std::vector<cv::Point3f> op;
-  std::vector<cv::Point2f> ip;
-  for (size_t i = 0; i < bearings.size(); ++i) {
-    const Vec3d v = R.transpose() * bearings[i];
-    if (v.z() <= 0.05) continue;
-    op.emplace_back(float(pts[i].x()), float(pts[i].y()), float(pts[i].z()));
-    ip.emplace_back(float(v.x() / v.z()), float(v.y() / v.z()));
-  }
-  if (op.size() < 4) return false;
-  cv::Mat rvec, tvec;
-  if (!cv::solvePnP(op, ip, cv::Mat::eye(3, 3, CV_64F), cv::noArray(), rvec, tvec, false, cv::SOLVEPNP_SQPNP))
-    return false;
-  const Vec3d aa(rvec.at<double>(0), rvec.at<double>(1), rvec.at<double>(2));
-  const Rigid3d virtual_from_board(QuaternionFromAngleAxis<double>(aa),
-                                   Vec3d(tvec.at<double>(0), tvec.at<double>(1), tvec.at<double>(2)));
-  Rigid3d pose = Rigid3d(Eigen::Quaterniond(R), Vec3d::Zero()) * virtual_from_board;
-  // Refinement through the catadioptric model (pixel residuals).
-  PoseParams p = PoseParams::From(pose);
-  ceres::Problem problem;
-  for (size_t i = 0; i < pts.size(); ++i) {
-    auto* cost =
-        new ceres::NumericDiffCostFunction<LeftCost, ceres::CENTRAL, 2, 4, 3>(new LeftCost{&model, pts[i], obs[i]});
-    problem.AddResidualBlock(cost, new ceres::HuberLoss(1.0), p.q, p.t);
-  }
-  problem.SetManifold(p.q, new ceres::EigenQuaternionManifold);
-  ceres::Solver::Options so;
-  so.max_num_iterations = 100;
-  so.linear_solver_type = ceres::DENSE_QR;
-  ceres::Solver::Summary summary;
-  ceres::Solve(so, &problem, &summary);
-  if (summary.termination_type == ceres::FAILURE) return false;
-  pose = ToPose(p.q, p.t);
-  *mirror_from_board = pose;
-  if (rms_px) *rms_px = Rms(model, pose, corners, board);
-  return true;
+  return calib::FitBoardPose(model, pts, obs, mirror_from_board, rms_px);
 }
 
 StereoCalibration CalibrateStereo(const AnyModel& left, const AnyModel& right,

@@ -355,14 +355,43 @@ TEST(CalibrateCli, ANearParabolicSmallCameraWithAFieldAboveTheHorizonCalibrates)
                  (dir / "set").string());
   ASSERT_EQ(set.exit_code, 0) << set.output;
   const std::string manifest = (dir / "set" / "dataset.json").string();
-  const auto noisy = test::Hovs("-q calibrate --truth-corners --corner-noise 0.05 --seed 3 --dataset " + manifest +
-                                " --out " + (dir / "noisy").string());
+  const auto noisy =
+      test::Hovs("-q calibrate --truth-corners --corner-noise 0.05 --seed 3 --cross-validate 4 --dataset " + manifest +
+                 " --out " + (dir / "noisy").string());
   ASSERT_EQ(noisy.exit_code, 0) << noisy.output;
   const auto jn = nlohmann::json::parse(ReadFile(dir / "noisy" / "calibration.json"));
   EXPECT_LT(jn["polynomial"]["rms_px"].get<double>(), 0.1);
   EXPECT_LT(jn["unified"]["rms_px"].get<double>(), 0.1);
   EXPECT_LT(jn["ground_truth"]["mean_ray_angle_deg"].get<double>(), 0.08);
   EXPECT_LT(jn["polynomial"]["inverse"]["max_error_px"].get<double>(), 0.05);
+  // Cross-validation: held-out boards at the noise level; the folds' models within a tenth of a pixel.
+  const auto& cv = jn["cross_validation"];
+  EXPECT_EQ(cv["folds"], 4);
+  EXPECT_LT(cv["held_out_rms_px"].get<double>(), 0.1);
+  EXPECT_GT(cv["held_out_rms_px"].get<double>(), cv["train_rms_px"].get<double>());
+  EXPECT_LT(cv["spread"]["px"]["median"].get<double>(), 0.1);
+  EXPECT_TRUE(fs::exists(dir / "noisy" / "figures" / "cross_validation_px.png"));
+  // hovs compare: the calibrated polynomial against the true rig, as calibrate's own ground-truth figure.
+  const auto cmp = test::Hovs("-q compare " + manifest + " " + (dir / "noisy" / "calibration.json").string() +
+                              " --kind-b polynomial --out " + (dir / "cmp").string());
+  ASSERT_EQ(cmp.exit_code, 0) << cmp.output;
+  const auto jc = nlohmann::json::parse(ReadFile(dir / "cmp" / "compare.json"));
+  EXPECT_LT(jc["diff"]["deg"]["median"].get<double>(), 0.08);
+  EXPECT_NEAR(jc["diff"]["rotation_deg"].get<double>(), jn["ground_truth"]["frame_rotation_deg"].get<double>(), 1e-3);
+  EXPECT_TRUE(fs::exists(dir / "cmp" / "figures" / "diff_px.png"));
+  const auto refused = [&](const std::string& args, const std::string& needle) {
+    const auto r = test::Hovs(args + " --out " + (dir / "bad").string());
+    EXPECT_EQ(r.exit_code, 2) << r.output;
+    EXPECT_NE(r.output.find(needle), std::string::npos) << r.output;
+    EXPECT_FALSE(fs::exists(dir / "bad"));
+  };
+  refused("compare " + manifest + " " + std::string(HOVS_SOURCE_DIR) + "/scenes/reference_calibration.yaml",
+          "is a model of 2750x2200 images but A");
+  refused("compare " + manifest + " " + manifest + " --kind-b sideways", "expected auto, physical, polynomial");
+  refused("compare " + manifest + " " + manifest + " --kind-b physical", "has no physical model");
+  refused("calibrate --truth-corners --dataset " + manifest + " --cross-validate 1", "needs at least 2 folds");
+  refused("calibrate --truth-corners --dataset " + manifest + " --cross-validate 17",
+          "more folds (17) than images (16)");
   const auto det = test::Hovs("-q calibrate --dataset " + manifest + " --out " + (dir / "det").string());
   ASSERT_EQ(det.exit_code, 0) << det.output;
   const auto jd = nlohmann::json::parse(ReadFile(dir / "det" / "calibration.json"));
