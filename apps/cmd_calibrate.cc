@@ -39,6 +39,7 @@ struct Options {
   uint64_t seed = 1;
   bool omnidir = false;
   int cross_validate = 0;
+  bool board_flex = false;
 };
 
 int RunCalibrate(const Options& o, const GlobalOptions& global) {
@@ -76,6 +77,7 @@ int RunCalibrate(const Options& o, const GlobalOptions& global) {
   mo.polynomial.outlier_sigmas = o.outlier_sigmas;
   mo.omnidir = o.omnidir;
   mo.cross_validate = o.cross_validate;
+  mo.polynomial.board_flex = o.board_flex;
   std::optional<raytrace::CatadioptricUnit> design;
   if (o.physical) {
     if (!o.nominal.empty()) {
@@ -148,6 +150,9 @@ Runner SetupCalibrate(CLI::App* sub, const GlobalOptions* global) {
   sub->add_option("--loss", o->loss, "none | huber | cauchy")->capture_default_str();
   AddBounded(sub, "--loss-scale", &o->loss_scale, "robust loss scale, px", 0, 1000, true);
   sub->add_flag("--compare-omnidir", o->omnidir, "also run OpenCV omnidir on the same corners");
+  sub->add_flag("--board-flex", o->board_flex,
+                "estimate the board's flex (two parabolas along its axes, shared by every image, as mrcal's) in the "
+                "polynomial and unified solves");
   AddBounded(sub, "--cross-validate", &o->cross_validate,
              "K-fold cross-validation (image i in fold i mod K; K = the image count: leave one out): held-out "
              "error and the map of the folds' model differences (0: off)",

@@ -48,8 +48,8 @@ Runner SetupCompare(CLI::App* sub, const GlobalOptions* global) {
     o->diff.fit_rotation = !o->no_rotation;
     const AnyModel a = LoadCompared(o->a, o->kind_a, o->unit, "--kind-a");
     const AnyModel b = LoadCompared(o->b, o->kind_b, o->unit, "--kind-b");
-    HOVS_REQUIRE(a.width() == b.width() && a.height() == b.height(), o->b, "is a model of ", b.width(), "x",
-                 b.height(), " images but A (", o->a, ") of ", a.width(), "x", a.height(), ": not one camera");
+    HOVS_REQUIRE(a.width() == b.width() && a.height() == b.height(), o->b, "is a model of ", b.width(), "x", b.height(),
+                 " images but A (", o->a, ") of ", a.width(), "x", a.height(), ": not one camera");
     CheckOutputFolder(o->out, "compare", {o->a, o->b});
     const calib::ModelDiff d = calib::DiffModels(a, b, o->diff);
     nlohmann::json j = {{"tool", "hovs compare"},
@@ -61,8 +61,8 @@ Runner SetupCompare(CLI::App* sub, const GlobalOptions* global) {
                          "per grid pixel: unprojected by A, turned by the best rotation onto B's frame, projected by "
                          "B; px = distance to the pixel, deg = angle to B's bearing of the pixel"}};
     const std::string summary =
-        "hovs compare: " + std::string(a.KindName()) + " " + o->a + " vs " + b.KindName() + " " + o->b + "\n" +
-        "  " + std::to_string(d.common_pixels) + " grid pixels in both domains (step " + std::to_string(d.step_px) +
+        "hovs compare: " + std::string(a.KindName()) + " " + o->a + " vs " + b.KindName() + " " + o->b + "\n" + "  " +
+        std::to_string(d.common_pixels) + " grid pixels in both domains (step " + std::to_string(d.step_px) +
         " px), frames " + FormatNumber("%.4f", d.rotation_deg) + " deg apart\n" + "  difference: median " +
         FormatNumber("%.4f", d.px_stats.median) + " px, 95 % " + FormatNumber("%.4f", d.px_stats.p95) + " px, max " +
         FormatNumber("%.4f", d.px_stats.max) + " px; median " + FormatNumber("%.5f", d.deg_stats.median) +

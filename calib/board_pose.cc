@@ -75,8 +75,8 @@ bool FitBoardPose(const AnyModel& model, const std::vector<Vec3d>& board_points,
   const Rigid3d pose = Rigid3d(Eigen::Quaterniond(R), Vec3d::Zero()) * virtual_from_board;
   // Refinement through the model (pixel residuals).
   const Eigen::Quaterniond q0 = pose.rotation.normalized();
-  double q[4] = {q0.x(), q0.y(), q0.z(), q0.w()}, t[3] = {pose.translation(0), pose.translation(1),
-                                                          pose.translation(2)};
+  double q[4] = {q0.x(), q0.y(), q0.z(), q0.w()},
+         t[3] = {pose.translation(0), pose.translation(1), pose.translation(2)};
   ceres::Problem problem;
   for (size_t i = 0; i < pts.size(); ++i)
     problem.AddResidualBlock(

@@ -62,7 +62,8 @@ void ErrorMapFigure(const std::vector<BoardObservation>& obs, const PolynomialCa
   for (size_t i = 0; i < obs.size(); ++i)
     for (size_t k = 0; k < obs[i].pixels.size(); ++k) {
       Vec2d uv(1e9, 1e9);
-      cal.model.ImgFromCam(cal.cam_from_board[i] * obs[i].board_points[k], &uv);
+      cal.model.ImgFromCam(
+          cal.cam_from_board[i] * cal.board_extent.Warped<double>(obs[i].board_points[k], cal.board_warp.data()), &uv);
       res[i].push_back(uv - obs[i].pixels[k]);
       const bool in = cal.inlier.empty() || cal.inlier[i][k];
       extent = std::max(extent, res[i].back().cwiseAbs().maxCoeff());
@@ -164,7 +165,9 @@ void WriteMonoCalibrationReport(const std::filesystem::path& folder, const Calib
     page.Heading("Reprojection per image (polynomial model; residuals x20)");
     for (size_t i = 0; i < in.observations.size() && i < in.paths.size(); ++i) {
       const std::string fig = "figures/" + std::filesystem::path(in.observations[i].image).stem().string() + ".png";
-      ReprojectionFigure(in.paths[i], in.observations[i], p.inlier[i], p.model, p.cam_from_board[i], p.per_image_rms[i],
+      BoardObservation warped = in.observations[i];  // the board as the solve saw it (its flex, if estimated)
+      warped.board_points = p.board_extent.Warped(warped.board_points, p.board_warp);
+      ReprojectionFigure(in.paths[i], warped, p.inlier[i], p.model, p.cam_from_board[i], p.per_image_rms[i],
                          folder / fig);
       page.Figure(fig, in.observations[i].image + ": RMS " + FormatNumber("%.3f", p.per_image_rms[i]) + " px", 420);
     }

@@ -13,8 +13,8 @@ CrossValidation CrossValidatePolynomial(const std::vector<BoardObservation>& obs
   const int n = static_cast<int>(obs.size());
   HOVS_REQUIRE(folds >= 2, "--cross-validate", "needs at least 2 folds (got ", folds, ")");
   HOVS_REQUIRE(folds <= n, "--cross-validate", "more folds (", folds, ") than images (", n, ")");
-  HOVS_REQUIRE(n - (n + folds - 1) / folds >= 3, "--cross-validate",
-               folds, " folds of ", n, " images leave fewer than three images to calibrate each fold on");
+  HOVS_REQUIRE(n - (n + folds - 1) / folds >= 3, "--cross-validate", folds, " folds of ", n,
+               " images leave fewer than three images to calibrate each fold on");
   CrossValidation cv;
   cv.folds = folds;
   const AnyModel full = AnyModel::Polynomial(full_model, "the full calibration");
@@ -36,7 +36,9 @@ CrossValidation CrossValidatePolynomial(const std::vector<BoardObservation>& obs
       f.held_out.push_back(o.image);
       Rigid3d pose;
       double rms = NAN;
-      if (!FitBoardPose(model, o.board_points, o.pixels, &pose, &rms) || !std::isfinite(rms)) {
+      // The same physical board: the fold's estimate of its flex applies to the held-out images too.
+      const std::vector<Vec3d> board = cal.board_extent.Warped(o.board_points, cal.board_warp);
+      if (!FitBoardPose(model, board, o.pixels, &pose, &rms) || !std::isfinite(rms)) {
         f.held_out_image_rms.push_back(NAN);
         continue;
       }

@@ -16,9 +16,9 @@
 namespace hovs::calib {
 
 struct CrossValidationFold {
-  std::vector<std::string> held_out;        // image names
-  std::vector<double> held_out_image_rms;   // px, per held-out image (NaN: no pose)
-  double train_rms = 0, held_out_rms = 0;   // px, over the corners
+  std::vector<std::string> held_out;       // image names
+  std::vector<double> held_out_image_rms;  // px, per held-out image (NaN: no pose)
+  double train_rms = 0, held_out_rms = 0;  // px, over the corners
   ModelDiff diff_to_full;
 };
 

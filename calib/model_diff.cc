@@ -1,10 +1,12 @@
 #include "calib/model_diff.h"
 
+#include <algorithm>
 #include <cmath>
 
 #include "core/error.h"
 #include "core/format.h"
-#include "results/plot.h"
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
 
 namespace hovs::calib {
 
@@ -89,31 +91,56 @@ nlohmann::json ModelDiffJson(const ModelDiff& d) {
           {"deg", stats(d.deg_stats)}};
 }
 
+namespace {
+
+// One map: the image at up to 800 px wide, each grid cell coloured by its value (turbo, 0 .. the 99th percentile
+// rounded up), pale grey outside the common domain; title above, colour bar below. OpenCV only: no display.
+void WriteDiffMap(const ModelDiff& d, const std::vector<double>& values, const std::string& title,
+                  const SampleSummary& s, const char* format, const std::filesystem::path& path) {
+  std::vector<double> finite;
+  for (double v : values)
+    if (std::isfinite(v)) finite.push_back(v);
+  std::sort(finite.begin(), finite.end());
+  double top = finite.empty() ? 1 : finite[std::min(finite.size() - 1, finite.size() * 99 / 100)];
+  if (!(top > 0)) top = 1;
+  const double scale = std::min(1.0, 800.0 / d.width);
+  const int w = std::max(1, static_cast<int>(d.width * scale)), h = std::max(1, static_cast<int>(d.height * scale));
+  cv::Mat ramp(1, 256, CV_8UC1);
+  for (int k = 0; k < 256; ++k) ramp.at<uchar>(0, k) = static_cast<uchar>(k);
+  cv::applyColorMap(ramp, ramp, cv::COLORMAP_TURBO);
+  const auto colour = [&](double v) {
+    const int k = std::clamp(static_cast<int>(255 * v / top), 0, 255);
+    return ramp.at<cv::Vec3b>(0, k);
+  };
+  cv::Mat fig(h + 110, std::max(w, 420), CV_8UC3, cv::Scalar(255, 255, 255));
+  for (int y = 0; y < h; ++y)
+    for (int x = 0; x < w; ++x) {
+      const int i = std::clamp(static_cast<int>(std::lround(x / scale / d.step_px)), 0, d.nx - 1);
+      const int j = std::clamp(static_cast<int>(std::lround(y / scale / d.step_px)), 0, d.ny - 1);
+      const double v = values[j * d.nx + i];
+      fig.at<cv::Vec3b>(30 + y, x) = std::isfinite(v) ? colour(v) : cv::Vec3b(225, 225, 225);
+    }
+  const auto put = [&](const std::string& t, int x, int y) {
+    cv::putText(fig, t, cv::Point(x, y), cv::FONT_HERSHEY_SIMPLEX, 0.45, cv::Scalar(0, 0, 0), 1, cv::LINE_AA);
+  };
+  put(title + ": median " + FormatNumber(format, s.median) + ", 95 % " + FormatNumber(format, s.p95) + ", max " +
+          FormatNumber(format, s.max),
+      4, 20);
+  const int bar_y = 30 + h + 15, bar_w = std::min(fig.cols - 20, 400);
+  for (int x = 0; x < bar_w; ++x)
+    cv::line(fig, cv::Point(10 + x, bar_y), cv::Point(10 + x, bar_y + 14), cv::Scalar(colour(top * x / bar_w)));
+  put("0", 8, bar_y + 32);
+  put(FormatNumber(format, top), 10 + bar_w - 40, bar_y + 32);
+  put("grey: outside either model's domain", 10, bar_y + 50);
+  HOVS_REQUIRE(cv::imwrite(path.string(), fig), path.string(), "cannot write the figure");
+}
+
+}  // namespace
+
 void WriteModelDiffFigures(const ModelDiff& d, const std::string& title, const std::filesystem::path& px_png,
                            const std::filesystem::path& deg_png) {
-  const auto figure = [&](const std::vector<double>& values, const std::string& what, const SampleSummary& s,
-                          const char* format, const std::filesystem::path& path) {
-    results::HeatMapFigure f;
-    f.title = title + ": " + what + " (median " + FormatNumber(format, s.median) + ", 95 % " +
-              FormatNumber(format, s.p95) + ")";
-    f.x_label = "u (px)", f.y_label = "-v (px)", f.value_label = what;
-    f.nx = d.nx, f.ny = d.ny;
-    f.x0 = 0, f.x1 = (d.nx - 1) * d.step_px, f.y0 = -(d.ny - 1) * d.step_px, f.y1 = 0;
-    f.width = 900, f.height = std::max(400, 900 * d.height / std::max(1, d.width));
-    f.values.resize(values.size()), f.shade.resize(values.size());
-    for (int j = 0; j < d.ny; ++j)  // figure row j is image row ny - 1 - j (image up is figure up)
-      for (int i = 0; i < d.nx; ++i) {
-        const double v = values[(d.ny - 1 - j) * d.nx + i];
-        f.values[j * d.nx + i] = std::isfinite(v) ? v : 0;
-        f.shade[j * d.nx + i] = !std::isfinite(v);
-      }
-    f.shade_label = "pale: outside either model's domain";
-    f.contour_levels = {s.median, s.p95};
-    f.contour_format = format;
-    results::WritePng(f, path);
-  };
-  figure(d.px, "difference, px", d.px_stats, "%.3f", px_png);
-  figure(d.deg, "difference, degrees", d.deg_stats, "%.4f", deg_png);
+  WriteDiffMap(d, d.px, title + ", px", d.px_stats, "%.3f", px_png);
+  WriteDiffMap(d, d.deg, title + ", degrees", d.deg_stats, "%.4f", deg_png);
 }
 
 }  // namespace hovs::calib

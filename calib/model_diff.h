@@ -16,8 +16,8 @@
 namespace hovs::calib {
 
 struct ModelDiffOptions {
-  int grid_step_px = 0;       // 0: about 120 grid columns across the image
-  bool fit_rotation = true;   // false: the two mirror frames are taken as the same
+  int grid_step_px = 0;      // 0: about 120 grid columns across the image
+  bool fit_rotation = true;  // false: the two mirror frames are taken as the same
   void Check(const std::string& where) const;
 };
 
@@ -25,9 +25,9 @@ struct ModelDiff {
   int width = 0, height = 0, step_px = 1, nx = 0, ny = 0;
   std::vector<double> px, deg;  // ny rows of nx values (row j at v = j step); NaN outside the common domain
   Mat3<double> b_from_a = Mat3<double>::Identity();
-  double rotation_deg = 0;        // the angle of b_from_a
+  double rotation_deg = 0;  // the angle of b_from_a
   SampleSummary px_stats, deg_stats;
-  size_t common_pixels = 0;       // grid pixels in both domains
+  size_t common_pixels = 0;  // grid pixels in both domains
 };
 
 // Throws hovs::Error when the models' image sizes differ or their domains share fewer than 100 grid pixels.
@@ -39,7 +39,8 @@ ModelDiff RmsOfDiffs(const std::vector<ModelDiff>& diffs);
 
 nlohmann::json ModelDiffJson(const ModelDiff& diff);
 
-// Two heat maps (px and degrees) of the diff, under `title`; the pixels outside the common domain pale.
+// Two maps (px and degrees) of the diff over the image, under `title`; the pixels outside the common domain grey.
+// Drawn with OpenCV (no display needed).
 void WriteModelDiffFigures(const ModelDiff& diff, const std::string& title, const std::filesystem::path& px_png,
                            const std::filesystem::path& deg_png);
 

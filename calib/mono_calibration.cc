@@ -29,6 +29,13 @@ nlohmann::json DetectionJson(const ImageDetection& d) {
   return row;
 }
 
+// The board's flex (calib/board_warp.h) in mm: each axis' bulge and their sum at the centre; null when not
+// estimated.
+nlohmann::json BoardFlexJson(bool estimated, const std::array<double, 2>& warp) {
+  if (!estimated) return nullptr;
+  return {{"x_mm", 1e3 * warp[0]}, {"y_mm", 1e3 * warp[1]}, {"centre_mm", 1e3 * (warp[0] + warp[1])}};
+}
+
 nlohmann::json PolynomialJson(const PolynomialCalibration& r, const std::vector<BoardObservation>& obs) {
   const auto& m = r.model;
   nlohmann::json j = {{"model", "polynomial"},
@@ -50,6 +57,7 @@ nlohmann::json PolynomialJson(const PolynomialCalibration& r, const std::vector<
                       {"rms_px", r.rms},
                       {"mean_px", r.mean},
                       {"initial_rms_px", r.initial_rms},
+                      {"board_flex", BoardFlexJson(r.board_flex, r.board_warp)},
                       {"converged", r.converged},
                       {"solver", r.solver_report},
                       {"stddev", r.stddev}};
@@ -241,6 +249,7 @@ nlohmann::json MonoCalibrationJson(const CalibrationInput& in, const MonoCalibra
       {"cx", u.model.cx},
       {"cy", u.model.cy},
       {"distortion", {u.model.distortion.k1, u.model.distortion.k2, u.model.distortion.p1, u.model.distortion.p2}},
+      {"board_flex", BoardFlexJson(r.polynomial.board_flex, u.board_warp)},
       {"rms_px", u.rms},
       {"mean_px", u.mean},
       {"converged", u.converged},
@@ -332,6 +341,10 @@ std::string MonoCalibrationSummary(const CalibrationInput& in, const MonoCalibra
       s += " " + ol.image + "#" + std::to_string(ol.corner) + " (" + FormatNumber("%.2f", ol.residual_px) + ")";
     s += "\n";
   }
+  if (p.board_flex)
+    s += "  board flex: " + FormatNumber("%.3f", 1e3 * p.board_warp[0]) + " mm along x, " +
+         FormatNumber("%.3f", 1e3 * p.board_warp[1]) + " mm along y (" +
+         FormatNumber("%.3f", 1e3 * (p.board_warp[0] + p.board_warp[1])) + " mm at the centre)\n";
   s += "  unified + radtan:         RMS " + FormatNumber("%.4f", r.unified.rms) + " px\n";
   if (r.omnidir && r.omnidir->ok)
     s += "  OpenCV omnidir (same corners): RMS " + FormatNumber("%.4f", r.omnidir->rms) + " px\n";

@@ -16,6 +16,7 @@
 #include <memory>
 #include <sstream>
 
+#include "calib/board_warp.h"
 #include "calib/solver_util.h"
 #include "core/error.h"
 #include "core/format.h"
@@ -28,11 +29,12 @@ namespace {
 // normalised radius: f(rho) = sum_k b_k (rho / scale)^k (k = 0, 2..N), so every coefficient has a similar size.
 struct ReprojectionError {
   ReprojectionError(const Vec3d& board_point, const Vec2d& pixel, int degree, double scale, double rho_hint,
-                    const std::array<double, 3>* fixed_affine)
-      : P(board_point), obs(pixel), N(degree), s(scale), hint(rho_hint), affine(fixed_affine) {}
+                    const std::array<double, 3>* fixed_affine, const BoardExtent& board_extent)
+      : P(board_point), obs(pixel), N(degree), s(scale), hint(rho_hint), affine(fixed_affine), extent(board_extent) {}
 
   template <class T>
-  bool operator()(const T* centre, const T* aff, const T* poly, const T* aa, const T* t, T* residual) const {
+  bool operator()(const T* centre, const T* aff, const T* poly, const T* aa, const T* t, const T* warp,
+                  T* residual) const {
     PolynomialModel<T> m;
     m.cx = centre[0], m.cy = centre[1];
     if (affine) {
@@ -44,7 +46,8 @@ struct ReprojectionError {
     m.poly[0] = poly[0];
     double sk = s * s;
     for (int k = 2; k <= N; ++k, sk *= s) m.poly[k] = poly[k - 1] / T(sk);
-    const T Pb[3] = {T(P.x()), T(P.y()), T(P.z())};
+    const Vec3<T> Pw = extent.Warped(P, warp);
+    const T Pb[3] = {Pw(0), Pw(1), Pw(2)};
     T X[3];
     ceres::AngleAxisRotatePoint(aa, Pb, X);
     Vec2<T> uv;
@@ -54,10 +57,10 @@ struct ReprojectionError {
     return true;
   }
 
-  // For ceres::DynamicAutoDiffCostFunction: blocks centre, affine, poly (N values), angle-axis, t.
+  // For ceres::DynamicAutoDiffCostFunction: blocks centre, affine, poly (N values), angle-axis, t, board warp.
   template <class T>
   bool operator()(T const* const* p, T* residual) const {
-    return (*this)(p[0], p[1], p[2], p[3], p[4], residual);
+    return (*this)(p[0], p[1], p[2], p[3], p[4], p[5], residual);
   }
 
   Vec3d P;
@@ -65,6 +68,7 @@ struct ReprojectionError {
   int N;
   double s, hint;
   const std::array<double, 3>* affine;
+  BoardExtent extent;
 };
 
 // Scaramuzza's linear initialisation for one image with the centre fixed: R (first two columns) and t1, t2
@@ -233,6 +237,8 @@ PolynomialCalibration CalibratePolynomial(const std::vector<BoardObservation>& o
 
   static const std::array<double, 3> kIdentityAffine = {1, 0, 0};
   PolynomialCalibration out;
+  const BoardExtent extent = BoardExtent::Of(obs);
+  std::array<double, 2> warp = {0, 0};
   const auto evaluate = [&](std::vector<double>* per_image_rms, std::vector<double>* per_image_mean, double* rms,
                             double* mean) {
     double sum2 = 0, sum = 0;
@@ -242,9 +248,9 @@ PolynomialCalibration CalibratePolynomial(const std::vector<BoardObservation>& o
       size_t n = 0;
       for (size_t j = 0; j < obs[i].pixels.size(); ++j) {
         const double hint = (obs[i].pixels[j] - Vec2d(centre[0], centre[1])).norm();
-        ReprojectionError e(obs[i].board_points[j], obs[i].pixels[j], N, scale, hint, nullptr);
+        ReprojectionError e(obs[i].board_points[j], obs[i].pixels[j], N, scale, hint, nullptr, extent);
         double res[2] = {1e6, 1e6};
-        e(centre, affine, poly.data(), pose_params[i].data(), pose_params[i].data() + 3, res);
+        e(centre, affine, poly.data(), pose_params[i].data(), pose_params[i].data() + 3, warp.data(), res);
         const double d2 = res[0] * res[0] + res[1] * res[1];
         for (auto& o : out.outliers)
           if (o.image_index == static_cast<int>(i) && o.corner == static_cast<int>(j))
@@ -285,13 +291,14 @@ PolynomialCalibration CalibratePolynomial(const std::vector<BoardObservation>& o
         const double hint = (obs[i].pixels[j] - centre0).norm();
         auto* cost = new ceres::DynamicAutoDiffCostFunction<ReprojectionError, 8>(
             new ReprojectionError(obs[i].board_points[j], obs[i].pixels[j], N, scale, hint,
-                                  opt.estimate_affine ? nullptr : &kIdentityAffine));
-        for (int size : {2, 3, N, 3, 3}) cost->AddParameterBlock(size);
+                                  opt.estimate_affine ? nullptr : &kIdentityAffine, extent));
+        for (int size : {2, 3, N, 3, 3, 2}) cost->AddParameterBlock(size);
         cost->SetNumResiduals(2);
         problem->AddResidualBlock(cost, MakeLoss(opt.loss, opt.loss_scale), centre, affine, poly.data(),
-                                  pose_params[i].data(), pose_params[i].data() + 3);
+                                  pose_params[i].data(), pose_params[i].data() + 3, warp.data());
       }
     if (!opt.estimate_affine) problem->SetParameterBlockConstant(affine);
+    if (!opt.board_flex) problem->SetParameterBlockConstant(warp.data());
     ceres::Solve(so, problem.get(), &summary);
   };
   solve();
@@ -305,9 +312,9 @@ PolynomialCalibration CalibratePolynomial(const std::vector<BoardObservation>& o
   const auto residual = [&](size_t i, size_t j) {
     const double hint = (obs[i].pixels[j] - Vec2d(centre[0], centre[1])).norm();
     ReprojectionError e(obs[i].board_points[j], obs[i].pixels[j], N, scale, hint,
-                        opt.estimate_affine ? nullptr : &kIdentityAffine);
+                        opt.estimate_affine ? nullptr : &kIdentityAffine, extent);
     double res[2] = {1e6, 1e6};
-    e(centre, affine, poly.data(), pose_params[i].data(), pose_params[i].data() + 3, res);
+    e(centre, affine, poly.data(), pose_params[i].data(), pose_params[i].data() + 3, warp.data(), res);
     return std::hypot(res[0], res[1]);
   };
   std::vector<std::vector<double>> first_residual(obs.size());
@@ -367,6 +374,7 @@ PolynomialCalibration CalibratePolynomial(const std::vector<BoardObservation>& o
                FormatNumber("%.1f", rho_max), " px: the corners do not constrain the model (try --degree 3)");
   m.FitInverse(0.01);
   for (size_t i = 0; i < obs.size(); ++i) out.cam_from_board.push_back(ParamsToPose(pose_params[i].data()));
+  out.board_flex = opt.board_flex, out.board_warp = warp, out.board_extent = extent;
   evaluate(&out.per_image_rms, &out.per_image_mean, &out.rms, &out.mean);
 
   // Standard deviations of the intrinsics (when the covariance is computable).
@@ -374,12 +382,15 @@ PolynomialCalibration CalibratePolynomial(const std::vector<BoardObservation>& o
   // absorb it): the covariance is the pseudo-inverse with that one null direction removed.
   std::vector<std::pair<double*, int>> blocks = {{centre, 2}, {poly.data(), N}};
   if (opt.estimate_affine) blocks.push_back({affine, 3});
+  if (opt.board_flex) blocks.push_back({warp.data(), 2});
   std::vector<std::vector<double>> sd;
   if (ParameterStddevs(problem.get(), blocks, opt.estimate_affine ? 1 : 0, &sd)) {
     out.stddev["cx"] = sd[0][0], out.stddev["cy"] = sd[0][1];
     out.stddev["a0"] = sd[1][0];
     for (int k = 2; k <= N; ++k) out.stddev["a" + std::to_string(k)] = sd[1][k - 1] / std::pow(scale, k);
     if (opt.estimate_affine) out.stddev["c"] = sd[2][0], out.stddev["d"] = sd[2][1], out.stddev["e"] = sd[2][2];
+    if (opt.board_flex)
+      out.stddev["board_flex_x_mm"] = 1e3 * sd.back()[0], out.stddev["board_flex_y_mm"] = 1e3 * sd.back()[1];
   }
   return out;
 }
@@ -447,13 +458,15 @@ namespace {
 
 // Reprojection through the core's unified model. Parameters: [xi, fx, fy, cx, cy], [k1, k2, p1, p2], pose.
 struct UnifiedReprojection {
-  UnifiedReprojection(const Vec3d& P, const Vec2d& obs) : P_(P), obs_(obs) {}
+  UnifiedReprojection(const Vec3d& P, const Vec2d& obs, const BoardExtent& extent)
+      : P_(P), obs_(obs), extent_(extent) {}
   template <class T>
-  bool operator()(const T* intr, const T* dist, const T* aa, const T* t, T* residual) const {
+  bool operator()(const T* intr, const T* dist, const T* aa, const T* t, const T* warp, T* residual) const {
     UnifiedModel<T> m;
     m.xi = intr[0], m.fx = intr[1], m.fy = intr[2], m.cx = intr[3], m.cy = intr[4];
     m.distortion = {dist[0], dist[1], dist[2], dist[3]};
-    const T Pb[3] = {T(P_.x()), T(P_.y()), T(P_.z())};
+    const Vec3<T> Pw = extent_.Warped(P_, warp);
+    const T Pb[3] = {Pw(0), Pw(1), Pw(2)};
     T X[3];
     ceres::AngleAxisRotatePoint(aa, Pb, X);
     Vec2<T> uv;
@@ -464,6 +477,7 @@ struct UnifiedReprojection {
   }
   Vec3d P_;
   Vec2d obs_;
+  BoardExtent extent_;
 };
 
 // Fits xi, fx = fy, cx, cy of a distortion-free unified model to the rays of a calibrated polynomial model.
@@ -518,14 +532,18 @@ UnifiedCalibration CalibrateUnified(const std::vector<BoardObservation>& obs, in
   double dist[4] = {0, 0, 0, 0};
   std::vector<std::array<double, 6>> poses(obs.size());
   for (size_t i = 0; i < obs.size(); ++i) poses[i] = PoseToParams(start.cam_from_board[i]);
+  // The board's flex, when the polynomial solve estimated it, is estimated again here (same board, same extent).
+  std::array<double, 2> warp = start.board_warp;
   ceres::Problem problem;
   for (size_t i = 0; i < obs.size(); ++i)
     for (size_t j = 0; j < obs[i].pixels.size(); ++j) {
-      problem.AddResidualBlock(new ceres::AutoDiffCostFunction<UnifiedReprojection, 2, 5, 4, 3, 3>(
-                                   new UnifiedReprojection(obs[i].board_points[j], obs[i].pixels[j])),
-                               MakeLoss(loss, loss_scale), intr, dist, poses[i].data(), poses[i].data() + 3);
+      problem.AddResidualBlock(
+          new ceres::AutoDiffCostFunction<UnifiedReprojection, 2, 5, 4, 3, 3, 2>(
+              new UnifiedReprojection(obs[i].board_points[j], obs[i].pixels[j], start.board_extent)),
+          MakeLoss(loss, loss_scale), intr, dist, poses[i].data(), poses[i].data() + 3, warp.data());
     }
   if (!estimate_distortion) problem.SetParameterBlockConstant(dist);
+  if (!start.board_flex) problem.SetParameterBlockConstant(warp.data());
   const ceres::Solver::Options so = CalibrationSolverOptions(300, 1e-14);
   ceres::Solver::Summary summary;
   ceres::Solve(so, &problem, &summary);
@@ -543,9 +561,11 @@ UnifiedCalibration CalibrateUnified(const std::vector<BoardObservation>& obs, in
     double s2 = 0;
     for (size_t j = 0; j < obs[i].pixels.size(); ++j) {
       Vec2d uv;
-      const double d2 = m.ImgFromCam(out.cam_from_board[i] * obs[i].board_points[j], &uv)
-                            ? (uv - obs[i].pixels[j]).squaredNorm()
-                            : 1e12;
+      const double d2 =
+          m.ImgFromCam(out.cam_from_board[i] * start.board_extent.Warped<double>(obs[i].board_points[j], warp.data()),
+                       &uv)
+              ? (uv - obs[i].pixels[j]).squaredNorm()
+              : 1e12;
       s2 += d2, sum += std::sqrt(d2);
     }
     out.per_image_rms.push_back(std::sqrt(s2 / obs[i].pixels.size()));
@@ -553,6 +573,7 @@ UnifiedCalibration CalibrateUnified(const std::vector<BoardObservation>& obs, in
   }
   out.rms = std::sqrt(sum2 / count);
   out.mean = sum / count;
+  out.board_warp = warp;
   // Standard deviations of the intrinsics (no gauge freedom: skew is fixed).
   std::vector<std::vector<double>> sd;
   std::vector<std::pair<double*, int>> blocks = {{intr, 5}};

@@ -5,12 +5,14 @@
 // exact world2cam and an optional robust loss. Standard deviations come from ceres::Covariance.
 #pragma once
 
+#include <array>
 #include <filesystem>
 #include <map>
 #include <optional>
 #include <string>
 #include <vector>
 
+#include "calib/board_warp.h"
 #include "core/polynomial.h"
 #include "core/rigid.h"
 
@@ -34,6 +36,8 @@ struct PolynomialCalibrationOptions {
   // per-axis sigma of all residuals) are removed and listed, and the problem is solved again. 0 disables it.
   double outlier_sigmas = 5;
   double outlier_floor_px = 0.5;
+  // Estimate the board's flex (calib/board_warp.h: two parabolas shared by every image) in the joint solve.
+  bool board_flex = false;
   void Check(const std::string& where) const;
 };
 
@@ -48,15 +52,18 @@ struct CornerOutlier {
 
 struct PolynomialCalibration {
   PolynomialModel<double> model;
-  std::vector<Rigid3d> cam_from_board;    // the board poses, in the model's (mirror) frame
-  std::vector<double> per_image_rms;      // px, over the image's inliers
-  std::vector<double> per_image_mean;     // px, mean reprojection error (the article's figure)
-  double rms = 0, mean = 0;               // over all inlier corners, px
-  std::vector<std::vector<bool>> inlier;  // per image, per corner
-  std::vector<CornerOutlier> outliers;    // rejected corners, listed
-  double outlier_threshold_px = 0;        // 0: rejection disabled
-  double initial_rms = 0;                 // after the linear initialisation
-  std::map<std::string, double> stddev;   // cx, cy, c, d, e, a0, a2, ... (from the covariance)
+  std::vector<Rigid3d> cam_from_board;        // the board poses, in the model's (mirror) frame
+  std::vector<double> per_image_rms;          // px, over the image's inliers
+  std::vector<double> per_image_mean;         // px, mean reprojection error (the article's figure)
+  double rms = 0, mean = 0;                   // over all inlier corners, px
+  std::vector<std::vector<bool>> inlier;      // per image, per corner
+  std::vector<CornerOutlier> outliers;        // rejected corners, listed
+  double outlier_threshold_px = 0;            // 0: rejection disabled
+  double initial_rms = 0;                     // after the linear initialisation
+  std::map<std::string, double> stddev;       // cx, cy, c, d, e, a0, a2, ... (from the covariance)
+  bool board_flex = false;                    // estimated (else board_warp is 0)
+  std::array<double, 2> board_warp = {0, 0};  // metres (calib/board_warp.h)
+  BoardExtent board_extent;
   bool converged = false;
   std::string solver_report;
 };
@@ -84,7 +91,8 @@ struct UnifiedCalibration {
   std::vector<Rigid3d> cam_from_board;
   std::vector<double> per_image_rms;
   double rms = 0, mean = 0;
-  std::map<std::string, double> stddev;  // xi, fx, fy, cx, cy, k1, k2, p1, p2 (from the covariance)
+  std::map<std::string, double> stddev;       // xi, fx, fy, cx, cy, k1, k2, p1, p2 (from the covariance)
+  std::array<double, 2> board_warp = {0, 0};  // metres, estimated when the polynomial start estimated it
   bool converged = false;
   std::string solver_report;
 };

@@ -20,8 +20,8 @@ TEST(ModelDiff, FindsTheFrameRotationAndNothingElse) {
   const auto rig = test::AlignedRig();
   auto turned = rig;
   turned.cam_from_mirror =
-      turned.cam_from_mirror * Rigid3d(Eigen::Quaterniond(Eigen::AngleAxisd(0.5 * M_PI / 180, Vec3d::UnitZ())),
-                                       Vec3d::Zero());
+      turned.cam_from_mirror *
+      Rigid3d(Eigen::Quaterniond(Eigen::AngleAxisd(0.5 * M_PI / 180, Vec3d::UnitZ())), Vec3d::Zero());
   const AnyModel a = AnyModel::Exact(rig), b = AnyModel::Exact(turned);
   const ModelDiff same = DiffModels(a, a);
   EXPECT_LT(same.px_stats.max, 1e-9);
@@ -72,17 +72,59 @@ TEST(CrossValidation, HeldOutErrorAndSpreadOfNoisyCorners) {
   EXPECT_GT(cv.held_out_rms, cv.train_rms);
   EXPECT_GT(cv.held_out_rms, 0.1);
   EXPECT_LT(cv.held_out_rms, 0.2);
-  std::printf("[ figure ] held-out %.4f px, fit %.4f px, spread median %.4f px (%.5f deg), 95 %% %.4f px\n", cv.held_out_rms, cv.train_rms, cv.spread.px_stats.median, cv.spread.deg_stats.median, cv.spread.px_stats.p95);
+  std::printf("[ figure ] held-out %.4f px, fit %.4f px, spread median %.4f px (%.5f deg), 95 %% %.4f px\n",
+              cv.held_out_rms, cv.train_rms, cv.spread.px_stats.median, cv.spread.deg_stats.median,
+              cv.spread.px_stats.p95);
   const auto quiet = SyntheticObservations(rig, 12, 0.02, 5);
-  const CrossValidation cv_quiet = CrossValidatePolynomial(
-      quiet, 2750, 2200, {}, 3, CalibratePolynomial(quiet, 2750, 2200, {}).model);
+  const CrossValidation cv_quiet =
+      CrossValidatePolynomial(quiet, 2750, 2200, {}, 3, CalibratePolynomial(quiet, 2750, 2200, {}).model);
   const double ratio = cv.spread.px_stats.median / cv_quiet.spread.px_stats.median;
   EXPECT_GT(ratio, 3.5);
   EXPECT_LT(ratio, 6.5);
   EXPECT_THROW(CrossValidatePolynomial(obs, 2750, 2200, {}, 1, full.model), Error);
-  EXPECT_THROW(CrossValidatePolynomial(std::vector<BoardObservation>(obs.begin(), obs.begin() + 4), 2750, 2200, {},
-                                       2, full.model),
+  EXPECT_THROW(CrossValidatePolynomial(std::vector<BoardObservation>(obs.begin(), obs.begin() + 4), 2750, 2200, {}, 2,
+                                       full.model),
                Error);
+}
+
+}  // namespace
+}  // namespace hovs::calib
+
+namespace hovs::calib {
+namespace {
+
+// Corners of a board bulging 0.3 mm along x and -0.2 mm along y (calib/board_warp.h), through the exact rig with
+// 0.05 px noise: the flat-board solve is left with the bulge in its residuals; with --board-flex the bulge is
+// found again (within 0.03 mm) and the fit is at the noise floor, for both models.
+TEST(BoardFlex, RecoversTheBulgeOfABentBoard) {
+  const auto rig = test::AlignedRig();
+  std::vector<Rigid3d> poses;
+  auto obs = SyntheticObservations(rig, 12, 0.0, 9, &poses);
+  const BoardExtent extent = BoardExtent::Of(obs);
+  const std::array<double, 2> bulge = {0.3e-3, -0.2e-3};
+  std::mt19937 rng(4);
+  std::normal_distribution<double> noise(0, 0.05);
+  for (size_t i = 0; i < obs.size(); ++i)
+    for (size_t k = 0; k < obs[i].pixels.size(); ++k) {
+      Vec2d uv;
+      ASSERT_EQ(rig.ImgFromMirror(poses[i] * extent.Warped<double>(obs[i].board_points[k], bulge.data()), &uv),
+                ProjectionStatus::kOk);
+      obs[i].pixels[k] = uv + Vec2d(noise(rng), noise(rng));
+    }
+  const PolynomialCalibration flat = CalibratePolynomial(obs, 2750, 2200, {});
+  PolynomialCalibrationOptions o;
+  o.board_flex = true;
+  const PolynomialCalibration bent = CalibratePolynomial(obs, 2750, 2200, o);
+  EXPECT_GT(flat.rms, bent.rms + 0.01);
+  EXPECT_LT(bent.rms, 0.075);  // the noise floor: 0.05 sqrt(2) = 0.071 px
+  EXPECT_NEAR(bent.board_warp[0], bulge[0], 0.03e-3);
+  EXPECT_NEAR(bent.board_warp[1], bulge[1], 0.03e-3);
+  EXPECT_GT(bent.stddev.count("board_flex_x_mm"), 0u);
+  const UnifiedCalibration unified = CalibrateUnified(obs, 2750, 2200, bent);
+  EXPECT_LT(unified.rms, 0.075);
+  EXPECT_NEAR(unified.board_warp[0], bulge[0], 0.03e-3);
+  std::printf("[ figure ] bent board: flat solve %.4f px, with flex %.4f px, bulge found (%.4f, %.4f) mm\n", flat.rms,
+              bent.rms, 1e3 * bent.board_warp[0], 1e3 * bent.board_warp[1]);
 }
 
 }  // namespace
