@@ -39,7 +39,7 @@ struct Options {
   uint64_t seed = 1;
   bool omnidir = false;
   int cross_validate = 0;
-  bool board_flex = false;
+  bool board_flex = false, board_flex_per_image = false;
 };
 
 int RunCalibrate(const Options& o, const GlobalOptions& global) {
@@ -77,7 +77,8 @@ int RunCalibrate(const Options& o, const GlobalOptions& global) {
   mo.polynomial.outlier_sigmas = o.outlier_sigmas;
   mo.omnidir = o.omnidir;
   mo.cross_validate = o.cross_validate;
-  mo.polynomial.board_flex = o.board_flex;
+  mo.polynomial.board_flex = o.board_flex || o.board_flex_per_image;
+  mo.polynomial.board_flex_per_image = o.board_flex_per_image;
   std::optional<raytrace::CatadioptricUnit> design;
   if (o.physical) {
     if (!o.nominal.empty()) {
@@ -153,6 +154,8 @@ Runner SetupCalibrate(CLI::App* sub, const GlobalOptions* global) {
   sub->add_flag("--board-flex", o->board_flex,
                 "estimate the board's flex (two parabolas along its axes, shared by every image, as mrcal's) in the "
                 "polynomial and unified solves");
+  sub->add_flag("--board-flex-per-image", o->board_flex_per_image,
+                "the board's flex estimated for each image (a board that bends differently each time it is held)");
   AddBounded(sub, "--cross-validate", &o->cross_validate,
              "K-fold cross-validation (image i in fold i mod K; K = the image count: leave one out): held-out "
              "error and the map of the folds' model differences (0: off)",

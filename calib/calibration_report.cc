@@ -63,7 +63,7 @@ void ErrorMapFigure(const std::vector<BoardObservation>& obs, const PolynomialCa
     for (size_t k = 0; k < obs[i].pixels.size(); ++k) {
       Vec2d uv(1e9, 1e9);
       cal.model.ImgFromCam(
-          cal.cam_from_board[i] * cal.board_extent.Warped<double>(obs[i].board_points[k], cal.board_warp.data()), &uv);
+          cal.cam_from_board[i] * cal.board_extent.Warped<double>(obs[i].board_points[k], cal.WarpOf(i).data()), &uv);
       res[i].push_back(uv - obs[i].pixels[k]);
       const bool in = cal.inlier.empty() || cal.inlier[i][k];
       extent = std::max(extent, res[i].back().cwiseAbs().maxCoeff());
@@ -166,7 +166,7 @@ void WriteMonoCalibrationReport(const std::filesystem::path& folder, const Calib
     for (size_t i = 0; i < in.observations.size() && i < in.paths.size(); ++i) {
       const std::string fig = "figures/" + std::filesystem::path(in.observations[i].image).stem().string() + ".png";
       BoardObservation warped = in.observations[i];  // the board as the solve saw it (its flex, if estimated)
-      warped.board_points = p.board_extent.Warped(warped.board_points, p.board_warp);
+      warped.board_points = p.board_extent.Warped(warped.board_points, p.WarpOf(i));
       ReprojectionFigure(in.paths[i], warped, p.inlier[i], p.model, p.cam_from_board[i], p.per_image_rms[i],
                          folder / fig);
       page.Figure(fig, in.observations[i].image + ": RMS " + FormatNumber("%.3f", p.per_image_rms[i]) + " px", 420);

@@ -31,9 +31,16 @@ nlohmann::json DetectionJson(const ImageDetection& d) {
 
 // The board's flex (calib/board_warp.h) in mm: each axis' bulge and their sum at the centre; null when not
 // estimated.
-nlohmann::json BoardFlexJson(bool estimated, const std::array<double, 2>& warp) {
+nlohmann::json BoardFlexJson(bool estimated, const std::array<double, 2>& warp,
+                             const std::vector<std::array<double, 2>>& per_image) {
   if (!estimated) return nullptr;
-  return {{"x_mm", 1e3 * warp[0]}, {"y_mm", 1e3 * warp[1]}, {"centre_mm", 1e3 * (warp[0] + warp[1])}};
+  nlohmann::json j = {{"x_mm", 1e3 * warp[0]}, {"y_mm", 1e3 * warp[1]}, {"centre_mm", 1e3 * (warp[0] + warp[1])}};
+  if (!per_image.empty()) {
+    j["per_image_mm"] = nlohmann::json::array();
+    for (const auto& w : per_image) j["per_image_mm"].push_back({1e3 * w[0], 1e3 * w[1]});
+    j["note"] = "one warp per image; x_mm, y_mm: their mean";
+  }
+  return j;
 }
 
 nlohmann::json PolynomialJson(const PolynomialCalibration& r, const std::vector<BoardObservation>& obs) {
@@ -57,7 +64,7 @@ nlohmann::json PolynomialJson(const PolynomialCalibration& r, const std::vector<
                       {"rms_px", r.rms},
                       {"mean_px", r.mean},
                       {"initial_rms_px", r.initial_rms},
-                      {"board_flex", BoardFlexJson(r.board_flex, r.board_warp)},
+                      {"board_flex", BoardFlexJson(r.board_flex, r.board_warp, r.image_warps)},
                       {"converged", r.converged},
                       {"solver", r.solver_report},
                       {"stddev", r.stddev}};
@@ -249,7 +256,7 @@ nlohmann::json MonoCalibrationJson(const CalibrationInput& in, const MonoCalibra
       {"cx", u.model.cx},
       {"cy", u.model.cy},
       {"distortion", {u.model.distortion.k1, u.model.distortion.k2, u.model.distortion.p1, u.model.distortion.p2}},
-      {"board_flex", BoardFlexJson(r.polynomial.board_flex, u.board_warp)},
+      {"board_flex", BoardFlexJson(r.polynomial.board_flex, u.board_warp, u.image_warps)},
       {"rms_px", u.rms},
       {"mean_px", u.mean},
       {"converged", u.converged},
@@ -342,9 +349,9 @@ std::string MonoCalibrationSummary(const CalibrationInput& in, const MonoCalibra
     s += "\n";
   }
   if (p.board_flex)
-    s += "  board flex: " + FormatNumber("%.3f", 1e3 * p.board_warp[0]) + " mm along x, " +
-         FormatNumber("%.3f", 1e3 * p.board_warp[1]) + " mm along y (" +
-         FormatNumber("%.3f", 1e3 * (p.board_warp[0] + p.board_warp[1])) + " mm at the centre)\n";
+    s += std::string(p.image_warps.empty() ? "  board flex: " : "  board flex (mean of the images'): ") +
+         FormatNumber("%.3f", 1e3 * p.board_warp[0]) + " mm along x, " + FormatNumber("%.3f", 1e3 * p.board_warp[1]) +
+         " mm along y (" + FormatNumber("%.3f", 1e3 * (p.board_warp[0] + p.board_warp[1])) + " mm at the centre)\n";
   s += "  unified + radtan:         RMS " + FormatNumber("%.4f", r.unified.rms) + " px\n";
   if (r.omnidir && r.omnidir->ok)
     s += "  OpenCV omnidir (same corners): RMS " + FormatNumber("%.4f", r.omnidir->rms) + " px\n";

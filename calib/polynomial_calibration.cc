@@ -238,7 +238,11 @@ PolynomialCalibration CalibratePolynomial(const std::vector<BoardObservation>& o
   static const std::array<double, 3> kIdentityAffine = {1, 0, 0};
   PolynomialCalibration out;
   const BoardExtent extent = BoardExtent::Of(obs);
-  std::array<double, 2> warp = {0, 0};
+  // One warp shared by every image, or one per image (board_flex_per_image: a board that bends differently each
+  // time it is held).
+  const bool per_image = opt.board_flex && opt.board_flex_per_image;
+  std::vector<std::array<double, 2>> warps(per_image ? obs.size() : 1, {0.0, 0.0});
+  const auto warp_of = [&](size_t i) { return warps[per_image ? i : 0].data(); };
   const auto evaluate = [&](std::vector<double>* per_image_rms, std::vector<double>* per_image_mean, double* rms,
                             double* mean) {
     double sum2 = 0, sum = 0;
@@ -250,7 +254,7 @@ PolynomialCalibration CalibratePolynomial(const std::vector<BoardObservation>& o
         const double hint = (obs[i].pixels[j] - Vec2d(centre[0], centre[1])).norm();
         ReprojectionError e(obs[i].board_points[j], obs[i].pixels[j], N, scale, hint, nullptr, extent);
         double res[2] = {1e6, 1e6};
-        e(centre, affine, poly.data(), pose_params[i].data(), pose_params[i].data() + 3, warp.data(), res);
+        e(centre, affine, poly.data(), pose_params[i].data(), pose_params[i].data() + 3, warp_of(i), res);
         const double d2 = res[0] * res[0] + res[1] * res[1];
         for (auto& o : out.outliers)
           if (o.image_index == static_cast<int>(i) && o.corner == static_cast<int>(j))
@@ -295,10 +299,12 @@ PolynomialCalibration CalibratePolynomial(const std::vector<BoardObservation>& o
         for (int size : {2, 3, N, 3, 3, 2}) cost->AddParameterBlock(size);
         cost->SetNumResiduals(2);
         problem->AddResidualBlock(cost, MakeLoss(opt.loss, opt.loss_scale), centre, affine, poly.data(),
-                                  pose_params[i].data(), pose_params[i].data() + 3, warp.data());
+                                  pose_params[i].data(), pose_params[i].data() + 3, warp_of(i));
       }
     if (!opt.estimate_affine) problem->SetParameterBlockConstant(affine);
-    if (!opt.board_flex) problem->SetParameterBlockConstant(warp.data());
+    if (!opt.board_flex)
+      for (auto& w : warps)
+        if (problem->HasParameterBlock(w.data())) problem->SetParameterBlockConstant(w.data());
     ceres::Solve(so, problem.get(), &summary);
   };
   solve();
@@ -314,7 +320,7 @@ PolynomialCalibration CalibratePolynomial(const std::vector<BoardObservation>& o
     ReprojectionError e(obs[i].board_points[j], obs[i].pixels[j], N, scale, hint,
                         opt.estimate_affine ? nullptr : &kIdentityAffine, extent);
     double res[2] = {1e6, 1e6};
-    e(centre, affine, poly.data(), pose_params[i].data(), pose_params[i].data() + 3, warp.data(), res);
+    e(centre, affine, poly.data(), pose_params[i].data(), pose_params[i].data() + 3, warp_of(i), res);
     return std::hypot(res[0], res[1]);
   };
   std::vector<std::vector<double>> first_residual(obs.size());
@@ -374,7 +380,10 @@ PolynomialCalibration CalibratePolynomial(const std::vector<BoardObservation>& o
                FormatNumber("%.1f", rho_max), " px: the corners do not constrain the model (try --degree 3)");
   m.FitInverse(0.01);
   for (size_t i = 0; i < obs.size(); ++i) out.cam_from_board.push_back(ParamsToPose(pose_params[i].data()));
-  out.board_flex = opt.board_flex, out.board_warp = warp, out.board_extent = extent;
+  out.board_flex = opt.board_flex, out.board_extent = extent;
+  out.board_warp = {0, 0};
+  for (const auto& w : warps) out.board_warp[0] += w[0] / warps.size(), out.board_warp[1] += w[1] / warps.size();
+  if (per_image) out.image_warps = warps;
   evaluate(&out.per_image_rms, &out.per_image_mean, &out.rms, &out.mean);
 
   // Standard deviations of the intrinsics (when the covariance is computable).
@@ -382,14 +391,14 @@ PolynomialCalibration CalibratePolynomial(const std::vector<BoardObservation>& o
   // absorb it): the covariance is the pseudo-inverse with that one null direction removed.
   std::vector<std::pair<double*, int>> blocks = {{centre, 2}, {poly.data(), N}};
   if (opt.estimate_affine) blocks.push_back({affine, 3});
-  if (opt.board_flex) blocks.push_back({warp.data(), 2});
+  if (opt.board_flex && !per_image) blocks.push_back({warps[0].data(), 2});
   std::vector<std::vector<double>> sd;
   if (ParameterStddevs(problem.get(), blocks, opt.estimate_affine ? 1 : 0, &sd)) {
     out.stddev["cx"] = sd[0][0], out.stddev["cy"] = sd[0][1];
     out.stddev["a0"] = sd[1][0];
     for (int k = 2; k <= N; ++k) out.stddev["a" + std::to_string(k)] = sd[1][k - 1] / std::pow(scale, k);
     if (opt.estimate_affine) out.stddev["c"] = sd[2][0], out.stddev["d"] = sd[2][1], out.stddev["e"] = sd[2][2];
-    if (opt.board_flex)
+    if (opt.board_flex && !per_image)
       out.stddev["board_flex_x_mm"] = 1e3 * sd.back()[0], out.stddev["board_flex_y_mm"] = 1e3 * sd.back()[1];
   }
   return out;
@@ -533,17 +542,21 @@ UnifiedCalibration CalibrateUnified(const std::vector<BoardObservation>& obs, in
   std::vector<std::array<double, 6>> poses(obs.size());
   for (size_t i = 0; i < obs.size(); ++i) poses[i] = PoseToParams(start.cam_from_board[i]);
   // The board's flex, when the polynomial solve estimated it, is estimated again here (same board, same extent).
-  std::array<double, 2> warp = start.board_warp;
+  std::vector<std::array<double, 2>> warps(start.image_warps.empty() ? 1 : obs.size(), start.board_warp);
+  for (size_t i = 0; i < start.image_warps.size() && i < obs.size(); ++i) warps[i] = start.image_warps[i];
+  const auto warp_of = [&](size_t i) { return warps[warps.size() == 1 ? 0 : i].data(); };
   ceres::Problem problem;
   for (size_t i = 0; i < obs.size(); ++i)
     for (size_t j = 0; j < obs[i].pixels.size(); ++j) {
       problem.AddResidualBlock(
           new ceres::AutoDiffCostFunction<UnifiedReprojection, 2, 5, 4, 3, 3, 2>(
               new UnifiedReprojection(obs[i].board_points[j], obs[i].pixels[j], start.board_extent)),
-          MakeLoss(loss, loss_scale), intr, dist, poses[i].data(), poses[i].data() + 3, warp.data());
+          MakeLoss(loss, loss_scale), intr, dist, poses[i].data(), poses[i].data() + 3, warp_of(i));
     }
   if (!estimate_distortion) problem.SetParameterBlockConstant(dist);
-  if (!start.board_flex) problem.SetParameterBlockConstant(warp.data());
+  if (!start.board_flex)
+    for (auto& w : warps)
+      if (problem.HasParameterBlock(w.data())) problem.SetParameterBlockConstant(w.data());
   const ceres::Solver::Options so = CalibrationSolverOptions(300, 1e-14);
   ceres::Solver::Summary summary;
   ceres::Solve(so, &problem, &summary);
@@ -562,7 +575,7 @@ UnifiedCalibration CalibrateUnified(const std::vector<BoardObservation>& obs, in
     for (size_t j = 0; j < obs[i].pixels.size(); ++j) {
       Vec2d uv;
       const double d2 =
-          m.ImgFromCam(out.cam_from_board[i] * start.board_extent.Warped<double>(obs[i].board_points[j], warp.data()),
+          m.ImgFromCam(out.cam_from_board[i] * start.board_extent.Warped<double>(obs[i].board_points[j], warp_of(i)),
                        &uv)
               ? (uv - obs[i].pixels[j]).squaredNorm()
               : 1e12;
@@ -573,7 +586,9 @@ UnifiedCalibration CalibrateUnified(const std::vector<BoardObservation>& obs, in
   }
   out.rms = std::sqrt(sum2 / count);
   out.mean = sum / count;
-  out.board_warp = warp;
+  out.board_warp = {0, 0};
+  for (const auto& w : warps) out.board_warp[0] += w[0] / warps.size(), out.board_warp[1] += w[1] / warps.size();
+  if (warps.size() > 1) out.image_warps = warps;
   // Standard deviations of the intrinsics (no gauge freedom: skew is fixed).
   std::vector<std::vector<double>> sd;
   std::vector<std::pair<double*, int>> blocks = {{intr, 5}};

@@ -38,6 +38,7 @@ struct PolynomialCalibrationOptions {
   double outlier_floor_px = 0.5;
   // Estimate the board's flex (calib/board_warp.h: two parabolas shared by every image) in the joint solve.
   bool board_flex = false;
+  bool board_flex_per_image = false;  // with board_flex: one warp per image instead of one for all
   void Check(const std::string& where) const;
 };
 
@@ -52,17 +53,21 @@ struct CornerOutlier {
 
 struct PolynomialCalibration {
   PolynomialModel<double> model;
-  std::vector<Rigid3d> cam_from_board;        // the board poses, in the model's (mirror) frame
-  std::vector<double> per_image_rms;          // px, over the image's inliers
-  std::vector<double> per_image_mean;         // px, mean reprojection error (the article's figure)
-  double rms = 0, mean = 0;                   // over all inlier corners, px
-  std::vector<std::vector<bool>> inlier;      // per image, per corner
-  std::vector<CornerOutlier> outliers;        // rejected corners, listed
-  double outlier_threshold_px = 0;            // 0: rejection disabled
-  double initial_rms = 0;                     // after the linear initialisation
-  std::map<std::string, double> stddev;       // cx, cy, c, d, e, a0, a2, ... (from the covariance)
-  bool board_flex = false;                    // estimated (else board_warp is 0)
-  std::array<double, 2> board_warp = {0, 0};  // metres (calib/board_warp.h)
+  std::vector<Rigid3d> cam_from_board;             // the board poses, in the model's (mirror) frame
+  std::vector<double> per_image_rms;               // px, over the image's inliers
+  std::vector<double> per_image_mean;              // px, mean reprojection error (the article's figure)
+  double rms = 0, mean = 0;                        // over all inlier corners, px
+  std::vector<std::vector<bool>> inlier;           // per image, per corner
+  std::vector<CornerOutlier> outliers;             // rejected corners, listed
+  double outlier_threshold_px = 0;                 // 0: rejection disabled
+  double initial_rms = 0;                          // after the linear initialisation
+  std::map<std::string, double> stddev;            // cx, cy, c, d, e, a0, a2, ... (from the covariance)
+  bool board_flex = false;                         // estimated (else board_warp is 0)
+  std::array<double, 2> board_warp = {0, 0};       // metres (calib/board_warp.h); per image: their mean
+  std::vector<std::array<double, 2>> image_warps;  // per image (board_flex_per_image), else empty
+  const std::array<double, 2>& WarpOf(size_t image) const {
+    return image < image_warps.size() ? image_warps[image] : board_warp;
+  }
   BoardExtent board_extent;
   bool converged = false;
   std::string solver_report;
@@ -91,8 +96,9 @@ struct UnifiedCalibration {
   std::vector<Rigid3d> cam_from_board;
   std::vector<double> per_image_rms;
   double rms = 0, mean = 0;
-  std::map<std::string, double> stddev;       // xi, fx, fy, cx, cy, k1, k2, p1, p2 (from the covariance)
-  std::array<double, 2> board_warp = {0, 0};  // metres, estimated when the polynomial start estimated it
+  std::map<std::string, double> stddev;            // xi, fx, fy, cx, cy, k1, k2, p1, p2 (from the covariance)
+  std::array<double, 2> board_warp = {0, 0};       // metres, estimated when the polynomial start estimated it (mean)
+  std::vector<std::array<double, 2>> image_warps;  // per image, when the start has them
   bool converged = false;
   std::string solver_report;
 };
