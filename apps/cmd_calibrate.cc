@@ -40,6 +40,7 @@ struct Options {
   bool omnidir = false;
   int cross_validate = 0;
   bool board_flex = false, board_flex_per_image = false;
+  double uncertainty_range = 0;
 };
 
 int RunCalibrate(const Options& o, const GlobalOptions& global) {
@@ -77,6 +78,7 @@ int RunCalibrate(const Options& o, const GlobalOptions& global) {
   mo.polynomial.outlier_sigmas = o.outlier_sigmas;
   mo.omnidir = o.omnidir;
   mo.cross_validate = o.cross_validate;
+  mo.uncertainty_range_m = o.uncertainty_range;
   mo.polynomial.board_flex = o.board_flex || o.board_flex_per_image;
   mo.polynomial.board_flex_per_image = o.board_flex_per_image;
   std::optional<raytrace::CatadioptricUnit> design;
@@ -160,6 +162,8 @@ Runner SetupCalibrate(CLI::App* sub, const GlobalOptions* global) {
              "K-fold cross-validation (image i in fold i mod K; K = the image count: leave one out): held-out "
              "error and the map of the folds' model differences (0: off)",
              0, 10000);
+  AddBounded(sub, "--uncertainty-range", &o->uncertainty_range,
+             "range of the point whose projection uncertainty is mapped, m (0: infinity)", 0, 1e6);
   AddBounded(sub, "--outlier-sigmas", &o->outlier_sigmas,
              "reject corners above this many robust sigmas (at least 0.5 px) after the first solve; 0: keep all", 0,
              1000);

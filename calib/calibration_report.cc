@@ -192,6 +192,22 @@ void WriteMonoCalibrationReport(const std::filesystem::path& folder, const Calib
     page.Figure("figures/cross_validation_px.png", "difference, pixels", 700);
     page.Figure("figures/cross_validation_deg.png", "difference, degrees", 700);
   }
+  for (const auto& [name, map] : {std::pair{std::string("polynomial"), &r.polynomial_uncertainty},
+                                  std::pair{std::string("unified"), &r.unified_uncertainty}}) {
+    if (!*map) continue;
+    const auto& m = **map;
+    const std::string px = "figures/uncertainty_" + name + "_px.png", deg = "figures/uncertainty_" + name + "_deg.png";
+    WriteUncertaintyFigures(m, name, folder / px, folder / deg);
+    page.Heading("Projection uncertainty (" + name + " model)");
+    page.Paragraph(
+        "The spread of the projection of a fixed point that the corners' own noise (sigma " +
+        FormatNumber("%.3f", m.sigma_px) +
+        " px, from the residuals) leaves in the solution, propagated through the covariance of the intrinsics and "
+        "every board pose (mrcal's method: the point is tied to the world by the mean of the boards' frames). "
+        "Large where no board was seen. 1 sigma, worst direction; the ray map is the same at infinity in degrees.");
+    page.Figure(px, "pixels", 700);
+    page.Figure(deg, "ray, degrees", 700);
+  }
   page.Heading("Files");
   page.Link("Every figure above, the solver reports and the standard deviations: ", "calibration.json",
             "calibration.json", ".");

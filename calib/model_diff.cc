@@ -14,14 +14,20 @@ void ModelDiffOptions::Check(const std::string& where) const {
   HOVS_REQUIRE(grid_step_px >= 0 && grid_step_px <= 10000, where, "the grid step must be 0 (automatic) to 10000 px");
 }
 
+ImageGrid ImageGrid::Over(int width, int height, int step_px) {
+  ImageGrid g;
+  g.width = width, g.height = height;
+  g.step_px = step_px > 0 ? step_px : std::max(1, static_cast<int>(std::lround(width / 120.0)));
+  g.nx = (width - 1) / g.step_px + 1, g.ny = (height - 1) / g.step_px + 1;
+  return g;
+}
+
 ModelDiff DiffModels(const AnyModel& a, const AnyModel& b, const ModelDiffOptions& o) {
   o.Check("model diff options");
   HOVS_REQUIRE(a.width() == b.width() && a.height() == b.height(), "model diff", "the models are for images of ",
                a.width(), "x", a.height(), " and ", b.width(), "x", b.height(), ": not one camera");
   ModelDiff d;
-  d.width = a.width(), d.height = a.height();
-  d.step_px = o.grid_step_px > 0 ? o.grid_step_px : std::max(1, static_cast<int>(std::lround(d.width / 120.0)));
-  d.nx = (d.width - 1) / d.step_px + 1, d.ny = (d.height - 1) / d.step_px + 1;
+  static_cast<ImageGrid&>(d) = ImageGrid::Over(a.width(), a.height(), o.grid_step_px);
   std::vector<Vec3d> ba(d.nx * d.ny), bb(d.nx * d.ny);
   std::vector<char> common(d.nx * d.ny, 0);
   std::vector<std::pair<Vec3d, Vec3d>> pairs;
@@ -91,12 +97,11 @@ nlohmann::json ModelDiffJson(const ModelDiff& d) {
           {"deg", stats(d.deg_stats)}};
 }
 
-namespace {
-
-// One map: the image at up to 800 px wide, each grid cell coloured by its value (turbo, 0 .. the 99th percentile
-// rounded up), pale grey outside the common domain; title above, colour bar below. OpenCV only: no display.
-void WriteDiffMap(const ModelDiff& d, const std::vector<double>& values, const std::string& title,
-                  const SampleSummary& s, const char* format, const std::filesystem::path& path) {
+// The image at up to 800 px wide, each grid cell coloured by its value; title above, colour bar below. OpenCV
+// only: no display.
+void WriteGridMap(const ImageGrid& d, const std::vector<double>& values, const std::string& title,
+                  const SampleSummary& s, const char* format, const std::string& grey_note,
+                  const std::filesystem::path& path) {
   std::vector<double> finite;
   for (double v : values)
     if (std::isfinite(v)) finite.push_back(v);
@@ -131,16 +136,15 @@ void WriteDiffMap(const ModelDiff& d, const std::vector<double>& values, const s
     cv::line(fig, cv::Point(10 + x, bar_y), cv::Point(10 + x, bar_y + 14), cv::Scalar(colour(top * x / bar_w)));
   put("0", 8, bar_y + 32);
   put(FormatNumber(format, top), 10 + bar_w - 40, bar_y + 32);
-  put("grey: outside either model's domain", 10, bar_y + 50);
+  put("grey: " + grey_note, 10, bar_y + 50);
   HOVS_REQUIRE(cv::imwrite(path.string(), fig), path.string(), "cannot write the figure");
 }
 
-}  // namespace
-
 void WriteModelDiffFigures(const ModelDiff& d, const std::string& title, const std::filesystem::path& px_png,
                            const std::filesystem::path& deg_png) {
-  WriteDiffMap(d, d.px, title + ", px", d.px_stats, "%.3f", px_png);
-  WriteDiffMap(d, d.deg, title + ", degrees", d.deg_stats, "%.4f", deg_png);
+  const std::string note = "outside either model's domain";
+  WriteGridMap(d, d.px, title + ", px", d.px_stats, "%.3f", note, px_png);
+  WriteGridMap(d, d.deg, title + ", degrees", d.deg_stats, "%.4f", note, deg_png);
 }
 
 }  // namespace hovs::calib

@@ -21,8 +21,14 @@ struct ModelDiffOptions {
   void Check(const std::string& where) const;
 };
 
-struct ModelDiff {
+// A grid of pixels over an image: column i at u = i step, row j at v = j step.
+struct ImageGrid {
   int width = 0, height = 0, step_px = 1, nx = 0, ny = 0;
+  // A step of about width / 120 when `step_px` is 0.
+  static ImageGrid Over(int width, int height, int step_px);
+};
+
+struct ModelDiff : ImageGrid {
   std::vector<double> px, deg;  // ny rows of nx values (row j at v = j step); NaN outside the common domain
   Mat3<double> b_from_a = Mat3<double>::Identity();
   double rotation_deg = 0;  // the angle of b_from_a
@@ -43,5 +49,11 @@ nlohmann::json ModelDiffJson(const ModelDiff& diff);
 // Drawn with OpenCV (no display needed).
 void WriteModelDiffFigures(const ModelDiff& diff, const std::string& title, const std::filesystem::path& px_png,
                            const std::filesystem::path& deg_png);
+
+// One map of `values` (ny rows of nx) over the grid's image: turbo colours from 0 to the 99th percentile, NaN
+// cells pale grey (explained by `grey_note`), the title with the median, 95th percentile and maximum of `stats`.
+void WriteGridMap(const ImageGrid& grid, const std::vector<double>& values, const std::string& title,
+                  const SampleSummary& stats, const char* format, const std::string& grey_note,
+                  const std::filesystem::path& png);
 
 }  // namespace hovs::calib

@@ -227,6 +227,17 @@ MonoCalibration CalibrateMono(const CalibrationInput& in, const MonoCalibrationO
   if (options.cross_validate > 0)
     r.cross_validation = CrossValidatePolynomial(r.inliers, in.width, in.height, options.polynomial,
                                                  options.cross_validate, r.polynomial.model);
+  if (options.uncertainty) {
+    UncertaintyOptions uo;
+    uo.range_m = options.uncertainty_range_m;
+    uo.centre = Vec2d(r.polynomial.model.cx, r.polynomial.model.cy);
+    uo.rho_min = r.polynomial.model.rho_min, uo.rho_max = r.polynomial.model.rho_max;
+    if (r.polynomial.covariance.valid())
+      r.polynomial_uncertainty =
+          ProjectionUncertaintyMap(ParametricModel(r.polynomial.model), r.polynomial.covariance, uo);
+    if (r.unified.covariance.valid())
+      r.unified_uncertainty = ProjectionUncertaintyMap(ParametricModel(r.unified.model), r.unified.covariance, uo);
+  }
   if (in.truth) {
     r.polynomial_vs_truth = CompareWithTruth(*in.truth, r.polynomial.model);
     if (r.physical) r.physical_vs_truth = CompareWithTruth(*in.truth, r.physical->rig);
@@ -288,6 +299,8 @@ nlohmann::json MonoCalibrationJson(const CalibrationInput& in, const MonoCalibra
                      {"rim_rms_px", p.rim_rms}};
   }
   if (r.cross_validation) j["cross_validation"] = CrossValidationJson(*r.cross_validation);
+  if (r.polynomial_uncertainty) j["uncertainty"]["polynomial"] = UncertaintyJson(*r.polynomial_uncertainty);
+  if (r.unified_uncertainty) j["uncertainty"]["unified"] = UncertaintyJson(*r.unified_uncertainty);
   if (r.omnidir) {
     const auto& cv = *r.omnidir;
     j["opencv_omnidir"] = cv.ok ? nlohmann::json{{"rms_px", cv.rms},
@@ -362,6 +375,14 @@ std::string MonoCalibrationSummary(const CalibrationInput& in, const MonoCalibra
          " px); the folds' models differ from the full one by " + FormatNumber("%.3f", cv.spread.px_stats.median) +
          " px median, " + FormatNumber("%.3f", cv.spread.px_stats.p95) + " px 95 %\n";
   }
+  for (const auto& [name, map] :
+       {std::pair{"polynomial", &r.polynomial_uncertainty}, std::pair{"unified", &r.unified_uncertainty}})
+    if (*map)
+      s += std::string("  projection uncertainty (") + name + ", 1 sigma, " +
+           ((*map)->range_m > 0 ? FormatNumber("%.3g", (*map)->range_m) + " m" : std::string("infinity")) +
+           "): median " + FormatNumber("%.3f", (*map)->px_stats.median) + " px, 95 % " +
+           FormatNumber("%.3f", (*map)->px_stats.p95) + " px; ray median " +
+           FormatNumber("%.4f", (*map)->deg_stats.median) + " deg\n";
   if (r.polynomial_vs_truth && r.polynomial_vs_truth->pixels == 0)
     s += "  vs ground truth: no pixel of the model's annulus sees the true mirror; nothing to compare\n";
   else if (r.polynomial_vs_truth)

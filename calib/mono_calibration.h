@@ -74,6 +74,10 @@ struct MonoCalibrationOptions {
   PhysicalCalibrationOptions physical;
   bool rim = true;         // fit the rim of the mirror image in every image (with paths)
   int cross_validate = 0;  // K >= 2: K-fold cross-validation of the polynomial model (calib/cross_validation.h)
+  // Projection uncertainty maps of the polynomial and unified models (calib/projection_uncertainty.h) at this
+  // range (m; 0: infinity), over the calibrated annulus.
+  bool uncertainty = true;
+  double uncertainty_range_m = 0;
 };
 
 struct OrderRow {
@@ -94,6 +98,7 @@ struct MonoCalibration {
   std::optional<RayAccuracy> polynomial_vs_truth;
   std::optional<PhysicalAccuracy> physical_vs_truth;
   std::optional<CrossValidation> cross_validation;
+  std::optional<UncertaintyMap> polynomial_uncertainty, unified_uncertainty;  // when the covariance is computable
 };
 
 // Runs every stage. `warn` receives what a user should know but that does not stop the calibration (an image

@@ -386,20 +386,27 @@ PolynomialCalibration CalibratePolynomial(const std::vector<BoardObservation>& o
   if (per_image) out.image_warps = warps;
   evaluate(&out.per_image_rms, &out.per_image_mean, &out.rms, &out.mean);
 
-  // Standard deviations of the intrinsics (when the covariance is computable).
+  // The covariance of the intrinsics and poses, and the intrinsics' standard deviations (when computable).
   // With the affine terms free, a rotation about the optical axis is a gauge freedom (poses turn, d and e
   // absorb it): the covariance is the pseudo-inverse with that one null direction removed.
-  std::vector<std::pair<double*, int>> blocks = {{centre, 2}, {poly.data(), N}};
-  if (opt.estimate_affine) blocks.push_back({affine, 3});
-  if (opt.board_flex && !per_image) blocks.push_back({warps[0].data(), 2});
-  std::vector<std::vector<double>> sd;
-  if (ParameterStddevs(problem.get(), blocks, opt.estimate_affine ? 1 : 0, &sd)) {
-    out.stddev["cx"] = sd[0][0], out.stddev["cy"] = sd[0][1];
-    out.stddev["a0"] = sd[1][0];
-    for (int k = 2; k <= N; ++k) out.stddev["a" + std::to_string(k)] = sd[1][k - 1] / std::pow(scale, k);
-    if (opt.estimate_affine) out.stddev["c"] = sd[2][0], out.stddev["d"] = sd[2][1], out.stddev["e"] = sd[2][2];
-    if (opt.board_flex && !per_image)
-      out.stddev["board_flex_x_mm"] = 1e3 * sd.back()[0], out.stddev["board_flex_y_mm"] = 1e3 * sd.back()[1];
+  std::vector<std::pair<double*, int>> blocks = {{centre, 2}, {affine, 3}, {poly.data(), N}};
+  for (auto& p : pose_params) blocks.push_back({p.data(), 3}), blocks.push_back({p.data() + 3, 3});
+  const bool shared_flex = opt.board_flex && !per_image;
+  if (shared_flex) blocks.push_back({warps[0].data(), 2});
+  Eigen::MatrixXd C;
+  if (ParameterCovariance(problem.get(), blocks, opt.estimate_affine ? 1 : 0, &C, &out.covariance.sigma_px)) {
+    Eigen::VectorXd to_model = Eigen::VectorXd::Ones(C.rows());  // a_k = b_k / scale^k
+    for (int k = 2; k <= N; ++k) to_model(4 + k) = 1 / std::pow(scale, k);
+    C = to_model.asDiagonal() * C * to_model.asDiagonal();
+    const auto sd = [&](int i) { return std::sqrt(C(i, i)); };
+    out.stddev["cx"] = sd(0), out.stddev["cy"] = sd(1);
+    if (opt.estimate_affine) out.stddev["c"] = sd(2), out.stddev["d"] = sd(3), out.stddev["e"] = sd(4);
+    out.stddev["a0"] = sd(5);
+    for (int k = 2; k <= N; ++k) out.stddev["a" + std::to_string(k)] = sd(4 + k);
+    const int P = 5 + N + 6 * static_cast<int>(obs.size());
+    if (shared_flex) out.stddev["board_flex_x_mm"] = 1e3 * sd(P), out.stddev["board_flex_y_mm"] = 1e3 * sd(P + 1);
+    out.covariance.covariance = C.topLeftCorner(P, P);
+    out.covariance.cam_from_board = out.cam_from_board;
   }
   return out;
 }
@@ -589,13 +596,16 @@ UnifiedCalibration CalibrateUnified(const std::vector<BoardObservation>& obs, in
   out.board_warp = {0, 0};
   for (const auto& w : warps) out.board_warp[0] += w[0] / warps.size(), out.board_warp[1] += w[1] / warps.size();
   if (warps.size() > 1) out.image_warps = warps;
-  // Standard deviations of the intrinsics (no gauge freedom: skew is fixed).
-  std::vector<std::vector<double>> sd;
-  std::vector<std::pair<double*, int>> blocks = {{intr, 5}};
-  if (estimate_distortion) blocks.push_back({dist, 4});
-  if (ParameterStddevs(&problem, blocks, 0, &sd)) {
+  // The covariance of the intrinsics and poses and the intrinsics' standard deviations (no gauge freedom: the
+  // skew is fixed).
+  std::vector<std::pair<double*, int>> blocks = {{intr, 5}, {dist, 4}};
+  for (auto& p : poses) blocks.push_back({p.data(), 3}), blocks.push_back({p.data() + 3, 3});
+  Eigen::MatrixXd C;
+  if (ParameterCovariance(&problem, blocks, 0, &C, &out.covariance.sigma_px)) {
     const char* names[9] = {"xi", "fx", "fy", "cx", "cy", "k1", "k2", "p1", "p2"};
-    for (size_t k = 0; k < 5 + 4 * estimate_distortion; ++k) out.stddev[names[k]] = k < 5 ? sd[0][k] : sd[1][k - 5];
+    for (int k = 0; k < 5 + 4 * estimate_distortion; ++k) out.stddev[names[k]] = std::sqrt(C(k, k));
+    out.covariance.covariance = C;
+    out.covariance.cam_from_board = out.cam_from_board;
   }
   return out;
 }

@@ -2,7 +2,8 @@
 // Scaramuzza's linear initialisation (centre fixed, R and t from the cross-product constraint, then the
 // polynomial and t3 by linear least squares), then one joint Ceres problem over the centre, the affine terms
 // c, d, e, the polynomial a0, a2..aN and every board pose, with 2-D reprojection residuals through the core's
-// exact world2cam and an optional robust loss. Standard deviations come from ceres::Covariance.
+// exact world2cam and an optional robust loss. Standard deviations and the covariance used for the projection
+// uncertainty (calib/projection_uncertainty.h) come from the Jacobian at the solution (calib/solver_util.h).
 #pragma once
 
 #include <array>
@@ -13,6 +14,7 @@
 #include <vector>
 
 #include "calib/board_warp.h"
+#include "calib/projection_uncertainty.h"
 #include "core/polynomial.h"
 #include "core/rigid.h"
 
@@ -62,6 +64,7 @@ struct PolynomialCalibration {
   double outlier_threshold_px = 0;                 // 0: rejection disabled
   double initial_rms = 0;                          // after the linear initialisation
   std::map<std::string, double> stddev;            // cx, cy, c, d, e, a0, a2, ... (from the covariance)
+  SolveCovariance covariance;                      // intrinsics (cx, cy, c, d, e, a0, a2, ...) and poses
   bool board_flex = false;                         // estimated (else board_warp is 0)
   std::array<double, 2> board_warp = {0, 0};       // metres (calib/board_warp.h); per image: their mean
   std::vector<std::array<double, 2>> image_warps;  // per image (board_flex_per_image), else empty
@@ -97,6 +100,7 @@ struct UnifiedCalibration {
   std::vector<double> per_image_rms;
   double rms = 0, mean = 0;
   std::map<std::string, double> stddev;            // xi, fx, fy, cx, cy, k1, k2, p1, p2 (from the covariance)
+  SolveCovariance covariance;                      // intrinsics (xi, fx, fy, cx, cy, k1, k2, p1, p2) and poses
   std::array<double, 2> board_warp = {0, 0};       // metres, estimated when the polynomial start estimated it (mean)
   std::vector<std::array<double, 2>> image_warps;  // per image, when the start has them
   bool converged = false;

@@ -58,11 +58,12 @@ inline std::vector<BoardObservation> SyntheticObservations(const CatadioptricCam
 
 // A cols x rows-corner board (square in metres) at random poses around the viewpoint (centre elevation in
 // [el_lo, el_hi] degrees, distance in [d_lo, d_hi] m), projected by any model's ImgFromCam; an image is kept
-// when every corner lands inside width x height.
+// when every corner lands inside width x height. `poses`: the kept boards' cam_from_board.
 template <class Model>
 std::vector<BoardObservation> SyntheticBoardsThrough(const Model& model, int width, int height, int cols, int rows,
                                                      double square, int images, double noise_px, unsigned seed,
-                                                     double el_lo, double el_hi, double d_lo, double d_hi) {
+                                                     double el_lo, double el_hi, double d_lo, double d_hi,
+                                                     std::vector<Rigid3d>* poses = nullptr) {
   constexpr double kDeg = M_PI / 180;
   std::mt19937 rng(seed);
   std::uniform_real_distribution<double> U(0, 1);
@@ -89,7 +90,9 @@ std::vector<BoardObservation> SyntheticBoardsThrough(const Model& model, int wid
         o.board_points.push_back(P);
         o.pixels.push_back(uv + Vec2d(N(rng), N(rng)));
       }
-    if (ok) out.push_back(o);
+    if (!ok) continue;
+    out.push_back(o);
+    if (poses) poses->push_back(cam_from_board);
   }
   return out;
 }
