@@ -41,6 +41,7 @@ struct Options {
   int cross_validate = 0;
   bool board_flex = false, board_flex_per_image = false;
   double uncertainty_range = 0;
+  int suggest = 0;
 };
 
 int RunCalibrate(const Options& o, const GlobalOptions& global) {
@@ -79,6 +80,7 @@ int RunCalibrate(const Options& o, const GlobalOptions& global) {
   mo.omnidir = o.omnidir;
   mo.cross_validate = o.cross_validate;
   mo.uncertainty_range_m = o.uncertainty_range;
+  mo.suggest = o.suggest;
   mo.polynomial.board_flex = o.board_flex || o.board_flex_per_image;
   mo.polynomial.board_flex_per_image = o.board_flex_per_image;
   std::optional<raytrace::CatadioptricUnit> design;
@@ -164,6 +166,10 @@ Runner SetupCalibrate(CLI::App* sub, const GlobalOptions* global) {
              0, 10000);
   AddBounded(sub, "--uncertainty-range", &o->uncertainty_range,
              "range of the point whose projection uncertainty is mapped, m (0: infinity)", 0, 1e6);
+  AddBounded(sub, "--suggest", &o->suggest,
+             "propose this many next board poses that would lower the projection uncertainty most, drawn through "
+             "the model (0: off)",
+             0, 20);
   AddBounded(sub, "--outlier-sigmas", &o->outlier_sigmas,
              "reject corners above this many robust sigmas (at least 0.5 px) after the first solve; 0: keep all", 0,
              1000);

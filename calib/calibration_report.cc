@@ -51,6 +51,47 @@ void ReprojectionFigure(const std::filesystem::path& image, const BoardObservati
   HOVS_REQUIRE(cv::imwrite(out.string(), crop), out.string(), "cannot write the figure");
 }
 
+// The suggested boards drawn through the model on the first image (or a grey canvas): each board's squares
+// filled black and white where the model puts them, numbered; the calibration's corners as small green dots.
+void SuggestionFigure(const CalibrationInput& in, const Suggestions& s, const std::filesystem::path& out) {
+  cv::Mat fig;
+  if (!in.paths.empty()) {
+    cv::cvtColor(ReadGreyImage(in.paths[0]) / 2 + 64, fig, cv::COLOR_GRAY2BGR);
+  } else {
+    fig = cv::Mat(in.height, in.width, CV_8UC3, cv::Scalar(128, 128, 128));
+  }
+  for (const auto& o : in.observations)
+    for (const auto& p : o.pixels) cv::circle(fig, cv::Point2d(p.x(), p.y()), 1, cv::Scalar(0, 200, 0), -1);
+  // The board's grid: square size and each corner's (column, row).
+  double square = HUGE_VAL;
+  const auto& P = s.board_points;
+  for (size_t a = 0; a < P.size(); ++a)
+    for (size_t b = a + 1; b < P.size(); ++b) square = std::min(square, (P[a] - P[b]).norm());
+  std::map<std::pair<long, long>, size_t> at;
+  for (size_t k = 0; k < P.size(); ++k) at[{std::lround(P[k].x() / square), std::lround(P[k].y() / square)}] = k;
+  for (size_t n = 0; n < s.boards.size(); ++n) {
+    const auto& c = s.boards[n].corners_px;
+    for (const auto& [ij, k] : at) {
+      const auto right = at.find({ij.first + 1, ij.second}), down = at.find({ij.first, ij.second + 1}),
+                 diag = at.find({ij.first + 1, ij.second + 1});
+      if (right == at.end() || down == at.end() || diag == at.end()) continue;
+      std::vector<cv::Point> quad;
+      for (size_t q : {k, right->second, diag->second, down->second})
+        quad.emplace_back(static_cast<int>(std::lround(c[q].x())), static_cast<int>(std::lround(c[q].y())));
+      const bool dark = (ij.first + ij.second) % 2 == 0;
+      cv::fillConvexPoly(fig, quad, dark ? cv::Scalar(20, 20, 20) : cv::Scalar(240, 240, 240), cv::LINE_AA);
+    }
+    const cv::Point label(static_cast<int>(s.boards[n].centre_px.x()) - 8,
+                          static_cast<int>(s.boards[n].centre_px.y()) + 8);
+    cv::putText(fig, std::to_string(n + 1), label, cv::FONT_HERSHEY_SIMPLEX, 0.9, cv::Scalar(255, 255, 255), 4,
+                cv::LINE_AA);
+    cv::putText(fig, std::to_string(n + 1), label, cv::FONT_HERSHEY_SIMPLEX, 0.9, cv::Scalar(0, 0, 255), 2,
+                cv::LINE_AA);
+  }
+  if (fig.cols > 1200) cv::resize(fig, fig, cv::Size(), 1200.0 / fig.cols, 1200.0 / fig.cols, cv::INTER_AREA);
+  HOVS_REQUIRE(cv::imwrite(out.string(), fig), out.string(), "cannot write the figure");
+}
+
 // The article's Fig. 20 (OCamCalib's error plot): every corner's reprojection error (du, dv), one colour per
 // image, rejected corners as crosses; beside it, where in the image the errors are (colour = error length).
 void ErrorMapFigure(const std::vector<BoardObservation>& obs, const PolynomialCalibration& cal,
@@ -207,6 +248,17 @@ void WriteMonoCalibrationReport(const std::filesystem::path& folder, const Calib
         "Large where no board was seen. 1 sigma, worst direction; the ray map is the same at infinity in degrees.");
     page.Figure(px, "pixels", 700);
     page.Figure(deg, "ray, degrees", 700);
+  }
+  if (r.suggestions) {
+    SuggestionFigure(in, *r.suggestions, folder / "figures/suggested_boards.png");
+    page.Heading("Where to hold the board next");
+    page.Paragraph("Of " + std::to_string(r.suggestions->candidates) +
+                   " candidate poses that the polynomial model sees whole, the ones that lower its mean projection "
+                   "uncertainty over the calibrated field most (chosen one after the other): from " +
+                   FormatNumber("%.3f", r.suggestions->mean_px_now) + " px now to " +
+                   FormatNumber("%.3f", r.suggestions->boards.back().mean_px) +
+                   " px with all of them. Drawn through the model; green dots: the corners already used.");
+    page.Figure("figures/suggested_boards.png", "suggested boards, numbered in order", 800);
   }
   page.Heading("Files");
   page.Link("Every figure above, the solver reports and the standard deviations: ", "calibration.json",

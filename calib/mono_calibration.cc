@@ -238,6 +238,22 @@ MonoCalibration CalibrateMono(const CalibrationInput& in, const MonoCalibrationO
     if (r.unified.covariance.valid())
       r.unified_uncertainty = ProjectionUncertaintyMap(ParametricModel(r.unified.model), r.unified.covariance, uo);
   }
+  if (options.suggest > 0) {
+    HOVS_REQUIRE(r.polynomial.covariance.valid(), "--suggest",
+                 "the polynomial solve's covariance is not computable: no uncertainty to lower");
+    UncertaintyOptions uo;
+    uo.range_m = options.uncertainty_range_m;
+    uo.centre = Vec2d(r.polynomial.model.cx, r.polynomial.model.cy);
+    uo.rho_min = r.polynomial.model.rho_min, uo.rho_max = r.polynomial.model.rho_max;
+    // The board as the images show it: the image with the most corners.
+    const auto largest =
+        std::max_element(in.observations.begin(), in.observations.end(),
+                         [](const auto& a, const auto& b) { return a.board_points.size() < b.board_points.size(); });
+    SuggestOptions so;
+    so.count = options.suggest;
+    r.suggestions =
+        SuggestBoardPoses(ParametricModel(r.polynomial.model), r.polynomial.covariance, largest->board_points, uo, so);
+  }
   if (in.truth) {
     r.polynomial_vs_truth = CompareWithTruth(*in.truth, r.polynomial.model);
     if (r.physical) r.physical_vs_truth = CompareWithTruth(*in.truth, r.physical->rig);
@@ -301,6 +317,7 @@ nlohmann::json MonoCalibrationJson(const CalibrationInput& in, const MonoCalibra
   if (r.cross_validation) j["cross_validation"] = CrossValidationJson(*r.cross_validation);
   if (r.polynomial_uncertainty) j["uncertainty"]["polynomial"] = UncertaintyJson(*r.polynomial_uncertainty);
   if (r.unified_uncertainty) j["uncertainty"]["unified"] = UncertaintyJson(*r.unified_uncertainty);
+  if (r.suggestions) j["suggested_boards"] = SuggestionsJson(*r.suggestions);
   if (r.omnidir) {
     const auto& cv = *r.omnidir;
     j["opencv_omnidir"] = cv.ok ? nlohmann::json{{"rms_px", cv.rms},
@@ -383,6 +400,15 @@ std::string MonoCalibrationSummary(const CalibrationInput& in, const MonoCalibra
            "): median " + FormatNumber("%.3f", (*map)->px_stats.median) + " px, 95 % " +
            FormatNumber("%.3f", (*map)->px_stats.p95) + " px; ray median " +
            FormatNumber("%.4f", (*map)->deg_stats.median) + " deg\n";
+  if (r.suggestions) {
+    s += "  next boards (the polynomial model's mean uncertainty over the field now " +
+         FormatNumber("%.3f", r.suggestions->mean_px_now) + " px):\n";
+    for (const auto& b : r.suggestions->boards)
+      s += "    centre at pixel (" + FormatNumber("%.0f", b.centre_px.x()) + ", " +
+           FormatNumber("%.0f", b.centre_px.y()) + "): azimuth " + FormatNumber("%.0f", b.azimuth_deg) +
+           " deg, elevation " + FormatNumber("%.1f", b.elevation_deg) + " deg, " + FormatNumber("%.2f", b.distance_m) +
+           " m, tilted " + FormatNumber("%.0f", b.tilt_deg) + " deg -> " + FormatNumber("%.3f", b.mean_px) + " px\n";
+  }
   if (r.polynomial_vs_truth && r.polynomial_vs_truth->pixels == 0)
     s += "  vs ground truth: no pixel of the model's annulus sees the true mirror; nothing to compare\n";
   else if (r.polynomial_vs_truth)

@@ -11,6 +11,7 @@
 #include <string>
 #include <vector>
 
+#include "calib/board_suggestion.h"
 #include "calib/checkerboard_detector.h"
 #include "calib/evaluation.h"
 #include "calib/omnidir_reference.h"
@@ -78,6 +79,7 @@ struct MonoCalibrationOptions {
   // range (m; 0: infinity), over the calibrated annulus.
   bool uncertainty = true;
   double uncertainty_range_m = 0;
+  int suggest = 0;  // > 0: this many next board poses that would lower the polynomial model's uncertainty most
 };
 
 struct OrderRow {
@@ -99,6 +101,7 @@ struct MonoCalibration {
   std::optional<PhysicalAccuracy> physical_vs_truth;
   std::optional<CrossValidation> cross_validation;
   std::optional<UncertaintyMap> polynomial_uncertainty, unified_uncertainty;  // when the covariance is computable
+  std::optional<Suggestions> suggestions;
 };
 
 // Runs every stage. `warn` receives what a user should know but that does not stop the calibration (an image

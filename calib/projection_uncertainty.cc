@@ -45,7 +45,8 @@ UnifiedModel<T> UnifiedOf(const UnifiedModel<double>& m, const T* v) {
 template <class T>
 bool Project(const std::variant<PolynomialModel<double>, UnifiedModel<double>>& m, const T* v, const Vec3<T>& p,
              double hint, Vec2<T>* uv) {
-  if (const auto* poly = std::get_if<PolynomialModel<double>>(&m)) return PolynomialOf(*poly, v).ImgFromCam(p, uv, hint);
+  if (const auto* poly = std::get_if<PolynomialModel<double>>(&m))
+    return PolynomialOf(*poly, v).ImgFromCam(p, uv, hint);
   return UnifiedOf(std::get<UnifiedModel<double>>(m), v).ImgFromCam(p, uv);
 }
 
@@ -53,31 +54,6 @@ bool Project(const std::variant<PolynomialModel<double>, UnifiedModel<double>>& 
 double WorstSigma(const Eigen::Matrix2d& c) {
   const Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d> es(c);
   return std::sqrt(std::max(0.0, es.eigenvalues()(1)));
-}
-
-// dq'/d(parameters) for the point p (a direction when `infinite`) in the solution's camera frame.
-bool ProjectionGradient(const ParametricModel& model, const SolveCovariance& solve, const Vec3d& p, bool infinite,
-                        Eigen::MatrixXd* G, Eigen::Matrix<double, 2, 3>* d_point) {
-  Vec2d uv;
-  Eigen::MatrixXd d_intr;
-  if (!model.ImgFromCamJacobians(p, &uv, &d_intr, d_point)) return false;
-  const int K = model.size(), n = static_cast<int>(solve.cam_from_board.size());
-  G->setZero(2, K + 6 * n);
-  G->leftCols(K) = d_intr;
-  for (int i = 0; i < n; ++i) {
-    const Rigid3d& T = solve.cam_from_board[i];
-    const std::array<double, 6> params = PoseToParams(T);
-    // The point in board i's frame; the perturbed pose maps it back: R(aa') b + t'.
-    const Vec3d b = infinite ? Vec3d(T.rotation.conjugate() * p) : Vec3d(T.Inverse() * p);
-    PointJet aa[3], bj[3] = {PointJet(b.x()), PointJet(b.y()), PointJet(b.z())}, out[3];
-    for (int k = 0; k < 3; ++k) aa[k] = PointJet(params[k], k);
-    ceres::AngleAxisRotatePoint(aa, bj, out);
-    Eigen::Matrix3d d_aa;
-    for (int r = 0; r < 3; ++r) d_aa.row(r) = out[r].v.transpose();
-    G->block(0, K + 6 * i, 2, 3) = *d_point * d_aa / n;
-    if (!infinite) G->block(0, K + 6 * i + 3, 2, 3) = *d_point / n;
-  }
-  return true;
 }
 
 }  // namespace
@@ -131,6 +107,34 @@ bool ParametricModel::ImgFromCamJacobians(const Vec3d& p, Vec2d* uv, Eigen::Matr
   return std::isfinite(d_intr->sum()) && d_point->allFinite();
 }
 
+Eigen::Matrix3d RotatedPointJacobian(const double* params, const Vec3d& b) {
+  PointJet aa[3], bj[3] = {PointJet(b.x()), PointJet(b.y()), PointJet(b.z())}, out[3];
+  for (int k = 0; k < 3; ++k) aa[k] = PointJet(params[k], k);
+  ceres::AngleAxisRotatePoint(aa, bj, out);
+  Eigen::Matrix3d d;
+  for (int r = 0; r < 3; ++r) d.row(r) = out[r].v.transpose();
+  return d;
+}
+
+bool ProjectionGradient(const ParametricModel& model, const std::vector<Rigid3d>& cam_from_board, const Vec3d& p,
+                        bool infinite, Eigen::MatrixXd* G, Eigen::Matrix<double, 2, 3>* d_point) {
+  Vec2d uv;
+  Eigen::MatrixXd d_intr;
+  if (!model.ImgFromCamJacobians(p, &uv, &d_intr, d_point)) return false;
+  const int K = model.size(), n = static_cast<int>(cam_from_board.size());
+  G->setZero(2, K + 6 * n);
+  G->leftCols(K) = d_intr;
+  for (int i = 0; i < n; ++i) {
+    const Rigid3d& T = cam_from_board[i];
+    const std::array<double, 6> params = PoseToParams(T);
+    // The point in board i's frame; the perturbed pose maps it back: R(aa') b + t'.
+    const Vec3d b = infinite ? Vec3d(T.rotation.conjugate() * p) : Vec3d(T.Inverse() * p);
+    G->block(0, K + 6 * i, 2, 3) = *d_point * RotatedPointJacobian(params.data(), b) / n;
+    if (!infinite) G->block(0, K + 6 * i + 3, 2, 3) = *d_point / n;
+  }
+  return true;
+}
+
 std::optional<PixelUncertainty> ProjectionUncertainty(const ParametricModel& model, const SolveCovariance& solve,
                                                       const Vec2d& uv, double range_m) {
   Vec3d v;
@@ -141,7 +145,7 @@ std::optional<PixelUncertainty> ProjectionUncertainty(const ParametricModel& mod
   Eigen::Matrix<double, 2, 3> d_point;
   // At infinity: the pixel covariance, and through the projection's Jacobian on the tangent plane of the ray, the
   // ray's angular covariance.
-  if (!ProjectionGradient(model, solve, v, true, &G, &d_point)) return std::nullopt;
+  if (!ProjectionGradient(model, solve.cam_from_board, v, true, &G, &d_point)) return std::nullopt;
   const Eigen::Matrix2d c_inf = G * solve.covariance * G.transpose();
   Eigen::Matrix<double, 3, 2> tangent;
   tangent.col(0) = v.unitOrthogonal();
@@ -152,7 +156,7 @@ std::optional<PixelUncertainty> ProjectionUncertainty(const ParametricModel& mod
   out.ray_covariance = Ai * c_inf * Ai.transpose();
   out.deg = WorstSigma(out.ray_covariance) * 180 / M_PI;
   if (range_m > 0) {
-    if (!ProjectionGradient(model, solve, range_m * v, false, &G, &d_point)) return std::nullopt;
+    if (!ProjectionGradient(model, solve.cam_from_board, range_m * v, false, &G, &d_point)) return std::nullopt;
     out.covariance = G * solve.covariance * G.transpose();
   } else {
     out.covariance = c_inf;

@@ -65,15 +65,23 @@ struct PixelUncertainty {
   Eigen::Matrix2d ray_covariance = Eigen::Matrix2d::Zero();  // of the ray in its tangent plane, rad^2
 };
 
+// dq'/d(parameters) at the point p of the solution's camera frame (a direction when `infinite`): 2 x (intrinsics
+// + 6 per pose), the poses' columns carrying the 1 / n of the mean; and the projection's Jacobian dq/dp.
+bool ProjectionGradient(const ParametricModel& model, const std::vector<Rigid3d>& cam_from_board, const Vec3d& p,
+                        bool infinite, Eigen::MatrixXd* G, Eigen::Matrix<double, 2, 3>* d_point);
+
+// d(R(aa) b)/d(aa) at the angle-axis `aa` (3 x 3): how a pose's rotation parameters move a point b of its frame.
+Eigen::Matrix3d RotatedPointJacobian(const double* aa, const Vec3d& b);
+
 // range_m 0: at infinity. Empty when the pixel has no ray or the point does not project back.
 std::optional<PixelUncertainty> ProjectionUncertainty(const ParametricModel& model, const SolveCovariance& solve,
                                                       const Vec2d& uv, double range_m);
 
 struct UncertaintyOptions {
-  double range_m = 0;     // the range of the px map; 0: infinity
-  int grid_step_px = 0;   // 0: about 120 grid columns
-  double rho_min = 0;     // the map covers the annulus rho_min..rho_max around (cx, cy) (the calibrated field);
-  double rho_max = 0;     // rho_max 0: every pixel the model has a ray for
+  double range_m = 0;    // the range of the px map; 0: infinity
+  int grid_step_px = 0;  // 0: about 120 grid columns
+  double rho_min = 0;    // the map covers the annulus rho_min..rho_max around (cx, cy) (the calibrated field);
+  double rho_max = 0;    // rho_max 0: every pixel the model has a ray for
   Vec2d centre = Vec2d::Zero();
   void Check(const std::string& where) const;
 };

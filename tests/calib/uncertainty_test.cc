@@ -8,6 +8,7 @@
 #include <cstdlib>
 #include <random>
 
+#include "calib/board_suggestion.h"
 #include "calib/polynomial_calibration.h"
 #include "calib/projection_uncertainty.h"
 #include "core/error.h"
@@ -114,12 +115,12 @@ TEST(ProjectionUncertainty, PredictsTheSpreadOverNoiseDraws) {
         if (std::getenv("HOVS_TEST_VERBOSE"))
           std::printf("%s range %g pixel (%.0f, %.0f): predicted %.4f px %.4f deg, observed %.4f px\n", names[mi],
                       range, pixels[j].x(), pixels[j].y(), predicted->px, predicted->deg, observed);
-        EXPECT_GT(predicted->px / observed, 0.75) << names[mi] << " range " << range << " pixel "
-                                                  << pixels[j].transpose() << ": predicted " << predicted->px
-                                                  << " observed " << observed;
-        EXPECT_LT(predicted->px / observed, 1.25) << names[mi] << " range " << range << " pixel "
-                                                  << pixels[j].transpose() << ": predicted " << predicted->px
-                                                  << " observed " << observed;
+        EXPECT_GT(predicted->px / observed, 0.75)
+            << names[mi] << " range " << range << " pixel " << pixels[j].transpose() << ": predicted " << predicted->px
+            << " observed " << observed;
+        EXPECT_LT(predicted->px / observed, 1.25)
+            << names[mi] << " range " << range << " pixel " << pixels[j].transpose() << ": predicted " << predicted->px
+            << " observed " << observed;
       }
     }
   }
@@ -164,6 +165,62 @@ TEST(ProjectionUncertainty, MapCoversTheFieldAndRejectsAMismatchedCovariance) {
   EXPECT_THROW(ProjectionUncertaintyMap(model, wrong, uo), Error);
   uo.range_m = -1;
   EXPECT_THROW(ProjectionUncertaintyMap(model, poly.covariance, uo), Error);
+}
+
+// Boards seen on one side only: adding the suggested board (rendered through the true camera with the same noise)
+// lowers the uncertainty as much as predicted, and more than showing the board again where it was.
+TEST(BoardSuggestion, LowersTheUncertaintyAsPredictedAndMoreThanARepeatedPose) {
+  const Case c = MakeCase();
+  std::vector<Rigid3d> poses;
+  const auto many =
+      SyntheticBoardsThrough(c.poly_truth, 640, 480, 7, 11, 0.03, 40, 0.0, 23, -60, 20, 0.35, 0.9, &poses);
+  std::vector<BoardObservation> one_side;
+  for (size_t i = 0; i < many.size() && one_side.size() < 8; ++i)
+    if (poses[i].translation.y() > 0.1) one_side.push_back(many[i]);
+  ASSERT_EQ(one_side.size(), 8u);
+  PolynomialCalibrationOptions po;
+  po.outlier_sigmas = 0;
+  const PolynomialCalibration before = CalibratePolynomial(WithNoise(one_side, 3), 640, 480, po);
+  ASSERT_TRUE(before.covariance.valid());
+  UncertaintyOptions uo;
+  uo.centre = Vec2d(before.model.cx, before.model.cy);
+  uo.rho_min = before.model.rho_min, uo.rho_max = before.model.rho_max;
+  SuggestOptions so;
+  so.count = 2;
+  const Suggestions s =
+      SuggestBoardPoses(ParametricModel(before.model), before.covariance, one_side[0].board_points, uo, so);
+  ASSERT_EQ(s.boards.size(), 2u);
+  EXPECT_GT(s.candidates, 50);
+  EXPECT_LT(s.boards[0].mean_px, s.mean_px_now);
+  EXPECT_LE(s.boards[1].mean_px, s.boards[0].mean_px);
+  // A board at `pose` through the true camera, with the same noise, then the calibration again: the field's mean.
+  uo.grid_step_px = 640 / 24;
+  const auto mean_with = [&](const Rigid3d& pose) {
+    BoardObservation added{"added", one_side[0].board_points, {}};
+    for (const auto& P : added.board_points) {
+      Vec2d uv;
+      EXPECT_TRUE(c.poly_truth.ImgFromCam(pose * P, &uv));
+      added.pixels.push_back(uv);
+    }
+    std::vector<BoardObservation> with = one_side;
+    with.push_back(added);
+    const PolynomialCalibration after = CalibratePolynomial(WithNoise(with, 3), 640, 480, po);
+    EXPECT_TRUE(after.covariance.valid());
+    return ProjectionUncertaintyMap(ParametricModel(after.model), after.covariance, uo).px_stats.mean;
+  };
+  const double now = ProjectionUncertaintyMap(ParametricModel(before.model), before.covariance, uo).px_stats.mean;
+  const double measured = mean_with(s.boards[0].cam_from_board);
+  const double repeated = mean_with(before.cam_from_board[1]);
+  if (std::getenv("HOVS_TEST_VERBOSE"))
+    std::printf(
+        "suggestion: now %.4f (map %.4f), predicted %.4f, after %.4f px, a repeated pose %.4f px; azimuth %.0f "
+        "elevation %.1f\n",
+        s.mean_px_now, now, s.boards[0].mean_px, measured, repeated, s.boards[0].azimuth_deg,
+        s.boards[0].elevation_deg);
+  EXPECT_NEAR(now, s.mean_px_now, 0.05 * now);
+  EXPECT_LT(measured, 0.9 * now);
+  EXPECT_NEAR(measured, s.boards[0].mean_px, 0.25 * s.boards[0].mean_px);
+  EXPECT_LT(measured, repeated);
 }
 
 }  // namespace
