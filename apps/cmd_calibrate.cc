@@ -52,7 +52,9 @@ int RunCalibrate(const Options& o, const GlobalOptions& global) {
   calib::CheckerboardDetectOptions detect;
   detect.subpix_half_window = o.subpix;
   detect.corner_refinement = o.corner_refinement;
-  if (!o.board.empty())
+  if (o.board.rfind("charuco:", 0) == 0)
+    detect.charuco = calib::ParseCharucoSpec(o.board, "--board");
+  else if (!o.board.empty())
     detect.board = calib::ParseBoardSpec(o.board, "--board");
   else
     detect.board.square = 0;  // from the manifest
@@ -128,7 +130,10 @@ Runner SetupCalibrate(CLI::App* sub, const GlobalOptions* global) {
   sub->add_option("--size", o->size, "image size WxH (with --corners)");
   sub->add_option("--dataset", o->dataset, "dataset manifest (dataset.json): corners detected in its images");
   sub->add_option("--images", o->images, "folder of images (png, jpg, tif, exr): corners detected");
-  sub->add_option("--board", o->board, "checkerboard COLSxROWSxSQUARE: inner corners and square (m), e.g. 7x6x0.03");
+  sub->add_option("--board", o->board,
+                  "checkerboard COLSxROWSxSQUARE: inner corners and square (m), e.g. 7x6x0.03; or a ChArUco board "
+                  "charuco:SXxSYxSQUARExMARKER[:DICTIONARY]: squares, square and marker sides (m), e.g. "
+                  "charuco:8x6x0.03x0.022 (default dictionary DICT_4X4_250)");
   sub->add_flag("--physical", o->physical,
                 "also calibrate the physical model: mirror a, b and the camera's tilt and offset, exact projection");
   sub->add_option("--nominal", o->nominal,

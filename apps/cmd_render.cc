@@ -73,7 +73,8 @@ Runner SetupDataset(CLI::App* sub, const GlobalOptions* global) {
       ->check(Bounded(0.01, 1000))
       ->expected(2);
   sub->add_option("--board", o->board,
-                  "mono_calibration: checkerboard COLSxROWSxSQUARE, inner corners and square (m), e.g. 7x11x0.03");
+                  "mono_calibration: checkerboard COLSxROWSxSQUARE, inner corners and square (m), e.g. 7x11x0.03, or "
+                  "charuco:SXxSYxSQUARExMARKER[:DICTIONARY] (squares; sides in m), e.g. charuco:8x12x0.03x0.022");
   return [o, global, samples, count]() {
     scenes::SceneConfig cfg = scenes::LoadSceneConfig(o->scene);
     scenes::DownscaleCameras(&cfg, o->downscale);
@@ -85,10 +86,17 @@ Runner SetupDataset(CLI::App* sub, const GlobalOptions* global) {
     if (!o->elevation.empty()) d.min_elevation_deg = o->elevation[0], d.max_elevation_deg = o->elevation[1];
     if (!o->distance.empty()) d.min_distance = o->distance[0], d.max_distance = o->distance[1];
     if (!o->board.empty()) {
-      HOVS_REQUIRE(d.kind == "mono_calibration", "--board", "sets the checkerboard of a mono_calibration dataset");
-      const calib::CheckerboardSpec spec = calib::ParseBoardSpec(o->board, "--board");
-      d.board.kind = scenes::BoardSpec::Kind::kChecker;
-      d.board.squares_x = spec.cols + 1, d.board.squares_y = spec.rows + 1, d.board.square = spec.square;
+      HOVS_REQUIRE(d.kind == "mono_calibration", "--board", "sets the board of a mono_calibration dataset");
+      if (o->board.rfind("charuco:", 0) == 0) {
+        const calib::CharucoSpec c = calib::ParseCharucoSpec(o->board, "--board");
+        d.board.kind = scenes::BoardSpec::Kind::kCharuco;
+        d.board.squares_x = c.squares_x, d.board.squares_y = c.squares_y, d.board.square = c.square;
+        d.board.marker_length = c.marker, d.board.dictionary = c.dictionary;
+      } else {
+        const calib::CheckerboardSpec spec = calib::ParseBoardSpec(o->board, "--board");
+        d.board.kind = scenes::BoardSpec::Kind::kChecker;
+        d.board.squares_x = spec.cols + 1, d.board.squares_y = spec.rows + 1, d.board.square = spec.square;
+      }
     }
     d.Check("dataset options");
     d.seed = o->seed;

@@ -46,7 +46,8 @@ Eigen::MatrixXd PseudoInverse(const Eigen::MatrixXd& H, int null) {
   const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> es(H);
   Eigen::MatrixXd C = Eigen::MatrixXd::Zero(H.rows(), H.cols());
   for (int k = null; k < H.rows(); ++k)
-    if (es.eigenvalues()(k) > 0) C += es.eigenvectors().col(k) * es.eigenvectors().col(k).transpose() / es.eigenvalues()(k);
+    if (es.eigenvalues()(k) > 0)
+      C += es.eigenvectors().col(k) * es.eigenvectors().col(k).transpose() / es.eigenvalues()(k);
   return C;
 }
 
@@ -240,19 +241,20 @@ nlohmann::json SuggestionsJson(const Suggestions& s) {
   for (const auto& b : s.boards) {
     const Eigen::Quaterniond& q = b.cam_from_board.rotation;
     const Vec3d& t = b.cam_from_board.translation;
-    boards.push_back({{"azimuth_deg", b.azimuth_deg},
-                      {"elevation_deg", b.elevation_deg},
-                      {"distance_m", b.distance_m},
-                      {"tilt_deg", b.tilt_deg},
-                      {"centre_px", {b.centre_px.x(), b.centre_px.y()}},
-                      {"cam_from_board", {{"qw", q.w()}, {"qx", q.x()}, {"qy", q.y()}, {"qz", q.z()},
-                                          {"t", {t.x(), t.y(), t.z()}}}},
-                      {"mean_px_after", b.mean_px}});
+    boards.push_back(
+        {{"azimuth_deg", b.azimuth_deg},
+         {"elevation_deg", b.elevation_deg},
+         {"distance_m", b.distance_m},
+         {"tilt_deg", b.tilt_deg},
+         {"centre_px", {b.centre_px.x(), b.centre_px.y()}},
+         {"cam_from_board", {{"qw", q.w()}, {"qx", q.x()}, {"qy", q.y()}, {"qz", q.z()}, {"t", {t.x(), t.y(), t.z()}}}},
+         {"mean_px_after", b.mean_px}});
   }
-  return {{"method", "greedy: each board the candidate that lowers the field's mean 1-sigma projection uncertainty most"},
-          {"candidates", s.candidates},
-          {"mean_px_now", s.mean_px_now},
-          {"boards", boards}};
+  return {
+      {"method", "greedy: each board the candidate that lowers the field's mean 1-sigma projection uncertainty most"},
+      {"candidates", s.candidates},
+      {"mean_px_now", s.mean_px_now},
+      {"boards", boards}};
 }
 
 }  // namespace hovs::calib

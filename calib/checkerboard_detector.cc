@@ -19,7 +19,10 @@ void CheckerboardSpec::Check(const std::string& where) const {
 }
 
 void CheckerboardDetectOptions::Check(const std::string& where) const {
-  board.Check(where);
+  if (charuco)
+    charuco->Check(where);
+  else
+    board.Check(where);
   HOVS_REQUIRE(min_corners >= 4, where, "min_corners must be at least 4 (got ", min_corners, ")");
   HOVS_REQUIRE(orientation == 1 || orientation == -1, where, "orientation must be +1 or -1 (got ", orientation, ")");
   HOVS_REQUIRE(std::isfinite(min_contrast) && min_contrast > 0 && min_contrast < 1, where,

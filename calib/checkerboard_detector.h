@@ -30,6 +30,7 @@
 #include <functional>
 #include <opencv2/core.hpp>
 #include <map>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -45,10 +46,30 @@ struct CheckerboardSpec {
   void Check(const std::string& where) const;
 };
 
+// A ChArUco board (OpenCV's): squares_x x squares_y squares, the top-left one (as printed) black, an ArUco
+// marker of side `marker` in every white square. Its inner corners are named by the markers around them, so a
+// partial view near the rim keeps certain labels. Corner id = row * (squares_x - 1) + column (OpenCV's), from the
+// top-left inner corner as printed; in hovs' board frame (x right, y up the print, z out of it, origin at the
+// pattern's centre) corner (column c, row r) is at ((c + 1) square - W / 2, H / 2 - (r + 1) square).
+struct CharucoSpec {
+  int squares_x = 8, squares_y = 6;
+  double square = 0.03, marker = 0.022;  // metres
+  std::string dictionary = "DICT_4X4_250";
+  void Check(const std::string& where) const;
+  int Cols() const { return squares_x - 1; }  // inner corners
+  int Rows() const { return squares_y - 1; }
+  Vec2d CornerXY(int id) const;  // board frame, metres
+};
+
+// "charuco:SXxSYxSQUARExMARKER[:DICTIONARY]" (squares, square and marker sides in metres), e.g.
+// charuco:8x6x0.03x0.022:DICT_4X4_250. Throws naming `where`.
+CharucoSpec ParseCharucoSpec(const std::string& text, const std::string& where);
+
 struct CheckerboardDetectOptions {
   CheckerboardSpec board;
-  int min_corners = 12;       // smaller grids are not reported as found
-  bool allow_partial = true;  // false: only the complete board counts as found
+  std::optional<CharucoSpec> charuco;  // set: the board is this ChArUco board (DetectCharuco)
+  int min_corners = 12;                // smaller grids are not reported as found
+  bool allow_partial = true;           // false: only the complete board counts as found
   // Expected sign of cross(x axis, y axis) of the board in the image ((u, v) pixels): -1 for a board seen through
   // one mirror reflection from its printed side (catadioptric cameras), +1 for a direct view.
   int orientation = -1;
@@ -82,6 +103,13 @@ struct CheckerboardDetection {
 
 // image: 8-bit grey (CV_8UC1). Throws hovs::Error for an empty or non-grey image or bad options.
 CheckerboardDetection DetectCheckerboard(const cv::Mat& image, const CheckerboardDetectOptions& options);
+
+// A ChArUco board: its ArUco markers (in the image and in its mirror image, whichever shows more: one mirror
+// reflection mirrors the board), the inner corners between them interpolated by OpenCV (local homographies of
+// the nearest markers, then cv::cornerSubPix), then (corner_refinement "edges") each corner where the board's
+// lines through it cross, as for a checkerboard. Uses options.charuco, min_corners, corner_refinement and
+// min_contrast. board_points in hovs' board frame (CharucoSpec), indices (column, row).
+CheckerboardDetection DetectCharuco(const cv::Mat& image, const CheckerboardDetectOptions& options);
 
 // The labels' proof: every corner must lie where its row and its column put it. Along each grid line through a
 // corner its position is predicted from the neighbours on that line (cubic through two on each side, else the

@@ -145,7 +145,7 @@ void DetectInto(const std::filesystem::path& path, const std::string& name, cons
   if (in->width == 0) in->width = grey.cols, in->height = grey.rows;
   HOVS_REQUIRE(grey.cols == in->width && grey.rows == in->height, path.string(), "image size ", grey.cols, "x",
                grey.rows, " differs from the first image's ", in->width, "x", in->height);
-  const auto det = DetectCheckerboard(grey, o);
+  const auto det = o.charuco ? DetectCharuco(grey, o) : DetectCheckerboard(grey, o);
   ImageDetection d;
   d.image = name, d.status = det.status, d.corner_refinement = o.corner_refinement;
   d.found = det.found, d.complete = det.complete;
@@ -175,6 +175,12 @@ CalibrationInput ImageFolderInput(const std::filesystem::path& folder, const Che
   in.description = {{"images", folder.string()},
                     {"corners", "hovs checkerboard detector"},
                     {"board", {options.board.cols, options.board.rows, options.board.square}}};
+  if (options.charuco)
+    in.description["corners"] = "hovs ChArUco detector",
+    in.description["board"] = {{"charuco", {options.charuco->squares_x, options.charuco->squares_y}},
+                               {"square", options.charuco->square},
+                               {"marker", options.charuco->marker},
+                               {"dictionary", options.charuco->dictionary}};
   return in;
 }
 

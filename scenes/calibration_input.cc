@@ -15,6 +15,20 @@ namespace {
 calib::CheckerboardDetectOptions BoardOf(const nlohmann::json& m, const std::filesystem::path& manifest,
                                          const DatasetCalibrationOptions& options) {
   calib::CheckerboardDetectOptions dopt = options.detect;
+  if (m.contains("boards") && !m["boards"].empty() && JsonText(m["boards"][0], "type") == "charuco") {
+    const auto& b = m["boards"][0];
+    calib::CharucoSpec c;
+    try {
+      c.squares_x = b.at("squares").at(0), c.squares_y = b.at("squares").at(1);
+      c.square = b.at("square"), c.marker = b.at("marker_length"), c.dictionary = b.at("dictionary");
+    } catch (const nlohmann::json::exception& e) {
+      throw Error(manifest.string() + " (boards[0])",
+                  std::string("a charuco board needs squares, square, marker_length and dictionary: ") + e.what());
+    }
+    c.Check(manifest.string() + " (boards[0])");
+    dopt.charuco = c;
+    return dopt;
+  }
   if (m.contains("boards") && !m["boards"].empty() && JsonText(m["boards"][0], "type") == "checker") {
     const auto& b = m["boards"][0];
     try {
@@ -81,6 +95,13 @@ DatasetCalibrationInput LoadDatasetCalibrationInput(const std::filesystem::path&
   in.description = {{"dataset", manifest.string()}, {"unit", uj["name"]}};
   if (options.truth_corners)
     in.description.update({{"corners", "ground truth"}, {"corner_noise_px", noise}, {"seed", options.seed}});
+  else if (dopt.charuco)
+    in.description.update({{"corners", "hovs ChArUco detector"},
+                           {"board",
+                            {{"charuco", {dopt.charuco->squares_x, dopt.charuco->squares_y}},
+                             {"square", dopt.charuco->square},
+                             {"marker", dopt.charuco->marker},
+                             {"dictionary", dopt.charuco->dictionary}}}});
   else
     in.description.update(
         {{"corners", "hovs checkerboard detector"}, {"board", {dopt.board.cols, dopt.board.rows, dopt.board.square}}});

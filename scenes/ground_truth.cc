@@ -123,6 +123,13 @@ nlohmann::json BoardToJson(const BoardInstance& b) {
     j["squares"] = {b.spec.squares_x, b.spec.squares_y};
     j["square"] = b.spec.square;
     j["inner_corners"] = {b.spec.squares_x - 1, b.spec.squares_y - 1};
+  } else if (b.spec.kind == BoardSpec::Kind::kCharuco) {
+    j["type"] = "charuco";
+    j["squares"] = {b.spec.squares_x, b.spec.squares_y};
+    j["square"] = b.spec.square;
+    j["marker_length"] = b.spec.marker_length;
+    j["dictionary"] = b.spec.dictionary;
+    j["inner_corners"] = {b.spec.squares_x - 1, b.spec.squares_y - 1};
   } else {
     j["type"] = "aruco";
     j["markers"] = {b.spec.markers_x, b.spec.markers_y};

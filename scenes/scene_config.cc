@@ -1,6 +1,7 @@
 #include "scenes/scene_config.h"
 
 #include <opencv2/aruco.hpp>
+#include <opencv2/aruco/charuco.hpp>
 #include <opencv2/core.hpp>
 
 #include <cmath>
@@ -27,13 +28,20 @@ cv::Ptr<cv::aruco::GridBoard> MakeGridBoard(const BoardSpec& s) {
 }
 }  // namespace
 
+calib::CharucoSpec BoardSpec::Charuco() const {
+  calib::CharucoSpec c;
+  c.squares_x = squares_x, c.squares_y = squares_y, c.square = square, c.marker = marker_length;
+  c.dictionary = dictionary;
+  return c;
+}
+
 double BoardSpec::Width() const {
-  return kind == Kind::kChecker ? squares_x * square + 2 * margin
-                                : markers_x * marker_length + (markers_x - 1) * marker_separation + 2 * margin;
+  return kind != Kind::kAruco ? squares_x * square + 2 * margin
+                              : markers_x * marker_length + (markers_x - 1) * marker_separation + 2 * margin;
 }
 double BoardSpec::Height() const {
-  return kind == Kind::kChecker ? squares_y * square + 2 * margin
-                                : markers_y * marker_length + (markers_y - 1) * marker_separation + 2 * margin;
+  return kind != Kind::kAruco ? squares_y * square + 2 * margin
+                              : markers_y * marker_length + (markers_y - 1) * marker_separation + 2 * margin;
 }
 
 std::vector<std::pair<int, Vec2d>> BoardSpec::Corners() const {
@@ -43,6 +51,11 @@ std::vector<std::pair<int, Vec2d>> BoardSpec::Corners() const {
       for (int i = 1; i < squares_x; ++i)
         out.emplace_back((j - 1) * (squares_x - 1) + (i - 1),
                          Vec2d((i - 0.5 * squares_x) * square, (j - 0.5 * squares_y) * square));
+    return out;
+  }
+  if (kind == Kind::kCharuco) {
+    const calib::CharucoSpec c = Charuco();
+    for (int id = 0; id < c.Cols() * c.Rows(); ++id) out.emplace_back(id, c.CornerXY(id));
     return out;
   }
   // OpenCV 4.6's GridBoard object points: origin at the pattern's top-left as printed, y down the print;
@@ -64,6 +77,8 @@ void CheckBoard(const BoardSpec& s, const std::string& where) {
     HOVS_REQUIRE(s.squares_x <= 1000 && s.squares_y <= 1000, where,
                  "a checkerboard has at most 1000 x 1000 squares (got ", s.squares_x, " x ", s.squares_y, ")");
     HOVS_REQUIRE(s.square > 0 && std::isfinite(s.square), where, "square size must be positive");
+  } else if (s.kind == BoardSpec::Kind::kCharuco) {
+    s.Charuco().Check(where);
   } else {
     HOVS_REQUIRE(calib::ArucoDictionaryId(s.dictionary) >= 0, where, "unknown ArUco dictionary '", s.dictionary,
                  "' (known: ", calib::ArucoDictionaryNames(), ")");
@@ -86,13 +101,16 @@ Rect MakeBoardRect(const BoardSpec& s, const Rigid3d& world_from_board, int obje
     r.front.margin = {0.95f, 0.95f, 0.95f};
     return r;
   }
-  // Draw the ArUco board at a resolution where every edge falls on a pixel edge (so the texture is exact) and
-  // markers get at least 120 pixels.
+  // Draw the ArUco or ChArUco board at a resolution where every edge falls on a pixel edge (so the texture is
+  // exact) and markers get at least 120 pixels.
+  const bool charuco = s.kind == BoardSpec::Kind::kCharuco;
   double ppm = 0;
   for (double cand : {1000.0, 2000.0, 4000.0, 5000.0, 10000.0, 20000.0}) {
     const auto integral = [&](double v) { return std::abs(v * cand - std::round(v * cand)) < 1e-6; };
-    if (integral(s.marker_length) && integral(s.marker_separation) && integral(s.margin) &&
-        s.marker_length * cand >= 120 && s.Width() * cand <= 16000 && s.Height() * cand <= 16000) {
+    const bool edges =
+        charuco ? integral(s.square) && integral(0.5 * (s.square - s.marker_length)) : integral(s.marker_separation);
+    if (integral(s.marker_length) && edges && integral(s.margin) && s.marker_length * cand >= 120 &&
+        s.Width() * cand <= 16000 && s.Height() * cand <= 16000) {
       ppm = cand;
       break;
     }
@@ -103,9 +121,16 @@ Rect MakeBoardRect(const BoardSpec& s, const Rigid3d& world_from_board, int obje
   const int w = static_cast<int>(std::lround(s.Width() * ppm)), h = static_cast<int>(std::lround(s.Height() * ppm));
   const int margin = static_cast<int>(std::lround(s.margin * ppm));
   cv::Mat img;
-  MakeGridBoard(s)->draw(cv::Size(w, h), img, margin, 1);
-  auto tex = std::make_shared<raytrace::ImageTexture>(
-      raytrace::ImageTexture::FromGray8(img.data, img.cols, img.rows, "aruco:" + s.dictionary));
+  if (charuco) {
+    cv::aruco::CharucoBoard::create(s.squares_x, s.squares_y, static_cast<float>(s.square),
+                                    static_cast<float>(s.marker_length),
+                                    cv::aruco::getPredefinedDictionary(calib::ArucoDictionaryId(s.dictionary)))
+        ->draw(cv::Size(w, h), img, margin, 1);
+  } else {
+    MakeGridBoard(s)->draw(cv::Size(w, h), img, margin, 1);
+  }
+  auto tex = std::make_shared<raytrace::ImageTexture>(raytrace::ImageTexture::FromGray8(
+      img.data, img.cols, img.rows, (charuco ? "charuco:" : "aruco:") + s.dictionary));
   // Paper white and ink black, like a print.
   for (float& p : tex->pixels) p = 0.05f + 0.9f * p;
   r.front.kind = Texture::Kind::kImage;
@@ -325,11 +350,24 @@ SceneConfig ParseSceneConfigUnguarded(const std::string& text, const std::string
         g.front = ReadTexture(r, r.Require(o, k, "texture", &t), k + ".texture", base);
         desc.rects.push_back(g);
       } else if (type == "board") {
-        r.OnlyKeys(o, k, {"type", "name", "pose", "checker", "aruco", "margin"});
+        r.OnlyKeys(o, k, {"type", "name", "pose", "checker", "aruco", "charuco", "margin"});
         BoardSpec spec;
-        HOVS_REQUIRE((o["checker"] ? 1 : 0) + (o["aruco"] ? 1 : 0) == 1, r.Where(o, k),
-                     "a board is either checker or aruco");
-        if (o["checker"]) {
+        HOVS_REQUIRE((o["checker"] ? 1 : 0) + (o["aruco"] ? 1 : 0) + (o["charuco"] ? 1 : 0) == 1, r.Where(o, k),
+                     "a board is one of checker, aruco and charuco");
+        if (o["charuco"]) {
+          const YAML::Node c = o["charuco"];
+          const std::string kc = k + ".charuco";
+          r.OnlyKeys(c, kc, {"squares", "square", "marker_length", "dictionary"});
+          spec.kind = BoardSpec::Kind::kCharuco;
+          YAML::Node sq, s, ml;
+          r.Require(c, kc, "squares", &sq);
+          HOVS_REQUIRE(sq.IsSequence() && sq.size() == 2, r.Where(sq, kc + ".squares"), "expected [nx, ny]");
+          spec.squares_x = r.Integer(sq[0], kc + ".squares[0]"), spec.squares_y = r.Integer(sq[1], kc + ".squares[1]");
+          spec.square = r.Positive(r.Require(c, kc, "square", &s), kc + ".square");
+          spec.marker_length = r.Positive(r.Require(c, kc, "marker_length", &ml), kc + ".marker_length");
+          spec.dictionary = "DICT_4X4_250";
+          if (c["dictionary"]) spec.dictionary = r.String(c["dictionary"], kc + ".dictionary");
+        } else if (o["checker"]) {
           const YAML::Node c = o["checker"];
           r.OnlyKeys(c, k + ".checker", {"squares", "square"});
           YAML::Node sq, s;

@@ -8,6 +8,7 @@
 #include <string>
 #include <vector>
 
+#include "calib/checkerboard_detector.h"
 #include "raytrace/render.h"
 #include "raytrace/scene.h"
 
@@ -16,19 +17,21 @@ namespace hovs::scenes {
 // A calibration target. Board frame: origin at the board centre, x along its width (squares_x / markers_x),
 // y along its height, z out of the printed face.
 struct BoardSpec {
-  enum class Kind { kChecker, kAruco } kind = Kind::kChecker;
-  int squares_x = 8, squares_y = 6;  // checker: squares (inner corners: (sx - 1) x (sy - 1))
+  enum class Kind { kChecker, kAruco, kCharuco } kind = Kind::kChecker;
+  int squares_x = 8, squares_y = 6;  // checker, charuco: squares (inner corners: (sx - 1) x (sy - 1))
   double square = 0.03;              // m
   int markers_x = 5, markers_y = 5;  // aruco grid
-  double marker_length = 0.2, marker_separation = 0.04;
+  double marker_length = 0.2, marker_separation = 0.04;  // aruco; charuco: marker_length (inside a square)
   std::string dictionary = "DICT_6X6_250";
   double margin = 0.02;  // white border around the pattern, m
 
   double Width() const;  // printed pattern plus margins
   double Height() const;
   // Corners with ids, in the board frame (z = 0): checker inner corners (id = j * (sx - 1) + i, i along x),
-  // or ArUco marker corners (id = 4 * marker id + k, k in OpenCV's corner order).
+  // ArUco marker corners (id = 4 * marker id + k, k in OpenCV's corner order), or ChArUco inner corners (OpenCV's
+  // ids, calib::CharucoSpec).
   std::vector<std::pair<int, Vec2d>> Corners() const;
+  calib::CharucoSpec Charuco() const;  // kind kCharuco
 };
 
 struct BoardInstance {
