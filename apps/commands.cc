@@ -102,6 +102,10 @@ const std::vector<Command>& Commands() {
        SetupCapture},
       {"compare", "The difference between two models of one camera as a map over the image (px and degrees)",
        SetupCompare},
+      {"convert",
+       "A camera model into other tools' files: Kalibr camchain, MEI YAML; refits to double sphere, EUCM, "
+       "Kannala-Brandt with their error",
+       SetupConvert},
       {"position", "Visual positioning: the camera's offset from the mirror design, from the rim in one image",
        SetupPosition},
       {"live",

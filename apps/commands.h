@@ -77,5 +77,6 @@ Runner SetupCapture(CLI::App* sub, const GlobalOptions* global);
 Runner SetupLive(CLI::App* sub, const GlobalOptions* global);
 Runner SetupPosition(CLI::App* sub, const GlobalOptions* global);
 Runner SetupCompare(CLI::App* sub, const GlobalOptions* global);
+Runner SetupConvert(CLI::App* sub, const GlobalOptions* global);
 
 }  // namespace hovs::apps

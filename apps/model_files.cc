@@ -5,6 +5,7 @@
 #include <map>
 #include <nlohmann/json.hpp>
 
+#include "calib/camera_formats.h"
 #include "calib/ocam_io.h"
 #include "calib/omnidir_io.h"
 #include "core/error.h"
@@ -91,7 +92,15 @@ AnyModel LoadModelSpec(const std::string& spec, const std::string& unit, double 
     throw Error("--unit " + unit, "no such unit in " + spec);
   };
   if (EndsWith(spec, ".yaml") || EndsWith(spec, ".yml")) {
-    if (calib::LooksLikeOmnidirYaml(ReadFile(path))) return LoadCalibratedModel(path, "unified", scene_distance);
+    const std::string text = ReadFile(path);
+    if (calib::LooksLikeOmnidirYaml(text)) return LoadCalibratedModel(path, "unified", scene_distance);
+    if (calib::LooksLikeMeiYaml(text)) return AnyModel::Unified(calib::ParseMeiYaml(text, spec), 0, 0, spec);
+    if (calib::LooksLikeKalibrCamchain(text)) {
+      const auto cams = calib::ParseKalibrCamchain(text, spec);
+      const size_t i = pick(cams.size(), [&](size_t k) { return "cam" + std::to_string(k); });
+      const std::string where = spec + " (cam" + std::to_string(i) + ")";
+      return AnyModel::Unified(calib::UnifiedFromKalibr(cams[i], where), 0, 0, where);
+    }
     const auto cfg = scenes::LoadSceneConfig(path);
     const auto& units = cfg.description.units;
     const size_t i = pick(units.size(), [&](size_t k) { return units[k].name; });

@@ -61,7 +61,8 @@ DepthFormulaStudy CompareDepthFormulas(const StereoRig& rig, const DepthFormulaO
         if (!rig.left.MirrorFromImg(ul, &bl) || !rig.right.MirrorFromImg(ur, &br) ||
             !rig.left.RayFromImg(ul, &ol, &dl) || !rig.right.RayFromImg(ur, &orr, &dr))
           continue;
-        const ClosedFormDepth own = ArticleClosedForm(b, bl, br), turned = ArticleClosedForm(b, bl, left_from_right * br);
+        const ClosedFormDepth own = ArticleClosedForm(b, bl, br),
+                              turned = ArticleClosedForm(b, bl, left_from_right * br);
         const Triangulation central = Triangulate(rig, bl, br, 0), rays = Triangulate(rig, ol, dl, orr, dr, 0);
         if (!own.ok || !turned.ok || !central.ok || !rays.ok) continue;
         const double e[4] = {(own.point_left - p).norm() / r, (turned.point_left - p).norm() / r,

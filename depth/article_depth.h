@@ -27,9 +27,9 @@ struct ClosedFormDepth {
 ClosedFormDepth ArticleClosedForm(double baseline, const Vec3d& bearing_left, const Vec3d& bearing_right);
 
 struct DepthFormulaOptions {
-  std::vector<double> ranges_m = {1, 2, 5, 10, 20};      // from the left viewpoint
+  std::vector<double> ranges_m = {1, 2, 5, 10, 20};          // from the left viewpoint
   std::vector<double> elevations_deg = {-5, -15, -30, -45};  // in the left mirror frame
-  double azimuth_step_deg = 5;                           // all round, from the baseline's direction
+  double azimuth_step_deg = 5;                               // all round, from the baseline's direction
   double min_angle_to_baseline_deg = 10;
   void Check(const std::string& where) const;
 };

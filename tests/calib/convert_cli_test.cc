@@ -1,0 +1,56 @@
+// hovs convert on a real calibration (the VMR reference corners): Kalibr's camchain of the unified model is the
+// model itself (hovs compare reads it back: 0 px), the refits report their cost, bad input is refused.
+#include <gtest/gtest.h>
+
+#include <nlohmann/json.hpp>
+
+#include "core/io.h"
+#include "tests/cli_helper.h"
+
+namespace hovs {
+namespace {
+namespace fs = std::filesystem;
+
+TEST(ConvertCli, WritesOtherToolsFilesAndRefusesBadInput) {
+  const fs::path dir = test::Scratch("convert-cli", "vmr");
+  const auto cal = test::Hovs("-q calibrate --corners " + std::string(HOVS_SHARED_DIR) +
+                              "/data/vmr/reference_corners.csv --size 1024x768 --out " + (dir / "cal").string());
+  ASSERT_EQ(cal.exit_code, 0) << cal.output;
+  const std::string json = (dir / "cal" / "calibration.json").string();
+  const auto kalibr = test::Hovs("-q convert " + json + " --kind unified --to kalibr --out " + (dir / "k").string());
+  ASSERT_EQ(kalibr.exit_code, 0) << kalibr.output;
+  const auto same = test::Hovs("-q compare " + (dir / "k" / "camchain.yaml").string() + " " + json +
+                               " --kind-b unified --no-rotation --out " + (dir / "cmp").string());
+  ASSERT_EQ(same.exit_code, 0) << same.output;
+  EXPECT_LT(nlohmann::json::parse(ReadFile(dir / "cmp" / "compare.json"))["diff"]["px"]["max"].get<double>(), 1e-9);
+  for (const std::string to : {"mei", "ds", "eucm", "kb"}) {
+    const auto r = test::Hovs("-q convert " + json + " --kind polynomial --to " + to + " --out " + (dir / to).string());
+    ASSERT_EQ(r.exit_code, 0) << r.output;
+    const auto j = nlohmann::json::parse(ReadFile(dir / to / "convert.json"));
+    EXPECT_FALSE(j["exact"].get<bool>());
+    EXPECT_LT(j["refit"]["error_px"]["p95"].get<double>(), 0.1) << to;
+    EXPECT_TRUE(fs::exists(dir / to / (to == "mei" ? "mei.yaml" : "camchain.yaml"))) << to;
+  }
+  // The MEI file is a model hovs reads: against the polynomial model it was refitted from, after the turn about
+  // the axis that the polynomial model's affine terms hold and the refit reports.
+  const auto mei = test::Hovs("-q compare " + (dir / "mei" / "mei.yaml").string() + " " + json +
+                              " --kind-b polynomial --out " + (dir / "cmp-mei").string());
+  ASSERT_EQ(mei.exit_code, 0) << mei.output;
+  const auto cmp = nlohmann::json::parse(ReadFile(dir / "cmp-mei" / "compare.json"));
+  EXPECT_LT(cmp["diff"]["px"]["p95"].get<double>(), 0.1);
+  EXPECT_NEAR(cmp["diff"]["rotation_deg"].get<double>(),
+              nlohmann::json::parse(ReadFile(dir / "mei" / "convert.json"))["refit"]["axis_rotation_deg"].get<double>(),
+              0.01);
+  const auto refused = [&](const std::string& args, const std::string& needle) {
+    const auto r = test::Hovs(args + " --out " + (dir / "bad").string());
+    EXPECT_EQ(r.exit_code, 2) << r.output;
+    EXPECT_NE(r.output.find(needle), std::string::npos) << r.output;
+    EXPECT_FALSE(fs::exists(dir / "bad"));
+  };
+  refused("convert " + json + " --to basalt", "expected kalibr, mei, ds, eucm or kb");
+  refused("convert " + (dir / "missing.json").string() + " --to ds", "file not found");
+  refused("convert " + (dir / "ds" / "camchain.yaml").string() + " --to mei", "hovs reads Kalibr's omni model");
+}
+
+}  // namespace
+}  // namespace hovs
