@@ -11,12 +11,14 @@
 #include "core/error.h"
 #include "core/format.h"
 #include "core/io.h"
+#include "core/json.h"
+#include "scenes/ground_truth.h"
 
 namespace hovs::apps {
 
 Runner SetupConvert(CLI::App* sub, const GlobalOptions* global) {
   struct Options {
-    std::string model, kind = "auto", unit, to, name = "camera", out = "results/convert";
+    std::string model, kind = "auto", unit, to, name = "camera", out = "results/convert", right, stereo;
     int grid_step = 0;
   };
   auto o = std::make_shared<Options>();
@@ -31,6 +33,8 @@ Runner SetupConvert(CLI::App* sub, const GlobalOptions* global) {
   sub->add_option("--kind", o->kind, "auto | physical | polynomial | unified: which model of a calibration.json")
       ->capture_default_str();
   sub->add_option("--unit", o->unit, "unit of a scene or manifest, camN of a camchain (default: the first)");
+  sub->add_option("--right", o->right, "the right unit's model (same kinds): a two-camera camchain with --stereo");
+  sub->add_option("--stereo", o->stereo, "hovs stereo-calibrate's stereo.json: cam1's T_cn_cnm1");
   sub->add_option("--camera-name", o->name, "camera_name of a MEI file")->capture_default_str();
   AddBounded(sub, "--grid-step", &o->grid_step, "refit grid step, px (0: about 60 columns)", 0, 10000);
   sub->add_option("-o,--out", o->out, "output folder (replaced atomically)")->capture_default_str();
@@ -43,42 +47,59 @@ Runner SetupConvert(CLI::App* sub, const GlobalOptions* global) {
     const AnyModel source =
         o->kind == "auto" ? LoadModelSpec(o->model, o->unit, 10.0) : LoadCalibratedModel(o->model, o->kind, 10.0);
     CheckOutputFolder(o->out, "convert", {o->model});
-    // The unified model itself when the source is one (exact); otherwise a refit.
-    const bool exact = (o->to == "kalibr" || o->to == "mei") && source.kind() == AnyModel::Kind::kUnified;
-    std::optional<calib::Refit> refit;
-    if (!exact) {
-      calib::RefitOptions ro;
-      ro.kind = o->to == "kalibr" || o->to == "mei" ? "omni" : o->to;
-      ro.grid_step_px = o->grid_step;
-      refit = calib::RefitModel(source, ro);
+    HOVS_REQUIRE(o->right.empty() == o->stereo.empty(), o->right.empty() ? "--stereo" : "--right",
+                 "a two-camera camchain needs both --right and --stereo");
+    HOVS_REQUIRE(o->right.empty() || o->to != "mei", "--right", "a MEI file holds one camera; use --to kalibr");
+    std::vector<AnyModel> sources = {source};
+    Rigid3d right_from_left;
+    if (!o->right.empty()) {
+      sources.push_back(o->kind == "auto" ? LoadModelSpec(o->right, o->unit, 10.0)
+                                          : LoadCalibratedModel(o->right, o->kind, 10.0));
+      const auto sj = ReadJsonFile(o->stereo);
+      HOVS_REQUIRE(sj.is_object() && sj.contains("right_from_left"), o->stereo,
+                   "not a hovs stereo-calibrate result (no right_from_left)");
+      right_from_left = scenes::PoseFromJson(sj["right_from_left"], o->stereo + " (right_from_left)");
     }
-    std::string file, text;
-    if (o->to == "mei") {
-      file = "mei.yaml";
-      text = calib::FormatMeiYaml(exact ? source.unified() : *refit->unified, o->name);
-    } else {
-      file = "camchain.yaml";
-      text = calib::FormatKalibrCamchain({exact ? calib::KalibrFromUnified(source.unified())
-                                                : calib::KalibrFromRefit(*refit, source.width(), source.height())});
+    nlohmann::json j = {{"tool", "hovs convert"}, {"versions", Versions()}, {"to", o->to}};
+    std::string summary;
+    std::vector<calib::KalibrCamera> cams;
+    std::vector<double> gamma;
+    std::optional<UnifiedModel<double>> mei;
+    for (size_t k = 0; k < sources.size(); ++k) {
+      const AnyModel& src = sources[k];
+      const std::string file = k == 0 ? o->model : o->right;
+      // The unified model itself when the source is one (exact); otherwise a refit.
+      const bool exact = (o->to == "kalibr" || o->to == "mei") && src.kind() == AnyModel::Kind::kUnified;
+      nlohmann::json cj = {{"file", file}, {"kind", src.KindName()}, {"exact", exact}};
+      summary += "hovs convert: " + std::string(src.KindName()) + " " + file;
+      if (exact) {
+        cams.push_back(calib::KalibrFromUnified(src.unified()));
+        mei = src.unified();
+        gamma.push_back(0);
+        summary += " (the unified model as it is)\n";
+      } else {
+        calib::RefitOptions ro;
+        ro.kind = o->to == "kalibr" || o->to == "mei" ? "omni" : o->to;
+        ro.grid_step_px = o->grid_step;
+        const calib::Refit refit = calib::RefitModel(src, ro);
+        cams.push_back(calib::KalibrFromRefit(refit, src.width(), src.height()));
+        if (refit.unified) mei = *refit.unified;
+        gamma.push_back(refit.axis_rotation_deg * M_PI / 180);
+        cj["refit"] = calib::RefitJson(refit);
+        summary += " (" + refit.kind + " refit over " + std::to_string(refit.pixels) + " grid pixels of its " +
+                   FormatNumber("%.1f", refit.field_deg) + " deg field: median " +
+                   FormatNumber("%.4f", refit.px.median) + " px, 95 % " + FormatNumber("%.4f", refit.px.p95) +
+                   " px, max " + FormatNumber("%.4f", refit.px.max) + " px" +
+                   (refit.outside ? ", " + std::to_string(refit.outside) + " outside its domain" : "") +
+                   "; its frame turned " + FormatNumber("%.4f", refit.axis_rotation_deg) + " deg about the axis)\n";
+      }
+      j["cameras"].push_back(cj);
     }
-    nlohmann::json j = {{"tool", "hovs convert"},
-                        {"versions", Versions()},
-                        {"source", {{"file", o->model}, {"kind", source.KindName()}}},
-                        {"to", o->to},
-                        {"file", file},
-                        {"exact", exact}};
-    std::string summary = "hovs convert: " + std::string(source.KindName()) + " " + o->model + " -> " + file;
-    if (refit) {
-      j["refit"] = calib::RefitJson(*refit);
-      summary += " (" + refit->kind + " refit over " + std::to_string(refit->pixels) + " grid pixels of the source's " +
-                 FormatNumber("%.1f", refit->field_deg) + " deg field: median " +
-                 FormatNumber("%.4f", refit->px.median) + " px, 95 % " + FormatNumber("%.4f", refit->px.p95) +
-                 " px, max " + FormatNumber("%.4f", refit->px.max) + " px" +
-                 (refit->outside ? ", " + std::to_string(refit->outside) + " outside its domain" : "") + ")";
-    } else {
-      summary += " (the unified model as it is)";
-    }
-    summary += "\n";
+    if (cams.size() == 2) cams[1].T_cn_cnm1 = calib::ToolsFromMirrorPose(right_from_left, gamma[0], gamma[1]);
+    const std::string file = o->to == "mei" ? "mei.yaml" : "camchain.yaml";
+    const std::string text = o->to == "mei" ? calib::FormatMeiYaml(*mei, o->name) : calib::FormatKalibrCamchain(cams);
+    j["file"] = file;
+    summary += "  -> " + file + "\n";
     StagedDirectory stage(o->out, "convert", {o->model});
     WriteFileAtomic(stage.staging() / file, text);
     WriteFileAtomic(stage.staging() / "convert.json", j.dump(2) + "\n");

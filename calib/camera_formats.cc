@@ -62,11 +62,14 @@ KalibrCamera KalibrFromRefit(const Refit& r, int width, int height) {
   return c;
 }
 
-Eigen::Matrix4d ToolsFromMirrorPose(const Rigid3d& T) {
+Eigen::Matrix4d ToolsFromMirrorPose(const Rigid3d& T, double gamma_left, double gamma_right) {
+  // A point's tools coordinates: Rz(gamma) S its mirror coordinates (S and Rz commute).
   const Eigen::Matrix3d S = Eigen::Vector3d(1, 1, -1).asDiagonal();
+  const Eigen::Matrix3d Rl = Eigen::AngleAxisd(gamma_left, Vec3d::UnitZ()).toRotationMatrix() * S;
+  const Eigen::Matrix3d Rr = Eigen::AngleAxisd(gamma_right, Vec3d::UnitZ()).toRotationMatrix() * S;
   Eigen::Matrix4d M = Eigen::Matrix4d::Identity();
-  M.topLeftCorner<3, 3>() = S * T.rotation.toRotationMatrix() * S;
-  M.topRightCorner<3, 1>() = S * T.translation;
+  M.topLeftCorner<3, 3>() = Rr * T.rotation.toRotationMatrix() * Rl.inverse();
+  M.topRightCorner<3, 1>() = Rr * T.translation;
   return M;
 }
 

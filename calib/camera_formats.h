@@ -32,8 +32,9 @@ struct KalibrCamera {
 KalibrCamera KalibrFromUnified(const UnifiedModel<double>& model);
 // A refit (ds, eucm, kb or omni) as a Kalibr camera.
 KalibrCamera KalibrFromRefit(const Refit& refit, int width, int height);
-// The tools' T_cn_cnm1 of a hovs relative pose between mirror frames (right_from_left).
-Eigen::Matrix4d ToolsFromMirrorPose(const Rigid3d& right_from_left);
+// The tools' T_cn_cnm1 of a hovs relative pose between mirror frames (right_from_left); gamma_left and
+// gamma_right: the turns about the axis of refitted frames (Refit::axis_rotation_deg, radians here).
+Eigen::Matrix4d ToolsFromMirrorPose(const Rigid3d& right_from_left, double gamma_left = 0, double gamma_right = 0);
 
 std::string FormatKalibrCamchain(const std::vector<KalibrCamera>& cameras);
 // Throws hovs::Error naming the file and key: not a camchain, missing or malformed keys.

@@ -86,7 +86,8 @@ Refit RefitModel(const AnyModel& source, const RefitOptions& o) {
   const Sample* axis = &samples[0];
   for (const auto& s : samples) {
     if (OmniFromMirror(s.mirror).z() > OmniFromMirror(axis->mirror).z()) axis = &s;
-    out.field_deg = std::max(out.field_deg, std::acos(std::clamp(OmniFromMirror(s.mirror).z(), -1.0, 1.0)) * 180 / M_PI);
+    out.field_deg =
+        std::max(out.field_deg, std::acos(std::clamp(OmniFromMirror(s.mirror).z(), -1.0, 1.0)) * 180 / M_PI);
   }
   const Vec2d c = axis->px;
   std::vector<double> f;
@@ -110,8 +111,9 @@ Refit RefitModel(const AnyModel& source, const RefitOptions& o) {
     problem.SetParameterLowerBound(p.data(), 0, 0.0);
     out.names = {"xi", "fx", "fy", "cx", "cy", "k1", "k2", "p1", "p2"};
   } else {
-    gk = o.kind == "ds" ? GenericKind::kDoubleSphere : o.kind == "eucm" ? GenericKind::kEucm
-                                                                          : GenericKind::kKannalaBrandt;
+    gk = o.kind == "ds"     ? GenericKind::kDoubleSphere
+         : o.kind == "eucm" ? GenericKind::kEucm
+                            : GenericKind::kKannalaBrandt;
     if (gk == GenericKind::kDoubleSphere) {
       p = {0.0, 0.5, f0, f0, c.x(), c.y()};
       out.names = {"xi", "alpha", "fx", "fy", "cx", "cy"};
@@ -159,7 +161,10 @@ Refit RefitModel(const AnyModel& source, const RefitOptions& o) {
     m.xi = p[0], m.fx = p[1], m.fy = p[2], m.cx = p[3], m.cy = p[4], m.distortion = {p[5], p[6], p[7], p[8]};
     for (const auto& s : samples) {
       Vec2d uv;
-      if (m.ImgFromCam(AboutAxis(s.mirror, gamma), &uv)) err.push_back((uv - s.px).norm()); else ++out.outside;
+      if (m.ImgFromCam(AboutAxis(s.mirror, gamma), &uv))
+        err.push_back((uv - s.px).norm());
+      else
+        ++out.outside;
     }
     out.unified = m;
   } else {
@@ -169,8 +174,10 @@ Refit RefitModel(const AnyModel& source, const RefitOptions& o) {
     if (gk == GenericKind::kKannalaBrandt) m.SetKannalaBrandtDomain();
     for (const auto& s : samples) {
       Vec2d uv;
-      if (m.ImgFromCam(AboutAxis(OmniFromMirror(s.mirror), gamma), &uv)) err.push_back((uv - s.px).norm());
-      else ++out.outside;
+      if (m.ImgFromCam(AboutAxis(OmniFromMirror(s.mirror), gamma), &uv))
+        err.push_back((uv - s.px).norm());
+      else
+        ++out.outside;
     }
     out.generic = m;
   }

@@ -34,10 +34,10 @@ struct Refit {
   std::optional<UnifiedModel<double>> unified;  // omni (hovs' mirror frame, as core/unified.h)
   std::vector<std::string> names;               // the parameters, in the tools' order
   std::vector<double> values;
-  SampleSummary px;          // error over the source's domain, px
-  size_t pixels = 0;         // grid pixels in the source's domain
-  size_t outside = 0;        // of those, where the fitted model has no projection
-  double field_deg = 0;      // the largest angle from the optical axis in the source's domain
+  SampleSummary px;              // error over the source's domain, px
+  size_t pixels = 0;             // grid pixels in the source's domain
+  size_t outside = 0;            // of those, where the fitted model has no projection
+  double field_deg = 0;          // the largest angle from the optical axis in the source's domain
   double axis_rotation_deg = 0;  // the refit's frame: the source's turned by this about the optical axis
   bool converged = false;
 };

@@ -97,8 +97,9 @@ struct GenericModel {
     double prev = 0;
     for (int i = 1; i <= 3600; ++i) {
       const double th = M_PI * i / 3600, t2 = th * th;
-      const double r = th * (1 + t2 * (ScalarPart(p[4]) +
-                                       t2 * (ScalarPart(p[5]) + t2 * (ScalarPart(p[6]) + t2 * ScalarPart(p[7])))));
+      const double r =
+          th *
+          (1 + t2 * (ScalarPart(p[4]) + t2 * (ScalarPart(p[5]) + t2 * (ScalarPart(p[6]) + t2 * ScalarPart(p[7])))));
       if (!(r > prev)) {
         theta_max = M_PI * (i - 1) / 3600;
         return;

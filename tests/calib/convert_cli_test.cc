@@ -26,7 +26,7 @@ TEST(ConvertCli, WritesOtherToolsFilesAndRefusesBadInput) {
   for (const std::string to : {"mei", "ds", "eucm", "kb"}) {
     const auto r = test::Hovs("-q convert " + json + " --kind polynomial --to " + to + " --out " + (dir / to).string());
     ASSERT_EQ(r.exit_code, 0) << r.output;
-    const auto j = nlohmann::json::parse(ReadFile(dir / to / "convert.json"));
+    const auto j = nlohmann::json::parse(ReadFile(dir / to / "convert.json"))["cameras"][0];
     EXPECT_FALSE(j["exact"].get<bool>());
     EXPECT_LT(j["refit"]["error_px"]["p95"].get<double>(), 0.1) << to;
     EXPECT_TRUE(fs::exists(dir / to / (to == "mei" ? "mei.yaml" : "camchain.yaml"))) << to;
@@ -39,8 +39,17 @@ TEST(ConvertCli, WritesOtherToolsFilesAndRefusesBadInput) {
   const auto cmp = nlohmann::json::parse(ReadFile(dir / "cmp-mei" / "compare.json"));
   EXPECT_LT(cmp["diff"]["px"]["p95"].get<double>(), 0.1);
   EXPECT_NEAR(cmp["diff"]["rotation_deg"].get<double>(),
-              nlohmann::json::parse(ReadFile(dir / "mei" / "convert.json"))["refit"]["axis_rotation_deg"].get<double>(),
+              nlohmann::json::parse(ReadFile(dir / "mei" / "convert.json"))["cameras"][0]["refit"]["axis_rotation_deg"]
+                  .get<double>(),
               0.01);
+  // Two cameras and the relative pose of a stereo calibration: cam1 with T_cn_cnm1 in the tools' frames.
+  WriteFileAtomic(dir / "stereo.json", R"({"right_from_left": {"q": [1, 0, 0, 0], "t": [-0.64, 0.007, 0.014]}})");
+  const auto pair = test::Hovs("-q convert " + json + " --kind unified --right " + json + " --stereo " +
+                               (dir / "stereo.json").string() + " --to kalibr --out " + (dir / "pair").string());
+  ASSERT_EQ(pair.exit_code, 0) << pair.output;
+  const std::string chain = ReadFile(dir / "pair" / "camchain.yaml");
+  EXPECT_NE(chain.find("cam1:\n  T_cn_cnm1:"), std::string::npos) << chain;
+  EXPECT_NE(chain.find("- [0, 0, 1, -0.014"), std::string::npos) << "z flips with the frame: " << chain;
   const auto refused = [&](const std::string& args, const std::string& needle) {
     const auto r = test::Hovs(args + " --out " + (dir / "bad").string());
     EXPECT_EQ(r.exit_code, 2) << r.output;
@@ -48,6 +57,8 @@ TEST(ConvertCli, WritesOtherToolsFilesAndRefusesBadInput) {
     EXPECT_FALSE(fs::exists(dir / "bad"));
   };
   refused("convert " + json + " --to basalt", "expected kalibr, mei, ds, eucm or kb");
+  refused("convert " + json + " --right " + json + " --to kalibr", "needs both --right and --stereo");
+  refused("convert " + json + " --right " + json + " --stereo " + json + " --to kalibr", "no right_from_left");
   refused("convert " + (dir / "missing.json").string() + " --to ds", "file not found");
   refused("convert " + (dir / "ds" / "camchain.yaml").string() + " --to mei", "hovs reads Kalibr's omni model");
 }

@@ -65,6 +65,16 @@ TEST(CameraFormats, KalibrCamchainAndMeiReadBackAsWritten) {
   const Eigen::Matrix3d R = c1.T_cn_cnm1->topLeftCorner(3, 3);
   EXPECT_NEAR(R.determinant(), 1.0, 1e-12) << "a proper rotation";
   EXPECT_NEAR((*c1.T_cn_cnm1)(2, 3), -0.014, 1e-15) << "z flips with the frame";
+  // With refitted frames turned about their axes: the pose maps the left tools' coordinates of a point to the
+  // right tools' ones.
+  const double gl = 0.01, gr = -0.02;
+  const Eigen::Matrix4d M = ToolsFromMirrorPose(right_from_left, gl, gr);
+  const Vec3d P(1.2, -0.4, -0.8);
+  const auto tools = [](const Vec3d& m, double g) {
+    return Vec3d(Eigen::AngleAxisd(g, Vec3d::UnitZ()) * OmniFromMirror(m));
+  };
+  const Vec3d mapped = M.topLeftCorner<3, 3>() * tools(P, gl) + M.topRightCorner<3, 1>();
+  EXPECT_LT((mapped - tools(right_from_left * P, gr)).norm(), 1e-14);
   const auto cams = ParseKalibrCamchain(FormatKalibrCamchain({c0, c1}), "camchain.yaml");
   ASSERT_EQ(cams.size(), 2u);
   const UnifiedModel<double> back = UnifiedFromKalibr(cams[0], "cam0");
@@ -86,16 +96,14 @@ TEST(CameraFormats, BadFilesAreRefusedNamingTheKey) {
     try {
       ParseKalibrCamchain(text, "c.yaml");
       ADD_FAILURE() << "accepted: " << text;
-    } catch (const Error& e) {
-      EXPECT_NE(std::string(e.what()).find(needle), std::string::npos) << e.what();
-    }
+    } catch (const Error& e) { EXPECT_NE(std::string(e.what()).find(needle), std::string::npos) << e.what(); }
   };
   refused("cam0: {camera_model: omni, intrinsics: [1, 2, 3], resolution: [640, 480]}", "intrinsics");
-  refused("cam0: {camera_model: fisheye62, intrinsics: [1, 2, 3, 4], resolution: [640, 480]}",
-          "unknown camera model");
-  refused("cam0: {camera_model: omni, intrinsics: [1, 200, 200, 320, 240], distortion_model: fov, "
-          "distortion_coeffs: [0.1], resolution: [640, 480]}",
-          "unknown distortion model");
+  refused("cam0: {camera_model: fisheye62, intrinsics: [1, 2, 3, 4], resolution: [640, 480]}", "unknown camera model");
+  refused(
+      "cam0: {camera_model: omni, intrinsics: [1, 200, 200, 320, 240], distortion_model: fov, "
+      "distortion_coeffs: [0.1], resolution: [640, 480]}",
+      "unknown distortion model");
   refused("cam0: {camera_model: omni, intrinsics: [1, 200, 200, 320, 240], resolution: [640.5, 480]}", "resolution");
   refused("cam1: {camera_model: omni}", "no cam0");
   KalibrCamera ds;

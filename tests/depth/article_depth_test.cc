@@ -13,7 +13,7 @@ namespace {
 
 TEST(ArticleDepth, ClosedFormIsExactOnTheRigItAssumes) {
   const double b = 0.64;
-  for (const Vec3d p : {Vec3d(1.0, 2.0, -0.5), Vec3d(-3.0, 0.7, -1.2), Vec3d(0.3, -5.0, -2.0), Vec3d(8, 9, -1)}) {
+  for (const Vec3d& p : {Vec3d(1.0, 2.0, -0.5), Vec3d(-3.0, 0.7, -1.2), Vec3d(0.3, -5.0, -2.0), Vec3d(8, 9, -1)}) {
     const ClosedFormDepth d = ArticleClosedForm(b, p, p - Vec3d(b, 0, 0));
     ASSERT_TRUE(d.ok) << p.transpose();
     EXPECT_LT((d.point_left - p).norm(), 1e-12 * p.norm()) << p.transpose();
