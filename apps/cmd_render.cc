@@ -1,3 +1,5 @@
+#include <cstdio>
+#include <cstdlib>
 #include <iostream>
 
 #include "apps/commands.h"
@@ -35,6 +37,39 @@ Runner SetupRender(CLI::App* sub, const GlobalOptions* global) {
   };
 }
 
+namespace {
+
+// "I/N", or Slurm's array variables when no shard is given (and Slurm sets them); else the whole set.
+void ParseShard(const std::string& text, int* index, int* count) {
+  std::string spec = text, where = "--shard";
+  const char* id = std::getenv("SLURM_ARRAY_TASK_ID");
+  const char* n = std::getenv("SLURM_ARRAY_TASK_COUNT");
+  if (spec.empty() && id && n) spec = std::string(id) + "/" + n, where = "SLURM_ARRAY_TASK_ID/SLURM_ARRAY_TASK_COUNT";
+  if (spec.empty()) return;
+  int end = -1;
+  HOVS_REQUIRE(std::sscanf(spec.c_str(), "%d/%d%n", index, count, &end) == 2 && end == static_cast<int>(spec.size()),
+               where, "expected I/N (shard I from 0 of N), got '", spec, "'");
+  HOVS_REQUIRE(*count >= 1 && *index >= 0 && *index < *count, where, "needs 0 <= I < N (got ", spec, ")");
+}
+
+}  // namespace
+
+Runner SetupMerge(CLI::App* sub, const GlobalOptions* global) {
+  struct Options {
+    std::vector<std::string> shards;
+    std::string out = "results/dataset";
+  };
+  auto o = std::make_shared<Options>();
+  sub->add_option("SHARDS", o->shards, "the shard folders of one dataset (hovs dataset --shard I/N)")->required();
+  sub->add_option("-o,--out", o->out, "merged dataset folder (replaced atomically)")->capture_default_str();
+  return [o, global]() {
+    std::vector<std::filesystem::path> dirs(o->shards.begin(), o->shards.end());
+    scenes::MergeDatasetShards(dirs, o->out);
+    if (!global->quiet) std::cout << "hovs merge: " << dirs.size() << " shards -> " << o->out << "/dataset.json\n";
+    return 0;
+  };
+}
+
 Runner SetupDataset(CLI::App* sub, const GlobalOptions* global) {
   struct Options {
     std::string scene = "scenes/reference_calibration.yaml";
@@ -47,7 +82,7 @@ Runner SetupDataset(CLI::App* sub, const GlobalOptions* global) {
     int downscale = 1;
     std::string unit;
     std::vector<double> elevation, distance;
-    std::string board;
+    std::string board, shard;
   };
   auto o = std::make_shared<Options>();
   sub->add_option("-s,--scene", o->scene, "base scene: units, background (its boards are replaced)")
@@ -75,6 +110,9 @@ Runner SetupDataset(CLI::App* sub, const GlobalOptions* global) {
   sub->add_option("--board", o->board,
                   "mono_calibration: checkerboard COLSxROWSxSQUARE, inner corners and square (m), e.g. 7x11x0.03, or "
                   "charuco:SXxSYxSQUARExMARKER[:DICTIONARY] (squares; sides in m), e.g. charuco:8x12x0.03x0.022");
+  sub->add_option("--shard", o->shard,
+                  "I/N: render shard I (from 0) of N of the set (hovs merge joins them); default: from "
+                  "SLURM_ARRAY_TASK_ID and SLURM_ARRAY_TASK_COUNT when Slurm sets them");
   return [o, global, samples, count]() {
     scenes::SceneConfig cfg = scenes::LoadSceneConfig(o->scene);
     scenes::DownscaleCameras(&cfg, o->downscale);
@@ -98,6 +136,9 @@ Runner SetupDataset(CLI::App* sub, const GlobalOptions* global) {
         d.board.squares_x = spec.cols + 1, d.board.squares_y = spec.rows + 1, d.board.square = spec.square;
       }
     }
+    ParseShard(o->shard, &d.shard_index, &d.shard_count);
+    HOVS_REQUIRE(d.shard_count == 1 || d.kind != "depth_sequence", "--shard",
+                 "depth_sequence sets are not sharded yet (mono_calibration and stereo_aruco are)");
     d.Check("dataset options");
     d.seed = o->seed;
     d.progress = !global->quiet;

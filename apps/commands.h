@@ -78,5 +78,6 @@ Runner SetupLive(CLI::App* sub, const GlobalOptions* global);
 Runner SetupPosition(CLI::App* sub, const GlobalOptions* global);
 Runner SetupCompare(CLI::App* sub, const GlobalOptions* global);
 Runner SetupConvert(CLI::App* sub, const GlobalOptions* global);
+Runner SetupMerge(CLI::App* sub, const GlobalOptions* global);
 
 }  // namespace hovs::apps

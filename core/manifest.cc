@@ -21,7 +21,7 @@ const std::set<std::string> kTopKeys = {"format",       "version",
                                         "render_stats", "statistics",
                                         "status",       "unpaired_frames",
                                         "writer",       "incomplete_frames",
-                                        "note"};
+                                        "note",         "shard"};
 const std::set<std::string> kFrameKeys = {"id",  "views", "world_from_board", "world_from_rig", "render_seconds",
                                           "rays"};
 const std::set<std::string> kViewKeys = {"unit",      "image",    "ground_truth", "device_ns",

@@ -7,6 +7,7 @@
 
 #include "core/error.h"
 #include "core/io.h"
+#include "core/manifest.h"
 #include "raytrace/render.h"
 #include "results/html.h"
 #include "scenes/ground_truth.h"
@@ -51,6 +52,9 @@ void DatasetOptions::Check(const std::string& where) const {
   HOVS_REQUIRE(min_elevation_deg < max_elevation_deg && max_elevation_deg < 90 && min_elevation_deg > -90,
                where + ".elevation", "needs -90 < min < max < 90 degrees");
   HOVS_REQUIRE(max_tilt_deg >= 0 && max_tilt_deg < 80, where + ".max_tilt_deg", "must be in [0, 80)");
+  HOVS_REQUIRE(shard_count >= 1 && shard_count <= count && shard_index >= 0 && shard_index < shard_count,
+               where + ".shard", "needs 0 <= index < shards <= frames (got shard ", shard_index, " of ", shard_count,
+               " for ", count, " frames)");
   CheckBoard(board, where + ".board");
 }
 
@@ -283,6 +287,10 @@ std::vector<Rigid3d> DrawBoardPoses(const SceneConfig& base, const DatasetOption
   return poses;
 }
 
+namespace {
+void WriteDatasetPage(const fs::path& dir, const nlohmann::json& m);
+}  // namespace
+
 void WriteCalibrationDataset(const SceneConfig& base, const DatasetOptions& o, const fs::path& out,
                              const std::map<std::string, std::string>& versions) {
   HOVS_REQUIRE(o.kind != "depth_sequence", "dataset", "depth_sequence datasets are written by WriteDepthSequence");
@@ -299,7 +307,11 @@ void WriteCalibrationDataset(const SceneConfig& base, const DatasetOptions& o, c
   nlohmann::json frames = nlohmann::json::array();
   nlohmann::json boards = nlohmann::json::array();
   raytrace::Frame scratch;  // reused by every frame's render
-  for (size_t i = 0; i < poses.size(); ++i) {
+  const size_t first = poses.size() * o.shard_index / o.shard_count,
+               end = poses.size() * (o.shard_index + 1) / o.shard_count;
+  if (o.shard_count > 1)
+    m["shard"] = {{"index", o.shard_index}, {"count", o.shard_count}, {"first_frame", first}, {"end_frame", end}};
+  for (size_t i = first; i < end; ++i) {
     SceneConfig cfg = base;
     // Replace the scene's boards by the calibration board at this pose.
     std::vector<raytrace::Rect> rects;
@@ -339,35 +351,54 @@ void WriteCalibrationDataset(const SceneConfig& base, const DatasetOptions& o, c
                       {"world_from_board", PoseToJson(poses[i])},
                       {"render_seconds", seconds},
                       {"rays", rays}});
-    if (i == 0) boards.push_back(BoardToJson(b));
+    // The manifest's board is frame 0's, whichever shard this is (the shards' manifests agree).
+    if (i == first) {
+      BoardInstance b0 = b;
+      b0.world_from_board = poses[0];
+      boards.push_back(BoardToJson(b0));
+    }
   }
   m["boards"] = boards;
   m["frames"] = frames;
+  m["generator"]["samples"] = base.render.samples;
+  m["generator"]["ground_truth"] = base.render.ground_truth;
   WriteFileAtomic(stage.staging() / "dataset.json", m.dump(2) + "\n");
+  WriteDatasetPage(stage.staging(), m);
+  stage.Commit();
+}
 
-  // A report page: thumbnails and the per-frame facts.
-  results::HtmlPage page("hovs dataset: " + base.name + " (" + o.kind + ")");
-  page.Paragraph(std::to_string(frames.size()) + " frames (" + o.kind + "), board poses drawn with seed " +
-                 std::to_string(o.seed) +
+namespace {
+
+// The report page of a board dataset folder: thumbnails and the per-frame facts.
+void WriteDatasetPage(const fs::path& dir, const nlohmann::json& m) {
+  const auto& frames = m["frames"];
+  const auto& gen = m["generator"];
+  const std::string kind = m["kind"];
+  results::HtmlPage page("hovs dataset: " + m["name"].get<std::string>() + " (" + kind + ")");
+  page.Paragraph(std::to_string(frames.size()) + " frames (" + kind + "), board poses drawn with seed " +
+                 std::to_string(m["seed"].get<uint64_t>()) +
                  " so that every corner is visible; "
                  "render seed " +
-                 std::to_string(base.render.seed) + ", " + std::to_string(base.render.samples) +
+                 std::to_string(m["render_seed"].get<uint64_t>()) + ", " + std::to_string(gen["samples"].get<int>()) +
                  " samples per pixel. " +
-                 (base.render.ground_truth ? "Ground truth per frame: truth/*.exr (channels Z, P, N, id, mask, M) and "
-                                             "truth/*.json (rig, board pose, exact corner pixels)."
-                                           : "Rendered without ground truth (render.ground_truth: false)."));
+                 (gen["ground_truth"].get<bool>()
+                      ? "Ground truth per frame: truth/*.exr (channels Z, P, N, id, mask, M) and "
+                        "truth/*.json (rig, board pose, exact corner pixels)."
+                      : "Rendered without ground truth (render.ground_truth: false)."));
+  if (m.contains("shard"))
+    page.Paragraph("Shard " + std::to_string(m["shard"]["index"].get<int>()) + " of " +
+                   std::to_string(m["shard"]["count"].get<int>()) + " (hovs merge joins the shards).");
   std::vector<std::vector<std::string>> rows;
   for (const auto& fr : frames) {
     char secs[32];
     std::snprintf(secs, sizeof secs, "%.2f", fr["render_seconds"].get<double>());
     for (const auto& view : fr["views"]) {
-      const std::string thumb = Thumbnail(stage.staging(), view["image"].get<std::string>(), 320);
+      const std::string thumb = Thumbnail(dir, view["image"].get<std::string>(), 320);
       page.Figure(thumb, "frame " + std::to_string(fr["id"].get<int>()) + ", " + view["unit"].get<std::string>(), 320);
       // (A set rendered without ground truth has no sidecar to count its corners from.)
       std::string visible = "no ground truth";
       if (view.contains("ground_truth")) {
-        const auto side =
-            nlohmann::json::parse(ReadFile(stage.staging() / view["ground_truth"]["sidecar"].get<std::string>()));
+        const auto side = nlohmann::json::parse(ReadFile(dir / view["ground_truth"]["sidecar"].get<std::string>()));
         visible = std::to_string(side["boards"][0]["visible_corners"].get<int>()) + " / " +
                   std::to_string(side["boards"][0]["corners"].size());
       }
@@ -380,7 +411,78 @@ void WriteCalibrationDataset(const SceneConfig& base, const DatasetOptions& o, c
   page.Paragraph(
       "dataset.json lists frames, images, ground truth and the rig; real captures use the same "
       "manifest without ground truth.");
-  WriteFileAtomic(stage.staging() / "index.html", page.Render());
+  WriteFileAtomic(dir / "index.html", page.Render());
+}
+
+}  // namespace
+
+void MergeDatasetShards(const std::vector<fs::path>& shards, const fs::path& out) {
+  HOVS_REQUIRE(!shards.empty(), "merge", "no shards given");
+  std::vector<nlohmann::json> manifests;
+  std::vector<fs::path> inputs;
+  for (const auto& dir : shards) {
+    const fs::path file = dir / "dataset.json";
+    HOVS_REQUIRE(fs::exists(file), dir.string(), "not a dataset folder (no dataset.json)");
+    manifests.push_back(LoadDatasetManifest(file));
+    inputs.push_back(file);
+    HOVS_REQUIRE(manifests.back().contains("shard"), file.string(), "is not a shard (written without --shard)");
+  }
+  // Everything but the frames and the shard record must agree: config, seed, kind, units, versions, board.
+  const auto head = [](nlohmann::json m) {
+    m.erase("frames"), m.erase("shard");
+    return m;
+  };
+  const nlohmann::json ref = head(manifests[0]);
+  const int count = manifests[0]["shard"]["count"].get<int>();
+  std::vector<int> seen(count, -1);
+  for (size_t k = 0; k < manifests.size(); ++k) {
+    const std::string where = inputs[k].string();
+    const nlohmann::json h = head(manifests[k]);
+    if (h != ref) {
+      std::string differ;
+      for (const auto& [key, value] : ref.items())
+        if (!h.contains(key) || h[key] != value) differ += (differ.empty() ? "" : ", ") + key;
+      throw Error(where, "does not belong with " + inputs[0].string() + ": its " + differ + " differ");
+    }
+    const auto& sh = manifests[k]["shard"];
+    HOVS_REQUIRE(sh["count"].get<int>() == count, where, "is a shard of ", sh["count"].get<int>(),
+                 " but the first is of ", count);
+    const int index = sh["index"].get<int>();
+    HOVS_REQUIRE(index >= 0 && index < count, where, "shard index ", index, " is out of range");
+    HOVS_REQUIRE(seen[index] < 0, where, "is shard ", index, ", given twice (also ", inputs[seen[index]].string(), ")");
+    seen[index] = static_cast<int>(k);
+  }
+  for (int i = 0; i < count; ++i) HOVS_REQUIRE(seen[i] >= 0, "merge", "shard ", i, " of ", count, " is missing");
+  CheckOutputFolder(out, "merge", inputs);
+  StagedDirectory stage(out, "merge", inputs);
+  nlohmann::json merged = ref;
+  merged["frames"] = nlohmann::json::array();
+  for (int i = 0; i < count; ++i) {
+    const fs::path dir = shards[seen[i]];
+    for (const auto& fr : manifests[seen[i]]["frames"]) {
+      HOVS_REQUIRE(fr["id"].get<size_t>() == merged["frames"].size(), inputs[seen[i]].string(), "frame ",
+                   fr["id"].dump(), " is out of order (expected ", merged["frames"].size(), ")");
+      for (const auto& view : fr["views"]) {
+        std::vector<std::string> files = {view["image"].get<std::string>()};
+        if (view.contains("ground_truth"))
+          files.push_back(view["ground_truth"]["exr"]), files.push_back(view["ground_truth"]["sidecar"]);
+        for (const auto& f : files) {
+          HOVS_REQUIRE(fs::exists(dir / f), (dir / f).string(), "is missing from its shard");
+          fs::create_directories((stage.staging() / f).parent_path());
+          // A hard link where the file system allows (a merged set of hundreds of GB is not copied), else a copy.
+          std::error_code ec;
+          fs::create_hard_link(dir / f, stage.staging() / f, ec);
+          if (ec) fs::copy_file(dir / f, stage.staging() / f);
+        }
+      }
+      merged["frames"].push_back(fr);
+    }
+  }
+  const int frames = merged["generator"]["count"].get<int>();
+  HOVS_REQUIRE(static_cast<int>(merged["frames"].size()) == frames, "merge", "the shards hold ",
+               merged["frames"].size(), " frames but the set has ", frames);
+  WriteFileAtomic(stage.staging() / "dataset.json", merged.dump(2) + "\n");
+  WriteDatasetPage(stage.staging(), merged);
   stage.Commit();
 }
 
