@@ -137,8 +137,6 @@ Runner SetupDataset(CLI::App* sub, const GlobalOptions* global) {
       }
     }
     ParseShard(o->shard, &d.shard_index, &d.shard_count);
-    HOVS_REQUIRE(d.shard_count == 1 || d.kind != "depth_sequence", "--shard",
-                 "depth_sequence sets are not sharded yet (mono_calibration and stereo_aruco are)");
     d.Check("dataset options");
     d.seed = o->seed;
     d.progress = !global->quiet;

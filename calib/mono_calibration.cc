@@ -233,11 +233,12 @@ MonoCalibration CalibrateMono(const CalibrationInput& in, const MonoCalibrationO
   if (options.cross_validate > 0)
     r.cross_validation = CrossValidatePolynomial(r.inliers, in.width, in.height, options.polynomial,
                                                  options.cross_validate, r.polynomial.model);
+  // The uncertainty is mapped (and the suggestions scored) over the polynomial model's calibrated annulus.
+  UncertaintyOptions uo;
+  uo.range_m = options.uncertainty_range_m;
+  uo.centre = Vec2d(r.polynomial.model.cx, r.polynomial.model.cy);
+  uo.rho_min = r.polynomial.model.rho_min, uo.rho_max = r.polynomial.model.rho_max;
   if (options.uncertainty) {
-    UncertaintyOptions uo;
-    uo.range_m = options.uncertainty_range_m;
-    uo.centre = Vec2d(r.polynomial.model.cx, r.polynomial.model.cy);
-    uo.rho_min = r.polynomial.model.rho_min, uo.rho_max = r.polynomial.model.rho_max;
     if (r.polynomial.covariance.valid())
       r.polynomial_uncertainty =
           ProjectionUncertaintyMap(ParametricModel(r.polynomial.model), r.polynomial.covariance, uo);
@@ -247,10 +248,6 @@ MonoCalibration CalibrateMono(const CalibrationInput& in, const MonoCalibrationO
   if (options.suggest > 0) {
     HOVS_REQUIRE(r.polynomial.covariance.valid(), "--suggest",
                  "the polynomial solve's covariance is not computable: no uncertainty to lower");
-    UncertaintyOptions uo;
-    uo.range_m = options.uncertainty_range_m;
-    uo.centre = Vec2d(r.polynomial.model.cx, r.polynomial.model.cy);
-    uo.rho_min = r.polynomial.model.rho_min, uo.rho_max = r.polynomial.model.rho_max;
     // The board as the images show it: the image with the most corners.
     const auto largest =
         std::max_element(in.observations.begin(), in.observations.end(),

@@ -6,6 +6,7 @@
 #include <random>
 
 #include "core/error.h"
+#include "core/format.h"
 #include "core/io.h"
 #include "core/manifest.h"
 #include "raytrace/render.h"
@@ -375,16 +376,24 @@ void WriteDatasetPage(const fs::path& dir, const nlohmann::json& m) {
   const auto& gen = m["generator"];
   const std::string kind = m["kind"];
   results::HtmlPage page("hovs dataset: " + m["name"].get<std::string>() + " (" + kind + ")");
-  page.Paragraph(std::to_string(frames.size()) + " frames (" + kind + "), board poses drawn with seed " +
-                 std::to_string(m["seed"].get<uint64_t>()) +
-                 " so that every corner is visible; "
-                 "render seed " +
-                 std::to_string(m["render_seed"].get<uint64_t>()) + ", " + std::to_string(gen["samples"].get<int>()) +
-                 " samples per pixel. " +
-                 (gen["ground_truth"].get<bool>()
-                      ? "Ground truth per frame: truth/*.exr (channels Z, P, N, id, mask, M) and "
-                        "truth/*.json (rig, board pose, exact corner pixels)."
-                      : "Rendered without ground truth (render.ground_truth: false)."));
+  if (kind == "depth_sequence")
+    page.Paragraph(std::to_string(frames.size()) + " frames, the rig moving " +
+                   FormatNumber("%g", gen["step_m"].get<double>()) + " m per frame (heading " +
+                   FormatNumber("%g", gen["heading_deg"].get<double>()) + " deg, yaw step " +
+                   FormatNumber("%g", gen["yaw_step_deg"].get<double>()) +
+                   " deg); every unit rendered per frame with ground truth "
+                   "(truth/*.exr: Z, P, N, id, mask, M; truth/*.json: the rig of that frame).");
+  else
+    page.Paragraph(std::to_string(frames.size()) + " frames (" + kind + "), board poses drawn with seed " +
+                   std::to_string(m["seed"].get<uint64_t>()) +
+                   " so that every corner is visible; "
+                   "render seed " +
+                   std::to_string(m["render_seed"].get<uint64_t>()) + ", " + std::to_string(gen["samples"].get<int>()) +
+                   " samples per pixel. " +
+                   (gen["ground_truth"].get<bool>()
+                        ? "Ground truth per frame: truth/*.exr (channels Z, P, N, id, mask, M) and "
+                          "truth/*.json (rig, board pose, exact corner pixels)."
+                        : "Rendered without ground truth (render.ground_truth: false)."));
   if (m.contains("shard"))
     page.Paragraph("Shard " + std::to_string(m["shard"]["index"].get<int>()) + " of " +
                    std::to_string(m["shard"]["count"].get<int>()) + " (hovs merge joins the shards).");
@@ -399,8 +408,10 @@ void WriteDatasetPage(const fs::path& dir, const nlohmann::json& m) {
       std::string visible = "no ground truth";
       if (view.contains("ground_truth")) {
         const auto side = nlohmann::json::parse(ReadFile(dir / view["ground_truth"]["sidecar"].get<std::string>()));
-        visible = std::to_string(side["boards"][0]["visible_corners"].get<int>()) + " / " +
-                  std::to_string(side["boards"][0]["corners"].size());
+        visible = side.contains("boards") && !side["boards"].empty()
+                      ? std::to_string(side["boards"][0]["visible_corners"].get<int>()) + " / " +
+                            std::to_string(side["boards"][0]["corners"].size())
+                      : "no board";
       }
       rows.push_back({std::to_string(fr["id"].get<int>()), view["unit"].get<std::string>(),
                       view["image"].get<std::string>(), visible, secs});
@@ -520,14 +531,11 @@ void WriteDepthSequence(const SceneConfig& base, const DatasetOptions& o, const 
   for (const auto& b : base.boards) boards.push_back(BoardToJson(b));
   m["boards"] = boards;
   nlohmann::json frames = nlohmann::json::array();
-  results::HtmlPage page("hovs dataset: " + base.name + " (depth_sequence)");
-  page.Paragraph(std::to_string(o.count) + " frames, the rig moving " + std::to_string(o.step_m) +
-                 " m per frame (heading " + std::to_string(o.heading_deg) + " deg, yaw step " +
-                 std::to_string(o.yaw_step_deg) +
-                 " deg); every unit rendered per frame with ground truth "
-                 "(truth/*.exr: Z, P, N, id, mask, M; truth/*.json: the rig of that frame).");
   raytrace::Frame scratch;  // reused by every frame's render
-  for (int i = 0; i < o.count; ++i) {
+  const int first = o.count * o.shard_index / o.shard_count, end = o.count * (o.shard_index + 1) / o.shard_count;
+  if (o.shard_count > 1)
+    m["shard"] = {{"index", o.shard_index}, {"count", o.shard_count}, {"first_frame", first}, {"end_frame", end}};
+  for (int i = first; i < end; ++i) {
     SceneConfig cfg = base;
     const Rigid3d world_from_rig = WorldFromRigAt(base, o, i);
     for (auto& u : cfg.description.units) u.world_from_mirror = world_from_rig * u.world_from_mirror;
@@ -543,16 +551,14 @@ void WriteDepthSequence(const SceneConfig& base, const DatasetOptions& o, const 
           ViewJson(RenderView(cfg, scene, static_cast<int>(u), stage.staging(), stem, o.progress, &stats, &scratch)));
       seconds += stats["seconds"].get<double>();
     }
-    for (const auto& view : views) {
-      const std::string thumb = Thumbnail(stage.staging(), view["image"].get<std::string>(), 320);
-      page.Figure(thumb, "frame " + std::to_string(i) + ", " + view["unit"].get<std::string>(), 320);
-    }
     frames.push_back(
         {{"id", i}, {"views", views}, {"world_from_rig", PoseToJson(world_from_rig)}, {"render_seconds", seconds}});
   }
   m["frames"] = frames;
+  m["generator"]["samples"] = base.render.samples;
+  m["generator"]["ground_truth"] = base.render.ground_truth;
   WriteFileAtomic(stage.staging() / "dataset.json", m.dump(2) + "\n");
-  WriteFileAtomic(stage.staging() / "index.html", page.Render());
+  WriteDatasetPage(stage.staging(), m);
   stage.Commit();
 }
 

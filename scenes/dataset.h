@@ -36,7 +36,7 @@ struct DatasetOptions {
   double min_visible_fraction = 1.0;                       // of the board's corners, in every unit that must see it
   double step_m = 0.5, heading_deg = 0, yaw_step_deg = 0;  // depth_sequence
   bool progress = false;
-  // A shard of the set (mono_calibration, stereo_aruco): frames [index count / shards, (index + 1) count / shards)
+  // A shard of the set (any kind): frames [index count / shards, (index + 1) count / shards)
   // of the same poses (all drawn, only these rendered; each frame seeded by its index), with "shard" in the
   // manifest. MergeDatasetShards joins the shards into the set one process writes.
   int shard_index = 0, shard_count = 1;
@@ -54,7 +54,7 @@ void RenderSceneFolder(const SceneConfig& scene, const std::filesystem::path& ou
 void WriteCalibrationDataset(const SceneConfig& base, const DatasetOptions& options, const std::filesystem::path& out,
                              const std::map<std::string, std::string>& versions);
 
-// Joins the shard folders of one board dataset (each written with shard_count = their number) into `out`: the
+// Joins the shard folders of one dataset (each written with shard_count = their number) into `out`: the
 // images, ground truth and a manifest equal to one process's apart from the render timings. Throws hovs::Error
 // naming the shard that does not belong: another config, seed, kind or library version, a shard missing or given
 // twice, a file missing.

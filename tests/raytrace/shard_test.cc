@@ -50,7 +50,7 @@ TEST(DatasetShards, MergedShardsAreTheSetOneProcessWrites) {
     for (const auto& fr : a["frames"])
       for (const auto& v : fr["views"])
         for (const std::string& f : {v["image"].get<std::string>(), v["ground_truth"]["exr"].get<std::string>(),
-                                    v["ground_truth"]["sidecar"].get<std::string>()}) {
+                                     v["ground_truth"]["sidecar"].get<std::string>()}) {
           EXPECT_EQ(ReadFile(dir / "whole" / f), ReadFile(merged / f)) << f << " differs (" << n << " shards)";
           ++files;
         }
@@ -64,9 +64,7 @@ TEST(DatasetShards, MergedShardsAreTheSetOneProcessWrites) {
     try {
       scenes::MergeDatasetShards(shards, dir / "bad");
       ADD_FAILURE() << "merged";
-    } catch (const Error& e) {
-      EXPECT_NE(std::string(e.what()).find(needle), std::string::npos) << e.what();
-    }
+    } catch (const Error& e) { EXPECT_NE(std::string(e.what()).find(needle), std::string::npos) << e.what(); }
     EXPECT_FALSE(fs::exists(dir / "bad"));
   };
   refused({dir / "s2_0", dir / "other_seed"}, "other_seed/dataset.json: does not belong with");
@@ -82,6 +80,31 @@ TEST(DatasetShards, MergedShardsAreTheSetOneProcessWrites) {
   const auto merge = test::Hovs("-q merge " + (dir / "s2_0").string() + " --out " + (dir / "bad").string());
   EXPECT_EQ(merge.exit_code, 2) << merge.output;
   EXPECT_FALSE(fs::exists(dir / "bad"));
+}
+
+TEST(DatasetShards, ADepthSequenceShardsAndMergesToo) {
+  const fs::path dir = test::Scratch("dataset", "depth-shards");
+  auto cfg = scenes::LoadSceneConfig(std::string(HOVS_SOURCE_DIR) + "/scenes/street.yaml");
+  scenes::DownscaleCameras(&cfg, 10);
+  cfg.render.samples = 1;
+  scenes::DatasetOptions o = scenes::DatasetOptions::ForKind("depth_sequence");
+  o.count = 3;
+  scenes::WriteDepthSequence(cfg, o, dir / "whole", {{"hovs", "test"}});
+  std::vector<fs::path> shards;
+  for (int i = 0; i < 2; ++i) {
+    scenes::DatasetOptions s = o;
+    s.shard_index = i, s.shard_count = 2;
+    shards.push_back(dir / ("s" + std::to_string(i)));
+    scenes::WriteDepthSequence(cfg, s, shards.back(), {{"hovs", "test"}});
+  }
+  scenes::MergeDatasetShards(shards, dir / "merged");
+  const auto a = nlohmann::json::parse(ReadFile(dir / "whole" / "dataset.json"));
+  EXPECT_EQ(WithoutTimings(a), WithoutTimings(nlohmann::json::parse(ReadFile(dir / "merged" / "dataset.json"))));
+  for (const auto& fr : a["frames"])
+    for (const auto& v : fr["views"])
+      EXPECT_EQ(ReadFile(dir / "whole" / v["image"].get<std::string>()),
+                ReadFile(dir / "merged" / v["image"].get<std::string>()));
+  EXPECT_TRUE(fs::exists(dir / "merged" / "index.html"));
 }
 
 }  // namespace
