@@ -125,10 +125,11 @@ std::vector<KalibrCamera> ParseKalibrCamchain(const std::string& text, const std
       if (DistortionCount(k.distortion_model) > 0 || c["distortion_coeffs"])
         k.distortion = ReadList(r, c, key, "distortion_coeffs", DistortionCount(k.distortion_model));
       const auto res = ReadList(r, c, key, "resolution", 2);
+      // Checked as numbers before they become ints (a huge value does not fit one).
+      for (double v : res)
+        HOVS_REQUIRE(v >= 1 && v <= 65535 && v == std::floor(v), r.Where(c, key + ".resolution"),
+                     "expected [width, height] in 1..65535 pixels");
       k.width = static_cast<int>(res[0]), k.height = static_cast<int>(res[1]);
-      HOVS_REQUIRE(k.width == res[0] && k.height == res[1] && k.width > 0 && k.height > 0 && k.width <= 65535 &&
-                       k.height <= 65535,
-                   r.Where(c, key + ".resolution"), "expected [width, height] in 1..65535 pixels");
       if (c["rostopic"]) k.rostopic = r.String(c["rostopic"], key + ".rostopic");
       if (c["T_cn_cnm1"]) {
         const YAML::Node t = c["T_cn_cnm1"];
