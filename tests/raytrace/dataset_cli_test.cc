@@ -14,22 +14,15 @@
 #include "raytrace/render.h"
 #include "scenes/dataset.h"
 #include "tests/cli_helper.h"
+#include "tests/raytrace/small_scene.h"
 #include "io/image_io.h"
 
 namespace hovs {
 namespace {
 namespace fs = std::filesystem;
 
-scenes::SceneConfig SmallCalibrationScene() {
-  auto cfg = scenes::LoadSceneConfig(std::string(HOVS_SOURCE_DIR) + "/scenes/reference_calibration.yaml");
-  // The reference optics at a quarter of the resolution: same field of view, 16 x fewer pixels.
-  cfg.description.units[0].rig.camera = PinholeCamera<double>::FromPhysical(0.016, 4 * 4.54e-6, 688, 550);
-  cfg.render.samples = 1;
-  return cfg;
-}
-
 TEST(Dataset, BoardPosesAreSeededAndKeepEveryCornerVisible) {
-  const auto cfg = SmallCalibrationScene();
+  const auto cfg = test::SmallCalibrationScene();
   scenes::DatasetOptions o;
   o.count = 5;
   o.seed = 42;
@@ -130,7 +123,7 @@ TEST(Dataset, ADepthSequenceDrivenIntoAnObjectIsRefusedBeforeRendering) {
 }
 
 TEST(Dataset, CalibrationSetHasManifestImagesAndGroundTruth) {
-  const auto cfg = SmallCalibrationScene();
+  const auto cfg = test::SmallCalibrationScene();
   scenes::DatasetOptions o;
   o.count = 3;
   const fs::path out = test::Scratch("dataset", "calib");
@@ -200,7 +193,7 @@ TEST(Dataset, StereoArucoPairsSeeTheBoardFromBothUnits) {
 TEST(Dataset, ASetRenderedWithoutGroundTruthHasAManifestAndAReport) {
   // render.ground_truth: false (as real captures have none): the report page used to read every view's sidecar
   // and stopped with an uncaught JSON error (exit 3).
-  auto cfg = SmallCalibrationScene();
+  auto cfg = test::SmallCalibrationScene();
   cfg.render.ground_truth = false;
   scenes::DatasetOptions o;
   o.count = 2;
@@ -252,7 +245,7 @@ TEST(Detection, EveryViewOfAHalfResolutionSetIsDetectedWhole) {
 }
 
 TEST(CalibrateCli, CalibratesASyntheticSetAgainstGroundTruthAndRejectsBadInput) {
-  const auto cfg = SmallCalibrationScene();
+  const auto cfg = test::SmallCalibrationScene();
   scenes::DatasetOptions o;
   o.count = 9;
   const fs::path dir = test::Scratch("calibrate-cli", "work");

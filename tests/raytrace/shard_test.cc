@@ -8,17 +8,11 @@
 #include "core/io.h"
 #include "scenes/dataset.h"
 #include "tests/cli_helper.h"
+#include "tests/raytrace/small_scene.h"
 
 namespace hovs {
 namespace {
 namespace fs = std::filesystem;
-
-scenes::SceneConfig QuarterScene() {
-  auto cfg = scenes::LoadSceneConfig(std::string(HOVS_SOURCE_DIR) + "/scenes/reference_calibration.yaml");
-  cfg.description.units[0].rig.camera = PinholeCamera<double>::FromPhysical(0.016, 4 * 4.54e-6, 688, 550);
-  cfg.render.samples = 1;
-  return cfg;
-}
 
 nlohmann::json WithoutTimings(nlohmann::json m) {
   for (auto& fr : m["frames"]) fr.erase("render_seconds");
@@ -27,7 +21,7 @@ nlohmann::json WithoutTimings(nlohmann::json m) {
 
 TEST(DatasetShards, MergedShardsAreTheSetOneProcessWrites) {
   const fs::path dir = test::Scratch("dataset", "shards");
-  const auto cfg = QuarterScene();
+  const auto cfg = test::SmallCalibrationScene();
   scenes::DatasetOptions o;
   o.count = 5;
   o.seed = 7;
