@@ -354,15 +354,20 @@ SceneConfig ParseSceneConfigUnguarded(const std::string& text, const std::string
         BoardSpec spec;
         HOVS_REQUIRE((o["checker"] ? 1 : 0) + (o["aruco"] ? 1 : 0) + (o["charuco"] ? 1 : 0) == 1, r.Where(o, k),
                      "a board is one of checker, aruco and charuco");
+        // A required [nx, ny] of whole numbers.
+        const auto pair = [&](const YAML::Node& c, const std::string& path, const std::string& key, int* x, int* y) {
+          YAML::Node n;
+          r.Require(c, path, key, &n);
+          HOVS_REQUIRE(n.IsSequence() && n.size() == 2, r.Where(n, path + "." + key), "expected [nx, ny]");
+          *x = r.Integer(n[0], path + "." + key + "[0]"), *y = r.Integer(n[1], path + "." + key + "[1]");
+        };
         if (o["charuco"]) {
           const YAML::Node c = o["charuco"];
           const std::string kc = k + ".charuco";
           r.OnlyKeys(c, kc, {"squares", "square", "marker_length", "dictionary"});
           spec.kind = BoardSpec::Kind::kCharuco;
-          YAML::Node sq, s, ml;
-          r.Require(c, kc, "squares", &sq);
-          HOVS_REQUIRE(sq.IsSequence() && sq.size() == 2, r.Where(sq, kc + ".squares"), "expected [nx, ny]");
-          spec.squares_x = r.Integer(sq[0], kc + ".squares[0]"), spec.squares_y = r.Integer(sq[1], kc + ".squares[1]");
+          YAML::Node s, ml;
+          pair(c, kc, "squares", &spec.squares_x, &spec.squares_y);
           spec.square = r.Positive(r.Require(c, kc, "square", &s), kc + ".square");
           spec.marker_length = r.Positive(r.Require(c, kc, "marker_length", &ml), kc + ".marker_length");
           spec.dictionary = "DICT_4X4_250";
@@ -370,21 +375,16 @@ SceneConfig ParseSceneConfigUnguarded(const std::string& text, const std::string
         } else if (o["checker"]) {
           const YAML::Node c = o["checker"];
           r.OnlyKeys(c, k + ".checker", {"squares", "square"});
-          YAML::Node sq, s;
-          r.Require(c, k + ".checker", "squares", &sq);
-          HOVS_REQUIRE(sq.IsSequence() && sq.size() == 2, r.Where(sq, k + ".checker.squares"), "expected [nx, ny]");
-          spec.squares_x = r.Integer(sq[0], k + ".checker.squares[0]");
-          spec.squares_y = r.Integer(sq[1], k + ".checker.squares[1]");
+          YAML::Node s;
+          pair(c, k + ".checker", "squares", &spec.squares_x, &spec.squares_y);
           spec.square = r.Positive(r.Require(c, k + ".checker", "square", &s), k + ".checker.square");
         } else {
           const YAML::Node c = o["aruco"];
           const std::string ka = k + ".aruco";
           r.OnlyKeys(c, ka, {"markers", "marker_length", "separation", "dictionary"});
           spec.kind = BoardSpec::Kind::kAruco;
-          YAML::Node mk, ml, sp;
-          r.Require(c, ka, "markers", &mk);
-          HOVS_REQUIRE(mk.IsSequence() && mk.size() == 2, r.Where(mk, ka + ".markers"), "expected [nx, ny]");
-          spec.markers_x = r.Integer(mk[0], ka + ".markers[0]"), spec.markers_y = r.Integer(mk[1], ka + ".markers[1]");
+          YAML::Node ml, sp;
+          pair(c, ka, "markers", &spec.markers_x, &spec.markers_y);
           spec.marker_length = r.Positive(r.Require(c, ka, "marker_length", &ml), ka + ".marker_length");
           spec.marker_separation = r.Positive(r.Require(c, ka, "separation", &sp), ka + ".separation");
           if (c["dictionary"]) spec.dictionary = r.String(c["dictionary"], ka + ".dictionary");
