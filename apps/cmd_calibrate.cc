@@ -18,15 +18,6 @@
 namespace hovs::apps {
 namespace {
 
-// --size WxH of a corner table's images.
-void ParseSize(const std::string& text, int* w, int* h) {
-  char x = 0;
-  int end = -1;
-  HOVS_REQUIRE(std::sscanf(text.c_str(), "%d%c%d%n", w, &x, h, &end) == 3 && x == 'x' &&
-                   end == static_cast<int>(text.size()) && *w > 0 && *h > 0 && *w <= 65535 && *h <= 65535,
-               "--size", "expected WxH of 1..65535 pixels each, e.g. 1024x768 (got '", text, "')");
-}
-
 struct Options {
   std::string corners, size, dataset, unit, images, board, out = "results/calibration", loss = "none";
   bool truth_corners = false, physical = false, physical_intrinsics = false, physical_mirror = false, rim = true;
@@ -62,7 +53,7 @@ int RunCalibrate(const Options& o, const GlobalOptions& global) {
   std::optional<raytrace::CatadioptricUnit> unit;  // a synthetic dataset's exact unit
   if (!o.corners.empty()) {
     int w = 0, h = 0;
-    ParseSize(o.size, &w, &h);
+    ParseImageSize(o.size, "--size", &w, &h);
     in = calib::CornerTableInput(o.corners, w, h);
   } else if (!o.dataset.empty()) {
     auto d = scenes::LoadDatasetCalibrationInput(o.dataset, {o.unit, o.truth_corners, o.noise, o.seed, detect});

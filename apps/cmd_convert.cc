@@ -7,6 +7,7 @@
 #include "apps/commands.h"
 #include "apps/model_files.h"
 #include "calib/camera_formats.h"
+#include "calib/omnidir_io.h"
 #include "calib/model_refit.h"
 #include "core/error.h"
 #include "core/format.h"
@@ -18,7 +19,7 @@ namespace hovs::apps {
 
 Runner SetupConvert(CLI::App* sub, const GlobalOptions* global) {
   struct Options {
-    std::string model, kind = "auto", unit, to, name = "camera", out = "results/convert", right, stereo;
+    std::string model, kind = "auto", unit, to, name = "camera", out = "results/convert", right, stereo, size;
     int grid_step = 0;
   };
   auto o = std::make_shared<Options>();
@@ -27,9 +28,11 @@ Runner SetupConvert(CLI::App* sub, const GlobalOptions* global) {
                   "calibration.json")
       ->required();
   sub->add_option("--to", o->to,
-                  "kalibr (camchain, omni + radtan) | mei (CamOdoCal / VINS-Fusion) | ds | eucm | kb (refits, "
-                  "written as a Kalibr camchain)")
+                  "kalibr (camchain, omni + radtan) | mei (CamOdoCal / VINS-Fusion) | omnidir (OpenCV omnidir YAML) | "
+                  "ds | eucm | kb (refits, written as a Kalibr camchain)")
       ->required();
+  sub->add_option("--image-size", o->size,
+                  "WxH: the image size of a model file that has none (OpenCV's omni_calibration sample output)");
   sub->add_option("--kind", o->kind, "auto | physical | polynomial | unified: which model of a calibration.json")
       ->capture_default_str();
   sub->add_option("--unit", o->unit, "unit of a scene or manifest, camN of a camchain (default: the first)");
@@ -39,17 +42,21 @@ Runner SetupConvert(CLI::App* sub, const GlobalOptions* global) {
   AddBounded(sub, "--grid-step", &o->grid_step, "refit grid step, px (0: about 60 columns)", 0, 10000);
   sub->add_option("-o,--out", o->out, "output folder (replaced atomically)")->capture_default_str();
   return [o, global]() {
-    HOVS_REQUIRE(o->to == "kalibr" || o->to == "mei" || o->to == "ds" || o->to == "eucm" || o->to == "kb", "--to",
-                 "expected kalibr, mei, ds, eucm or kb (got '", o->to, "')");
+    const bool unified_file = o->to == "kalibr" || o->to == "mei" || o->to == "omnidir";
+    HOVS_REQUIRE(unified_file || o->to == "ds" || o->to == "eucm" || o->to == "kb", "--to",
+                 "expected kalibr, mei, omnidir, ds, eucm or kb (got '", o->to, "')");
+    ImageSize size;
+    if (!o->size.empty()) ParseImageSize(o->size, "--image-size", &size.width, &size.height);
     HOVS_REQUIRE(o->kind == "auto" || o->kind == "physical" || o->kind == "polynomial" || o->kind == "unified",
                  "--kind", "expected auto, physical, polynomial or unified (got '", o->kind, "')");
     HOVS_REQUIRE(std::filesystem::exists(o->model), o->model, "file not found");
-    const AnyModel source =
-        o->kind == "auto" ? LoadModelSpec(o->model, o->unit, 10.0) : LoadCalibratedModel(o->model, o->kind, 10.0);
+    const AnyModel source = o->kind == "auto" ? LoadModelSpec(o->model, o->unit, 10.0, size)
+                                              : LoadCalibratedModel(o->model, o->kind, 10.0, size);
     CheckOutputFolder(o->out, "convert", {o->model});
     HOVS_REQUIRE(o->right.empty() == o->stereo.empty(), o->right.empty() ? "--stereo" : "--right",
                  "a two-camera camchain needs both --right and --stereo");
-    HOVS_REQUIRE(o->right.empty() || o->to != "mei", "--right", "a MEI file holds one camera; use --to kalibr");
+    HOVS_REQUIRE(o->right.empty() || (o->to != "mei" && o->to != "omnidir"), "--right",
+                 "a MEI or omnidir file holds one camera; use --to kalibr");
     std::vector<AnyModel> sources = {source};
     Rigid3d right_from_left;
     if (!o->right.empty()) {
@@ -69,7 +76,7 @@ Runner SetupConvert(CLI::App* sub, const GlobalOptions* global) {
       const AnyModel& src = sources[k];
       const std::string file = k == 0 ? o->model : o->right;
       // The unified model itself when the source is one (exact); otherwise a refit.
-      const bool exact = (o->to == "kalibr" || o->to == "mei") && src.kind() == AnyModel::Kind::kUnified;
+      const bool exact = unified_file && src.kind() == AnyModel::Kind::kUnified;
       nlohmann::json cj = {{"file", file}, {"kind", src.KindName()}, {"exact", exact}};
       summary += "hovs convert: " + std::string(src.KindName()) + " " + file;
       if (exact) {
@@ -79,7 +86,7 @@ Runner SetupConvert(CLI::App* sub, const GlobalOptions* global) {
         summary += " (the unified model as it is)\n";
       } else {
         calib::RefitOptions ro;
-        ro.kind = o->to == "kalibr" || o->to == "mei" ? "omni" : o->to;
+        ro.kind = unified_file ? "omni" : o->to;
         ro.grid_step_px = o->grid_step;
         const calib::Refit refit = calib::RefitModel(src, ro);
         cams.push_back(calib::KalibrFromRefit(refit, src.width(), src.height()));
@@ -96,8 +103,12 @@ Runner SetupConvert(CLI::App* sub, const GlobalOptions* global) {
       j["cameras"].push_back(cj);
     }
     if (cams.size() == 2) cams[1].T_cn_cnm1 = calib::ToolsFromMirrorPose(right_from_left, gamma[0], gamma[1]);
-    const std::string file = o->to == "mei" ? "mei.yaml" : "camchain.yaml";
-    const std::string text = o->to == "mei" ? calib::FormatMeiYaml(*mei, o->name) : calib::FormatKalibrCamchain(cams);
+    const std::string file = o->to == "mei" ? "mei.yaml" : o->to == "omnidir" ? "unified.yaml" : "camchain.yaml";
+    calib::OmnidirFile omnidir;
+    if (mei) omnidir.model = *mei;
+    const std::string text = o->to == "mei"       ? calib::FormatMeiYaml(*mei, o->name)
+                             : o->to == "omnidir" ? calib::FormatOmnidirYaml(omnidir)
+                                                  : calib::FormatKalibrCamchain(cams);
     j["file"] = file;
     summary += "  -> " + file + "\n";
     StagedDirectory stage(o->out, "convert", {o->model});

@@ -1,6 +1,7 @@
 #include "apps/commands.h"
 
 #include <cerrno>
+#include <cstdio>
 #include <cmath>
 #include <cstdlib>
 #include <filesystem>
@@ -118,6 +119,14 @@ const std::vector<Command>& Commands() {
       {"version", "Print the versions of hovs and its libraries", SetupVersion},
   };
   return table;
+}
+
+void ParseImageSize(const std::string& text, const std::string& option, int* w, int* h) {
+  char x = 0;
+  int end = -1;
+  HOVS_REQUIRE(std::sscanf(text.c_str(), "%d%c%d%n", w, &x, h, &end) == 3 && x == 'x' &&
+                   end == static_cast<int>(text.size()) && *w > 0 && *h > 0 && *w <= 65535 && *h <= 65535,
+               option, "expected WxH of 1..65535 pixels each, e.g. 1024x768 (got '", text, "')");
 }
 
 int RunCommandLine(int argc, const char* const* argv, bool rethrow) {

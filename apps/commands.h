@@ -57,6 +57,9 @@ auto OnInput(const std::string& input, F&& stage) -> decltype(stage()) {
 // Aravis (hw).
 std::map<std::string, std::string> Versions();
 
+// An image size "WxH" given to `option` (1..65535 pixels a side), or an error naming the option.
+void ParseImageSize(const std::string& text, const std::string& option, int* width, int* height);
+
 // Parses and runs one command line (argv[0] is the program). rethrow = false: errors are printed and turned into
 // exit codes (2 bad input, 3 internal); rethrow = true: hovs::Error propagates (used by hovs validate, which
 // names the failing stage).

@@ -45,14 +45,16 @@ PolynomialModel<double> LoadPolynomialModelFile(const std::filesystem::path& pat
   return m;
 }
 
-AnyModel LoadCalibratedModel(const std::filesystem::path& path, const std::string& prefer, double scene_distance) {
+AnyModel LoadCalibratedModel(const std::filesystem::path& path, const std::string& prefer, double scene_distance,
+                             ImageSize size) {
   HOVS_REQUIRE(prefer == "auto" || prefer == "physical" || prefer == "polynomial" || prefer == "unified",
                "--model-kind", "expected auto, physical, polynomial or unified (got '", prefer, "')");
-  if (path.extension() == ".yaml" || path.extension() == ".yml") {
+  if (path.extension() == ".yaml" || path.extension() == ".yml" || path.extension() == ".xml") {
     HOVS_REQUIRE(prefer == "auto" || prefer == "unified", path.string(),
-                 "an OpenCV omnidir YAML file holds the unified model only (--model-kind ", prefer, ")");
+                 "an OpenCV omnidir file holds the unified model only (--model-kind ", prefer, ")");
     const auto f = calib::LoadOmnidirYaml(path);
-    return AnyModel::Unified(f.model, f.annulus_min, f.annulus_max, path.string());
+    return AnyModel::Unified(calib::WithImageSize(f, size.width, size.height, path.string()), f.annulus_min,
+                             f.annulus_max, path.string());
   }
   if (prefer == "unified") {
     // calibration.json names its OpenCV YAML file, written beside it.
@@ -60,7 +62,7 @@ AnyModel LoadCalibratedModel(const std::filesystem::path& path, const std::strin
     HOVS_REQUIRE(j.contains("unified") && j["unified"].contains("opencv_yaml"), path.string(),
                  "has no unified model (a calibration.json of hovs calibrate, or its unified.yaml)");
     return LoadCalibratedModel(path.parent_path() / j["unified"]["opencv_yaml"].get<std::string>(), "unified",
-                               scene_distance);
+                               scene_distance, size);
   }
   if (path.extension() != ".txt" && prefer != "polynomial") {
     const auto j = ReadJsonFile(path);
@@ -80,7 +82,7 @@ namespace fs = std::filesystem;
 }  // namespace
 
 // The model named on the command line; `unit` selects a unit of a scene or manifest.
-AnyModel LoadModelSpec(const std::string& spec, const std::string& unit, double scene_distance) {
+AnyModel LoadModelSpec(const std::string& spec, const std::string& unit, double scene_distance, ImageSize size) {
   HOVS_REQUIRE(std::isfinite(scene_distance) && scene_distance > 0 && scene_distance <= 1e6, "--scene-distance",
                "must be in (0, 1e6] m (got ", scene_distance, ")");
   const fs::path path(spec);
@@ -93,7 +95,7 @@ AnyModel LoadModelSpec(const std::string& spec, const std::string& unit, double 
   };
   if (EndsWith(spec, ".yaml") || EndsWith(spec, ".yml")) {
     const std::string text = ReadFile(path);
-    if (calib::LooksLikeOmnidirYaml(text)) return LoadCalibratedModel(path, "unified", scene_distance);
+    if (calib::LooksLikeOmnidirYaml(text)) return LoadCalibratedModel(path, "unified", scene_distance, size);
     if (calib::LooksLikeMeiYaml(text)) return AnyModel::Unified(calib::ParseMeiYaml(text, spec), 0, 0, spec);
     if (calib::LooksLikeKalibrCamchain(text)) {
       const auto cams = calib::ParseKalibrCamchain(text, spec);
@@ -106,6 +108,7 @@ AnyModel LoadModelSpec(const std::string& spec, const std::string& unit, double 
     const size_t i = pick(units.size(), [&](size_t k) { return units[k].name; });
     return AnyModel::Exact(units[i].rig, scene_distance, spec + " (unit " + units[i].name + ")");
   }
+  if (EndsWith(spec, ".xml")) return LoadCalibratedModel(path, "unified", scene_distance, size);
   if (EndsWith(spec, ".txt")) return AnyModel::Polynomial(LoadPolynomialModelFile(path), spec);
   const auto j = ReadJsonFile(path);
   if (j.is_object() && JsonText(j, "format") == "hovs-dataset") {

@@ -16,15 +16,22 @@ namespace hovs::apps {
 // OCamCalib's calib_results.txt (by extension .txt) or the polynomial model of a hovs calibration.json.
 PolynomialModel<double> LoadPolynomialModelFile(const std::filesystem::path& path);
 
+// The image size a model file may lack (OpenCV's omni_calibration sample writes none); 0 x 0: none given.
+struct ImageSize {
+  int width = 0, height = 0;
+};
+
 // A calibrated model file as a handle: calib_results.txt -> polynomial; a hovs calibration.json -> its physical
 // model (mirror + camera pose, through the exact projection) when it has one and prefer is "auto" or "physical",
 // else its polynomial model. prefer: auto | physical | polynomial.
+// An OpenCV omnidir YAML or XML file -> unified (its size, or `size` when it has none).
 AnyModel LoadCalibratedModel(const std::filesystem::path& path, const std::string& prefer = "auto",
-                             double scene_distance = 10.0);
+                             double scene_distance = 10.0, ImageSize size = {});
 
 // The model named by --model: a scene YAML or a dataset manifest (the exact rig of `unit`, default the first),
-// calib_results.txt, or a hovs calibration.json (LoadCalibratedModel). Throws naming the file.
-AnyModel LoadModelSpec(const std::string& spec, const std::string& unit, double scene_distance);
+// calib_results.txt, an omnidir YAML or XML file, a Kalibr camchain, a MEI YAML, or a hovs calibration.json
+// (LoadCalibratedModel). Throws naming the file.
+AnyModel LoadModelSpec(const std::string& spec, const std::string& unit, double scene_distance, ImageSize size = {});
 
 // The frames an --input names: an image, a folder of images (each frame named after its file; two of one name
 // are refused), or a dataset manifest (every view of `unit`, default the first; frames named frame<id>).

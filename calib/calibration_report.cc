@@ -180,6 +180,7 @@ void WriteMonoCalibrationReport(const std::filesystem::path& folder, const Calib
   WriteFileAtomic(folder / "calib_results.txt", FormatOcamCalibResults(r.polynomial.model));
   OmnidirFile of;
   of.model = r.unified.model, of.rms_px = r.unified.rms, of.stddev = r.unified.stddev;
+  of.cam_from_board = r.unified.cam_from_board;
   CornerAnnulus(r, &of.annulus_min, &of.annulus_max);
   WriteFileAtomic(folder / "unified.yaml", FormatOmnidirYaml(of));
   const std::string summary = MonoCalibrationSummary(in, r);

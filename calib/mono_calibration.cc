@@ -43,6 +43,23 @@ nlohmann::json BoardFlexJson(bool estimated, const std::array<double, 2>& warp,
   return j;
 }
 
+// A board pose as {"q": [w, x, y, z], "t": [x, y, z]} (the form of every hovs pose), model frame from board frame.
+nlohmann::json PoseJson(const Rigid3d& p) {
+  const auto& q = p.rotation;
+  return {{"q", {q.w(), q.x(), q.y(), q.z()}}, {"t", {p.translation.x(), p.translation.y(), p.translation.z()}}};
+}
+
+// Every image's board pose, so that users reproject without solving them again.
+nlohmann::json BoardPosesJson(const std::vector<Rigid3d>& cam_from_board, const std::vector<BoardObservation>& obs) {
+  nlohmann::json poses = nlohmann::json::array();
+  for (size_t i = 0; i < cam_from_board.size() && i < obs.size(); ++i) {
+    nlohmann::json pj = PoseJson(cam_from_board[i]);
+    pj["image"] = obs[i].image;
+    poses.push_back(pj);
+  }
+  return poses;
+}
+
 nlohmann::json PolynomialJson(const PolynomialCalibration& r, const std::vector<BoardObservation>& obs) {
   const auto& m = r.model;
   nlohmann::json j = {{"model", "polynomial"},
@@ -76,6 +93,8 @@ nlohmann::json PolynomialJson(const PolynomialCalibration& r, const std::vector<
                    {"mean_px", r.per_image_mean[i]},
                    {"above_5px", r.per_image_mean[i] > 5.0}});
   j["per_image"] = per;
+  j["board_poses"] = BoardPosesJson(r.cam_from_board, obs);
+  j["board_poses_frame"] = "mirror_from_board: hovs' mirror frame from the board's (x, y on the board, metres)";
   nlohmann::json outl = nlohmann::json::array();
   for (const auto& o : r.outliers)
     outl.push_back({{"image", o.image},
@@ -292,7 +311,8 @@ nlohmann::json MonoCalibrationJson(const CalibrationInput& in, const MonoCalibra
       {"converged", u.converged},
       {"solver", u.solver_report},
       {"stddev", u.stddev},
-      {"opencv_yaml", "unified.yaml"}};
+      {"opencv_yaml", "unified.yaml"},
+      {"board_poses", BoardPosesJson(u.cam_from_board, in.observations)}};
   nlohmann::json orders = nlohmann::json::array();
   for (const auto& o : r.orders)
     orders.push_back({{"degree", o.degree},

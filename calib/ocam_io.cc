@@ -11,6 +11,10 @@
 
 namespace hovs::calib {
 
+namespace {
+const std::string kRingText = "fitted over the calibrated ring, image radii ";
+}  // namespace
+
 std::string FormatOcamCalibResults(const PolynomialModel<double>& m) {
   m.Check("OCamCalib export");
   HOVS_REQUIRE(!m.inv_poly.empty(), "OCamCalib export", "the model has no inverse polynomial");
@@ -21,9 +25,13 @@ std::string FormatOcamCalibResults(const PolynomialModel<double>& m) {
       "cam2world\n\n";
   out += std::to_string(m.poly.size()) + " ";
   for (double a : m.poly) std::snprintf(buf, sizeof buf, "%e ", a), out += buf;
+  // OCamCalib's C reader skips each comment as one whole line, so where the inverse is valid is said on the
+  // comment's own line: extra lines would shift what it reads.
+  std::snprintf(buf, sizeof buf, "%.2f to %.2f", m.rho_min, m.rho_max);
   out +=
       "\n\n#polynomial coefficients for the inverse mapping function (ocam_model.invpol in MATLAB). These are used by "
-      "world2cam\n\n";
+      "world2cam (" +
+      kRingText + buf + " px from the centre; outside it world2cam extrapolates)\n\n";
   out += std::to_string(m.inv_poly.size()) + " ";
   for (double a : m.inv_poly) std::snprintf(buf, sizeof buf, "%f ", a), out += buf;
   out += "\n\n#center: \"row\" and \"column\", starting from 0 (C convention)\n\n";
@@ -45,6 +53,8 @@ PolynomialModel<double> ParseOcamCalibResults(const std::string& text, const std
   const auto data = [&](const char* what) {
     while (std::getline(in, line)) {
       ++lineno;
+      // Windows line endings: a line holding only "\r" is blank, as OCamCalib's own C reader takes it.
+      while (!line.empty() && (line.back() == '\r' || line.back() == ' ' || line.back() == '\t')) line.pop_back();
       if (line.empty() || line[0] == '#') continue;
       std::istringstream ls(line);
       std::vector<double> v;
@@ -78,6 +88,12 @@ PolynomialModel<double> ParseOcamCalibResults(const std::string& text, const std
                "the image size needs height and width, whole numbers in 1..65535");
   m.height = static_cast<int>(size[0]), m.width = static_cast<int>(size[1]);
   m.rho_min = 0, m.rho_max = 0.5 * std::hypot(m.width, m.height);
+  // hovs' own files say on the inverse's comment line where the model was calibrated: that ring is kept.
+  const size_t ring = text.find(kRingText);
+  double lo = 0, hi = 0;
+  if (ring != std::string::npos && std::sscanf(text.c_str() + ring + kRingText.size(), "%lf to %lf", &lo, &hi) == 2 &&
+      std::isfinite(lo) && std::isfinite(hi) && lo >= 0 && hi > lo && hi <= 2 * std::hypot(m.width, m.height))
+    m.rho_min = lo, m.rho_max = hi;
   m.Check(source);
   return m;
 }

@@ -12,8 +12,10 @@
 namespace hovs::calib {
 
 std::string FormatOcamCalibResults(const PolynomialModel<double>& model);
-// Throws hovs::Error naming the file and line for anything that is not this layout. The valid annulus is not
-// part of the format: rho_max becomes half the image diagonal, rho_min 0.
+// Throws hovs::Error naming the file and line for anything that is not this layout. Windows line endings are
+// read. The valid annulus is not part of the format: hovs writes it on the inverse polynomial's comment line
+// (OCamCalib's readers skip comment lines whole) and reads it back from there; other files get rho_min 0 and
+// rho_max half the image diagonal.
 PolynomialModel<double> ParseOcamCalibResults(const std::string& text, const std::string& source);
 PolynomialModel<double> LoadOcamCalibResults(const std::filesystem::path& path);
 

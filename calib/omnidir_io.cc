@@ -12,6 +12,43 @@
 
 namespace hovs::calib {
 
+namespace {
+
+// A pose between hovs' mirror frame and omnidir's camera frame, (x, y, -z): F R F, F t with F = diag(1, 1, -1)
+// (its own inverse).
+Rigid3d FlipZ(const Rigid3d& p) {
+  const Eigen::Matrix3d F = Eigen::Vector3d(1, 1, -1).asDiagonal();
+  const Eigen::Matrix3d R = F * p.rotation.toRotationMatrix() * F;
+  return Rigid3d(Eigen::Quaterniond(R), F * p.translation);
+}
+
+// One board per row: rvec, tvec (omnidir's frame) -> cam_from_board (mirror frame).
+std::vector<Rigid3d> PosesFromRows(const std::vector<double>& v, const std::string& where) {
+  std::vector<Rigid3d> poses;
+  for (size_t i = 0; i + 6 <= v.size(); i += 6) {
+    const Vec3d r(v[i], v[i + 1], v[i + 2]), t(v[i + 3], v[i + 4], v[i + 5]);
+    HOVS_REQUIRE(r.allFinite() && t.allFinite() && r.norm() < 100 && t.norm() < 1e6, where, "row ", i / 6,
+                 " is not a pose (rvec, tvec)");
+    const double angle = r.norm();
+    const Eigen::Quaterniond q(angle > 0 ? Eigen::AngleAxisd(angle, r / angle) : Eigen::AngleAxisd::Identity());
+    poses.push_back(FlipZ(Rigid3d(q, t)));
+  }
+  return poses;
+}
+
+// What every form shares after its keys are read: the size's range, the model's check.
+void Finish(OmnidirFile* f, const std::string& where) {
+  auto& m = f->model;
+  HOVS_REQUIRE((m.width == 0) == (m.height == 0), where, "image_width and image_height come together");
+  HOVS_REQUIRE(m.width >= 0 && m.height >= 0 && m.width <= 65535 && m.height <= 65535, where,
+               "the image size must be 1..65535 pixels a side");
+  HOVS_REQUIRE(f->annulus_max == 0 || (f->annulus_min >= 0 && f->annulus_max > f->annulus_min), where,
+               "annulus_px must be 0 <= min < max");
+  m.Check(where);
+}
+
+}  // namespace
+
 std::string FormatOmnidirYaml(const OmnidirFile& f) {
   const auto& m = f.model;
   m.Check("omnidir export");
@@ -24,7 +61,19 @@ std::string FormatOmnidirYaml(const OmnidirFile& f) {
   fs << "camera_matrix" << cv::Mat(K);
   const cv::Matx14d D(m.distortion.k1, m.distortion.k2, m.distortion.p1, m.distortion.p2);
   fs << "distortion_coefficients" << cv::Mat(D);
-  fs << "xi" << cv::Mat(1, 1, CV_64F, cv::Scalar(m.xi));
+  fs << "xi" << m.xi;
+  if (!f.cam_from_board.empty()) {
+    fs.writeComment("extrinsic_parameters: one board per row, rvec then tvec (m), omnidir's camera frame");
+    fs << "nFrames" << static_cast<int>(f.cam_from_board.size());
+    cv::Mat rt(static_cast<int>(f.cam_from_board.size()), 6, CV_64F);
+    for (int i = 0; i < rt.rows; ++i) {
+      const Rigid3d p = FlipZ(f.cam_from_board[i]);
+      const Eigen::AngleAxisd aa(p.rotation);
+      const Vec3d r = aa.angle() * aa.axis();
+      for (int k = 0; k < 3; ++k) rt.at<double>(i, k) = r(k), rt.at<double>(i, 3 + k) = p.translation(k);
+    }
+    fs << "extrinsic_parameters" << rt;
+  }
   if (f.rms_px >= 0) fs << "rms_px" << f.rms_px;
   if (f.annulus_max > 0) fs << "annulus_px" << cv::Mat(cv::Matx12d(f.annulus_min, f.annulus_max));
   for (const auto& [name, value] : f.stddev) fs << "stddev_" + name << value;
@@ -63,6 +112,15 @@ std::vector<double> ReadMatrix(const YamlReader& r, const YAML::Node& root, cons
   return v;
 }
 
+// A matrix of any number of rows of `cols` numbers (at most 100,000 rows), row-major.
+std::vector<double> ReadRows(const YamlReader& r, const YAML::Node& root, const std::string& key, int cols) {
+  const YAML::Node n = root[key];
+  HOVS_REQUIRE(n.IsMap() && n["rows"] && n["cols"], r.Where(root, key), "expected a matrix (rows, cols, dt, data)");
+  const int rows = r.Integer(n["rows"], key + ".rows");
+  HOVS_REQUIRE(rows >= 0 && rows <= 100000, r.Where(n, key), "expected 0..100000 rows (got ", rows, ")");
+  return ReadMatrix(r, root, key, rows, cols);
+}
+
 OmnidirFile ParseOmnidirYamlUnguarded(const std::string& text, const std::string& source) {
   HOVS_REQUIRE(LooksLikeOmnidirYaml(text), source, "not an OpenCV FileStorage YAML file with a camera_matrix");
   const YamlReader r(source);
@@ -70,18 +128,18 @@ OmnidirFile ParseOmnidirYamlUnguarded(const std::string& text, const std::string
   // Line numbers in errors count from the file's first line: the directive line is kept as a blank one.
   const YAML::Node root = r.Load(first_line == std::string::npos ? std::string() : "\n" + text.substr(first_line + 1));
   HOVS_REQUIRE(root.IsMap(), source, "expected a mapping of the model's parameters");
-  std::set<std::string> known = {"image_width", "image_height", "camera_matrix", "distortion_coefficients",
-                                 "xi",          "rms_px",       "annulus_px"};
+  // hovs' keys and the omni_calibration sample's.
+  std::set<std::string> known = {
+      "image_width", "image_height", "camera_matrix",        "distortion_coefficients", "xi",    "rms_px",
+      "annulus_px",  "nFrames",      "extrinsic_parameters", "calibration_time",        "flags", "used_imgs",
+      "rms",         "image_points"};
   for (const char* name : {"xi", "fx", "fy", "cx", "cy", "k1", "k2", "p1", "p2"})
     known.insert(std::string("stddev_") + name);
   r.OnlyKeys(root, "", known);
   OmnidirFile f;
   auto& m = f.model;
-  YAML::Node w, h;
-  m.width = r.Integer(r.Require(root, "", "image_width", &w), "image_width");
-  m.height = r.Integer(r.Require(root, "", "image_height", &h), "image_height");
-  HOVS_REQUIRE(m.width > 0 && m.height > 0 && m.width <= 65535 && m.height <= 65535, r.Where(root, "image_width"),
-               "the image size must be 1..65535 pixels a side");
+  if (root["image_width"]) m.width = r.Integer(root["image_width"], "image_width");
+  if (root["image_height"]) m.height = r.Integer(root["image_height"], "image_height");
   const auto K = ReadMatrix(r, root, "camera_matrix", 3, 3);
   HOVS_REQUIRE(K[3] == 0 && K[6] == 0 && K[7] == 0 && K[8] == 1, r.Where(root["camera_matrix"], "camera_matrix"),
                "must be [fx s cx; 0 fy cy; 0 0 1]");
@@ -89,17 +147,19 @@ OmnidirFile ParseOmnidirYamlUnguarded(const std::string& text, const std::string
   const auto D = ReadMatrix(r, root, "distortion_coefficients", 1, 4);
   m.distortion = {D[0], D[1], D[2], D[3]};
   m.xi = ReadMatrix(r, root, "xi", 1, 1)[0];
+  if (root["rms"]) f.rms_px = r.Number(root["rms"], "rms");
   if (root["rms_px"]) f.rms_px = r.Number(root["rms_px"], "rms_px");
   if (root["annulus_px"]) {
     const auto a = ReadMatrix(r, root, "annulus_px", 1, 2);
     f.annulus_min = a[0], f.annulus_max = a[1];
-    HOVS_REQUIRE(f.annulus_min >= 0 && f.annulus_max > f.annulus_min, r.Where(root["annulus_px"], "annulus_px"),
-                 "must be 0 <= min < max");
   }
+  if (root["extrinsic_parameters"])
+    f.cam_from_board = PosesFromRows(ReadRows(r, root, "extrinsic_parameters", 6),
+                                     r.Where(root["extrinsic_parameters"], "extrinsic_parameters"));
   for (const char* name : {"xi", "fx", "fy", "cx", "cy", "k1", "k2", "p1", "p2"})
     if (root[std::string("stddev_") + name])
       f.stddev[name] = r.Number(root[std::string("stddev_") + name], std::string("stddev_") + name);
-  m.Check(source);
+  Finish(&f, source);
   return f;
 }
 
@@ -109,9 +169,88 @@ OmnidirFile ParseOmnidirYaml(const std::string& text, const std::string& source)
   return WithYamlErrors(source, [&] { return ParseOmnidirYamlUnguarded(text, source); });
 }
 
+bool LooksLikeOmnidirXml(const std::string& text) {
+  const size_t start = text.find_first_not_of(" \t\r\n");
+  return start != std::string::npos && text.compare(start, 5, "<?xml") == 0 &&
+         text.find("<opencv_storage>") != std::string::npos && text.find("<camera_matrix") != std::string::npos;
+}
+
+namespace {
+
+// A node of the XML file as numbers: a scalar, or an opencv-matrix of rows x cols (rows -1: any number of rows).
+std::vector<double> XmlMatrix(const cv::FileStorage& fs, const std::string& key, int rows, int cols,
+                              const std::string& source) {
+  const cv::FileNode n = fs[key];
+  HOVS_REQUIRE(!n.empty(), source + " (" + key + ")", "missing");
+  if (n.isReal() || n.isInt()) {
+    HOVS_REQUIRE(rows * cols == 1, source + " (" + key + ")", "expected a ", rows, " x ", cols, " matrix");
+    return {static_cast<double>(n.real())};
+  }
+  cv::Mat m;
+  n >> m;
+  HOVS_REQUIRE(!m.empty() && m.channels() == 1 && m.cols == cols && (rows < 0 || m.rows == rows),
+               source + " (" + key + ")", "expected a ", rows < 0 ? std::string("N") : std::to_string(rows), " x ",
+               cols, " matrix");
+  m.convertTo(m, CV_64F);
+  std::vector<double> v(m.begin<double>(), m.end<double>());
+  for (double x : v) HOVS_REQUIRE(std::isfinite(x), source + " (" + key + ")", "holds a non-finite number");
+  return v;
+}
+
+}  // namespace
+
+OmnidirFile ParseOmnidirXml(const std::string& text, const std::string& source) {
+  HOVS_REQUIRE(text.size() <= (size_t(64) << 20), source, "larger than 64 MB: not a camera file");
+  HOVS_REQUIRE(LooksLikeOmnidirXml(text), source, "not an OpenCV FileStorage XML file with a camera_matrix");
+  OmnidirFile f;
+  auto& m = f.model;
+  try {
+    cv::FileStorage fs(text, cv::FileStorage::READ | cv::FileStorage::MEMORY | cv::FileStorage::FORMAT_XML);
+    HOVS_REQUIRE(fs.isOpened(), source, "OpenCV cannot read it as a FileStorage XML file");
+    const auto integer = [&](const char* key) {
+      const cv::FileNode n = fs[key];
+      HOVS_REQUIRE(n.isInt(), source + " (" + key + ")", "expected an integer");
+      return static_cast<int>(n);
+    };
+    if (!fs["image_width"].empty()) m.width = integer("image_width");
+    if (!fs["image_height"].empty()) m.height = integer("image_height");
+    const auto K = XmlMatrix(fs, "camera_matrix", 3, 3, source);
+    HOVS_REQUIRE(K[3] == 0 && K[6] == 0 && K[7] == 0 && K[8] == 1, source + " (camera_matrix)",
+                 "must be [fx s cx; 0 fy cy; 0 0 1]");
+    m.fx = K[0], m.skew = K[1], m.cx = K[2], m.fy = K[4], m.cy = K[5];
+    const auto D = XmlMatrix(fs, "distortion_coefficients", 1, 4, source);
+    m.distortion = {D[0], D[1], D[2], D[3]};
+    m.xi = XmlMatrix(fs, "xi", 1, 1, source)[0];
+    if (!fs["rms"].empty()) f.rms_px = XmlMatrix(fs, "rms", 1, 1, source)[0];
+    if (!fs["extrinsic_parameters"].empty())
+      f.cam_from_board =
+          PosesFromRows(XmlMatrix(fs, "extrinsic_parameters", -1, 6, source), source + " (extrinsic_parameters)");
+  } catch (const cv::Exception& e) { throw Error(source, "malformed FileStorage XML: " + e.msg); }
+  Finish(&f, source);
+  return f;
+}
+
 OmnidirFile LoadOmnidirYaml(const std::filesystem::path& path) {
   HOVS_REQUIRE(std::filesystem::exists(path), path.string(), "file not found");
-  return ParseOmnidirYaml(ReadFile(path), path.string());
+  const std::string text = ReadFile(path);
+  if (LooksLikeOmnidirXml(text)) return ParseOmnidirXml(text, path.string());
+  return ParseOmnidirYaml(text, path.string());
+}
+
+UnifiedModel<double> WithImageSize(const OmnidirFile& file, int width, int height, const std::string& source) {
+  UnifiedModel<double> m = file.model;
+  const bool in_file = m.width > 0, given = width > 0 && height > 0;
+  HOVS_REQUIRE(in_file || given, source,
+               "has no image_width / image_height (OpenCV's omni_calibration sample writes none): give the image "
+               "size (hovs convert --image-size WxH, or image_size= in Python)");
+  if (in_file && given)
+    HOVS_REQUIRE(m.width == width && m.height == height, source, "is for ", m.width, " x ", m.height, " images, not ",
+                 width, " x ", height);
+  if (!in_file) {
+    m.width = width, m.height = height;
+    m.Check(source);
+  }
+  return m;
 }
 
 }  // namespace hovs::calib

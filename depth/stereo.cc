@@ -7,6 +7,7 @@
 #include <cmath>
 #include <opencv2/calib3d.hpp>
 #include <opencv2/imgproc.hpp>
+#include <iomanip>
 #include <sstream>
 
 #include "core/error.h"
@@ -327,6 +328,7 @@ DenseDepth ComputeDenseDepth(const Rectification& r, const unwrap::Image8& left_
 
 void WritePly(const std::filesystem::path& path, const std::vector<ColouredPoint>& points) {
   std::ostringstream os;
+  os << std::setprecision(9);  // every float exactly (the stream's default 6 digits rounded 12.34567 m to 0.1 mm)
   os << "ply\nformat ascii 1.0\ncomment hovs point cloud, left unit mirror frame, metres\nelement vertex "
      << points.size() << "\nproperty float x\nproperty float y\nproperty float z\nproperty uchar red\n"
      << "property uchar green\nproperty uchar blue\nend_header\n";

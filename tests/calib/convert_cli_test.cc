@@ -2,6 +2,8 @@
 // model itself (hovs compare reads it back: 0 px), the refits report their cost, bad input is refused.
 #include <gtest/gtest.h>
 
+#include <cstdio>
+
 #include <nlohmann/json.hpp>
 
 #include "core/io.h"
@@ -50,16 +52,37 @@ TEST(ConvertCli, WritesOtherToolsFilesAndRefusesBadInput) {
   const std::string chain = ReadFile(dir / "pair" / "camchain.yaml");
   EXPECT_NE(chain.find("cam1:\n  T_cn_cnm1:"), std::string::npos) << chain;
   EXPECT_NE(chain.find("- [0, 0, 1, -0.014"), std::string::npos) << "z flips with the frame: " << chain;
+  // OpenCV's file, and the omni_calibration sample's (no image size: --image-size gives it).
+  const auto omnidir = test::Hovs("-q convert " + json + " --kind unified --to omnidir --out " + (dir / "o").string());
+  ASSERT_EQ(omnidir.exit_code, 0) << omnidir.output;
+  std::string text = ReadFile(dir / "o" / "unified.yaml");
+  const size_t w0 = text.find("image_width: "), h1 = text.find('\n', text.find("image_height: "));
+  ASSERT_NE(w0, std::string::npos);
+  const std::string size_lines = text.substr(w0, h1 + 1 - w0);
+  int width = 0, height = 0;
+  ASSERT_EQ(std::sscanf(size_lines.c_str(), "image_width: %d\nimage_height: %d", &width, &height), 2);
+  text.erase(w0, h1 + 1 - w0);
+  WriteFileAtomic(dir / "nosize.yaml", text);
+  const auto sized =
+      test::Hovs("-q convert " + (dir / "nosize.yaml").string() + " --to omnidir --image-size " +
+                 std::to_string(width) + "x" + std::to_string(height) + " --out " + (dir / "o2").string());
+  ASSERT_EQ(sized.exit_code, 0) << sized.output;
+  const auto back = test::Hovs("-q compare " + (dir / "o2" / "unified.yaml").string() + " " + json +
+                               " --kind-b unified --no-rotation --out " + (dir / "cmp-o").string());
+  ASSERT_EQ(back.exit_code, 0) << back.output;
+  EXPECT_LT(nlohmann::json::parse(ReadFile(dir / "cmp-o" / "compare.json"))["diff"]["px"]["max"].get<double>(), 1e-9);
   const auto refused = [&](const std::string& args, const std::string& needle) {
     const auto r = test::Hovs(args + " --out " + (dir / "bad").string());
     EXPECT_EQ(r.exit_code, 2) << r.output;
     EXPECT_NE(r.output.find(needle), std::string::npos) << r.output;
     EXPECT_FALSE(fs::exists(dir / "bad"));
   };
-  refused("convert " + json + " --to basalt", "expected kalibr, mei, ds, eucm or kb");
+  refused("convert " + json + " --to basalt", "expected kalibr, mei, omnidir, ds, eucm or kb");
   refused("convert " + json + " --right " + json + " --to kalibr", "needs both --right and --stereo");
   refused("convert " + json + " --right " + json + " --stereo " + json + " --to kalibr", "no right_from_left");
   refused("convert " + (dir / "missing.json").string() + " --to ds", "file not found");
+  refused("convert " + (dir / "nosize.yaml").string() + " --to kalibr", "has no image_width / image_height");
+  refused("convert " + json + " --image-size 640x --to ds", "--image-size: expected WxH");
   refused("convert " + (dir / "ds" / "camchain.yaml").string() + " --to mei", "hovs reads Kalibr's omni model");
 }
 

@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 
 #include <opencv2/ccalib/omnidir.hpp>
+#include <opencv2/calib3d.hpp>
 #include <opencv2/core.hpp>
 
 #include <random>
@@ -54,7 +55,8 @@ TEST(OmnidirIo, YamlRoundTripsAndOpenCvProjectsLikeHovs) {
   // OpenCV reads the same text with its own names and projects with omnidir; its camera frame is (x, y, -z) of
   // hovs' mirror frame.
   cv::FileStorage fs(text, cv::FileStorage::READ | cv::FileStorage::MEMORY);
-  cv::Mat K, D, xi;
+  cv::Mat K, D;
+  double xi = 0;
   fs["camera_matrix"] >> K;
   fs["distortion_coefficients"] >> D;
   fs["xi"] >> xi;
@@ -72,11 +74,93 @@ TEST(OmnidirIo, YamlRoundTripsAndOpenCvProjectsLikeHovs) {
     }
   ASSERT_GT(pts.size(), 80u);
   std::vector<cv::Vec2d> cv_px;
-  cv::omnidir::projectPoints(pts, cv_px, cv::Vec3d(0, 0, 0), cv::Vec3d(0, 0, 0), K, xi.at<double>(0), D);
+  cv::omnidir::projectPoints(pts, cv_px, cv::Vec3d(0, 0, 0), cv::Vec3d(0, 0, 0), K, xi, D);
   double worst = 0;
   for (size_t k = 0; k < pts.size(); ++k)
     worst = std::max(worst, std::hypot(cv_px[k][0] - hovs_px[k].x(), cv_px[k][1] - hovs_px[k].y()));
   EXPECT_LT(worst, 1e-6) << "px between omnidir's and hovs' projections";
+}
+
+// What code written for OpenCV's omni_calibration sample does with hovs' file, and hovs with the sample's.
+TEST(OmnidirIo, ReadsAndIsReadLikeOpenCvsSample) {
+  OmnidirFile f;
+  f.model = SomeUnified();
+  const Eigen::Quaterniond q(Eigen::AngleAxisd(0.3, Vec3d(0.2, -0.5, 0.8).normalized()));
+  f.cam_from_board = {Rigid3d(q, Vec3d(0.1, -0.2, -0.6)), Rigid3d(q.conjugate(), Vec3d(-0.3, 0.05, -0.4))};
+  const std::string text = FormatOmnidirYaml(f);
+  cv::FileStorage fs(text, cv::FileStorage::READ | cv::FileStorage::MEMORY);
+  double xi = 0;
+  fs["xi"] >> xi;  // the sample's reader: a plain number
+  EXPECT_EQ(xi, f.model.xi);
+  EXPECT_EQ(static_cast<int>(fs["nFrames"]), 2);
+  cv::Mat rt;
+  fs["extrinsic_parameters"] >> rt;
+  ASSERT_EQ(rt.rows, 2);
+  ASSERT_EQ(rt.cols, 6);
+  // The board's points through omnidir's pose (its frame: (x, y, -z) of hovs') land where hovs' pose puts them.
+  for (int i = 0; i < 2; ++i) {
+    cv::Matx33d R;
+    cv::Rodrigues(cv::Vec3d(rt.at<double>(i, 0), rt.at<double>(i, 1), rt.at<double>(i, 2)), R);
+    const cv::Vec3d t(rt.at<double>(i, 3), rt.at<double>(i, 4), rt.at<double>(i, 5));
+    const Vec3d b(0.12, -0.09, 0);
+    const cv::Vec3d c = R * cv::Vec3d(b.x(), b.y(), 0) + t;
+    const Vec3d h = f.cam_from_board[i] * b;
+    EXPECT_NEAR(c[0], h.x(), 1e-12);
+    EXPECT_NEAR(c[1], h.y(), 1e-12);
+    EXPECT_NEAR(c[2], -h.z(), 1e-12);
+  }
+  const OmnidirFile back = ParseOmnidirYaml(text, "memory");
+  ASSERT_EQ(back.cam_from_board.size(), 2u);
+  for (int i = 0; i < 2; ++i) {
+    EXPECT_LT((back.cam_from_board[i].translation - f.cam_from_board[i].translation).norm(), 1e-12);
+    EXPECT_LT(back.cam_from_board[i].rotation.angularDistance(f.cam_from_board[i].rotation), 1e-12);
+  }
+
+  // The sample's output, YAML and XML: its keys, xi as a number, no image size.
+  for (const int format : {cv::FileStorage::FORMAT_YAML, cv::FileStorage::FORMAT_XML}) {
+    cv::FileStorage out(format == cv::FileStorage::FORMAT_XML ? ".xml" : ".yaml",
+                        cv::FileStorage::WRITE | cv::FileStorage::MEMORY | format);
+    out << "calibration_time"
+        << "Sat Dec  5 12:00:00 2026"
+        << "nFrames" << 2 << "flags" << 0;
+    out << "camera_matrix"
+        << cv::Mat(cv::Matx33d(f.model.fx, f.model.skew, f.model.cx, 0, f.model.fy, f.model.cy, 0, 0, 1));
+    out << "distortion_coefficients" << cv::Mat(cv::Matx14d(-0.031, 0.0042, 1.3e-4, -2.1e-4));
+    out << "xi" << f.model.xi;
+    out << "used_imgs"
+        << "["
+        << "a.jpg"
+        << "b.jpg"
+        << "]";
+    out << "extrinsic_parameters" << rt << "rms" << 0.41;
+    out << "image_points" << cv::Mat(2, 3, CV_64FC2, cv::Scalar(1, 2));
+    const std::string sample = out.releaseAndGetString();
+    const bool xml = format == cv::FileStorage::FORMAT_XML;
+    EXPECT_EQ(LooksLikeOmnidirXml(sample), xml);
+    const OmnidirFile s =
+        xml ? ParseOmnidirXml(sample, "out_camera_params.xml") : ParseOmnidirYaml(sample, "out_camera_params.yaml");
+    EXPECT_EQ(s.model.width, 0) << "the sample writes no size";
+    EXPECT_EQ(s.model.xi, f.model.xi);
+    EXPECT_EQ(s.model.fx, f.model.fx);
+    EXPECT_DOUBLE_EQ(s.rms_px, 0.41);
+    ASSERT_EQ(s.cam_from_board.size(), 2u);
+    EXPECT_LT((s.cam_from_board[1].translation - f.cam_from_board[1].translation).norm(), 1e-12);
+    try {
+      WithImageSize(s, 0, 0, "out_camera_params");
+      FAIL() << "a model without a size was accepted";
+    } catch (const Error& e) {
+      EXPECT_NE(std::string(e.what()).find("has no image_width / image_height"), std::string::npos) << e.what();
+    }
+    const UnifiedModel<double> sized = WithImageSize(s, 2750, 2200, "out_camera_params");
+    EXPECT_EQ(sized.width, 2750);
+    EXPECT_THROW(WithImageSize(back, 640, 480, "memory"), Error) << "a size that contradicts the file's";
+  }
+  // hovs' older files, xi as a 1 x 1 matrix, are still read.
+  std::string old = text;
+  const size_t at = old.find("xi: ");
+  old.replace(at, old.find('\n', at) - at, "xi: !!opencv-matrix\n   rows: 1\n   cols: 1\n   dt: d\n   data: [ 0.87 ]");
+  EXPECT_EQ(ParseOmnidirYaml(old, "old.yaml").model.xi, 0.87);
+  EXPECT_THROW(ParseOmnidirXml("<?xml version=\"1.0\"?>\n<opencv_storage>\n<camera_matrix>", "cut.xml"), Error);
 }
 
 TEST(OmnidirIo, BadFilesAreRefusedByName) {

@@ -189,6 +189,22 @@ TEST(OcamIo, CalibResultsRoundTripInOCamCalibsLayout) {
   EXPECT_LT(worst, 1e-3) << "px, after printing with OCamCalib's precision";
   EXPECT_THROW(ParseOcamCalibResults("#x\n\n3 -100 0\n", "bad.txt"), Error);
   EXPECT_THROW(ParseOcamCalibResults(text.substr(0, text.find("#image size")), "cut.txt"), Error);
+  // The calibrated ring is said on the inverse's comment line and read back.
+  EXPECT_NE(text.find("fitted over the calibrated ring, image radii "), std::string::npos);
+  EXPECT_NEAR(back.rho_min, m.rho_min, 0.006);
+  EXPECT_NEAR(back.rho_max, m.rho_max, 0.006);
+  // Windows line endings, as an editor on Windows saves the file: read as OCamCalib's C reader reads them.
+  std::string crlf;
+  for (char ch : text) crlf += ch == '\n' ? std::string("\r\n") : std::string(1, ch);
+  const PolynomialModel<double> w = ParseOcamCalibResults(crlf, "crlf.txt");
+  EXPECT_EQ(FormatOcamCalibResults(w), text);
+  // A file of OCamCalib itself (no ring on its comment line): the whole image.
+  std::string plain = text;
+  const size_t c0 = plain.find(" (fitted over"), c1 = plain.find(")\n", c0);
+  plain.erase(c0, c1 + 1 - c0);
+  const PolynomialModel<double> o = ParseOcamCalibResults(plain, "ocamcalib.txt");
+  EXPECT_EQ(o.rho_min, 0);
+  EXPECT_DOUBLE_EQ(o.rho_max, 0.5 * std::hypot(1024, 768));
 }
 
 // Cameras unlike the reference unit, on a 640 x 480 sensor with a 7 x 11-corner board of 30 mm squares: a
