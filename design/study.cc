@@ -21,7 +21,9 @@ namespace {
 using Clock = std::chrono::steady_clock;
 double Since(Clock::time_point t) { return std::chrono::duration<double>(Clock::now() - t).count(); }
 
-nlohmann::json ToJson(const Metrics& m) {
+}  // namespace
+
+nlohmann::json MetricsJson(const Metrics& m) {
   nlohmann::json j;
   j["a"] = m.p.a, j["b"] = m.p.b, j["d"] = m.p.d, j["c"] = m.c;
   j["system_length"] = m.system_length;
@@ -34,8 +36,8 @@ nlohmann::json ToJson(const Metrics& m) {
   return j;
 }
 
-nlohmann::json ToJson(const Optimum& o) {
-  nlohmann::json j = ToJson(o.metrics);
+nlohmann::json OptimumJson(const Optimum& o) {
+  nlohmann::json j = MetricsJson(o.metrics);
   j["objective"] = o.objective;
   j["max_violation"] = o.max_violation;
   j["feasible"] = o.max_violation <= 0;
@@ -48,6 +50,8 @@ nlohmann::json ToJson(const Optimum& o) {
   j["constraints"] = cs;
   return j;
 }
+
+namespace {
 
 nlohmann::json ProblemJson(const DesignConfig& cfg) {
   const DesignProblem& p = cfg.problem;
@@ -155,6 +159,16 @@ std::map<std::string, std::string> DesignVersions() {
   return v;
 }
 
+Optimum EvaluateDesign(const DesignPoint& p, const DesignProblem& problem, const std::string& method) {
+  Optimum m;
+  m.metrics = Evaluate(p, problem);
+  m.constraints = EvaluateConstraints(m.metrics, problem);
+  m.objective = ObjectiveValue(m.metrics, problem.objective);
+  m.max_violation = MaxViolation(m.constraints);
+  m.method = method;
+  return m;
+}
+
 DesignStudy RunDesignStudy(const DesignConfig& cfg) {
   DesignStudy st;
   auto t = Clock::now();
@@ -169,17 +183,29 @@ DesignStudy RunDesignStudy(const DesignConfig& cfg) {
     st.seconds["integer_mm_optimum"] = Since(t);
   }
   if (cfg.marked) {
-    Optimum m;
-    m.metrics = Evaluate(*cfg.marked, cfg.problem);
-    m.constraints = EvaluateConstraints(m.metrics, cfg.problem);
-    m.objective = ObjectiveValue(m.metrics, cfg.problem.objective);
-    m.max_violation = MaxViolation(m.constraints);
-    m.method = "given in the config";
-    st.marked = m;
+    st.marked = EvaluateDesign(*cfg.marked, cfg.problem, "given in the config");
     st.resolution_marked = RadialResolution(*cfg.marked, cfg.problem.camera, cfg.resolution_samples);
   }
   st.resolution_continuous = RadialResolution(st.continuous.metrics.p, cfg.problem.camera, cfg.resolution_samples);
   return st;
+}
+
+nlohmann::json DesignStudyJson(const DesignConfig& cfg, const DesignStudy& st) {
+  const SweepResult& s = st.sweep;
+  nlohmann::json j;
+  j["tool"] = "hovs design";
+  j["config"] = ProblemJson(cfg);
+  j["config_text"] = cfg.text;
+  j["continuous_optimum"] = OptimumJson(st.continuous);
+  j["continuous_optimum"]["solver_log"] = st.continuous.solver_log;
+  j["integer_mm_optimum"] = st.integer_mm ? OptimumJson(*st.integer_mm) : nlohmann::json(nullptr);
+  j["marked_design"] = st.marked ? OptimumJson(*st.marked) : nlohmann::json(nullptr);
+  size_t feasible = 0;
+  for (uint32_t v : s.violated) feasible += v == 0;
+  j["sweep"] = {{"points", s.size()}, {"feasible_points", feasible}, {"constraints", s.constraint_names}};
+  if (auto b = s.BestFeasible()) j["sweep"]["best_feasible_objective"] = s.objective[*b];
+  j["seconds"] = st.seconds;
+  return j;
 }
 
 std::string WriteDesignReport(const DesignConfig& cfg, const DesignStudy& st, const std::filesystem::path& out_dir) {
@@ -315,20 +341,8 @@ std::string WriteDesignReport(const DesignConfig& cfg, const DesignStudy& st, co
   }
 
   // JSON.
-  nlohmann::json j;
-  j["tool"] = "hovs design";
+  nlohmann::json j = DesignStudyJson(cfg, st);
   j["versions"] = versions;
-  j["config"] = ProblemJson(cfg);
-  j["config_text"] = cfg.text;
-  j["continuous_optimum"] = ToJson(st.continuous);
-  j["continuous_optimum"]["solver_log"] = st.continuous.solver_log;
-  j["integer_mm_optimum"] = st.integer_mm ? ToJson(*st.integer_mm) : nlohmann::json(nullptr);
-  j["marked_design"] = st.marked ? ToJson(*st.marked) : nlohmann::json(nullptr);
-  size_t feasible = 0;
-  for (uint32_t v : s.violated) feasible += v == 0;
-  j["sweep"] = {{"points", s.size()}, {"feasible_points", feasible}, {"constraints", s.constraint_names}};
-  if (auto b = s.BestFeasible()) j["sweep"]["best_feasible_objective"] = s.objective[*b];
-  j["seconds"] = st.seconds;
   WriteFileAtomic(dir / "design.json", j.dump(2) + "\n");
 
   // Summary and HTML.
@@ -350,7 +364,8 @@ std::string WriteDesignReport(const DesignConfig& cfg, const DesignStudy& st, co
   else if (cfg.integer_mm)
     sum << "  integer-mm optimum   none: no integer-millimetre design is feasible\n";
   if (st.marked) line("marked design", *st.marked);
-  sum << "  sweep: " << s.size() << " designs, " << feasible << " feasible; report in " << out_dir.string() << "\n";
+  sum << "  sweep: " << s.size() << " designs, " << j["sweep"]["feasible_points"].get<size_t>()
+      << " feasible; report in " << out_dir.string() << "\n";
   WriteFileAtomic(dir / "summary.txt", sum.str());
 
   results::HtmlPage page("hovs design study: " + cfg.name);

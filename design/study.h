@@ -3,6 +3,7 @@
 
 #include <filesystem>
 #include <map>
+#include <nlohmann/json.hpp>
 #include <optional>
 #include <string>
 #include <vector>
@@ -22,6 +23,15 @@ struct DesignStudy {
 };
 
 DesignStudy RunDesignStudy(const DesignConfig& config);
+
+// One design evaluated against a problem: metrics, constraints, objective and violation (method says where the
+// design came from).
+Optimum EvaluateDesign(const DesignPoint& p, const DesignProblem& problem, const std::string& method);
+
+// The JSON forms of design.json: a design's metrics and constraints, and the whole study (without versions).
+nlohmann::json MetricsJson(const Metrics& m);
+nlohmann::json OptimumJson(const Optimum& o);
+nlohmann::json DesignStudyJson(const DesignConfig& config, const DesignStudy& study);
 
 // Writes out_dir/ atomically: config.yaml, sweep.csv, design.json, radial_resolution.csv, figures/*.png,
 // index.html, summary.txt. Nothing is left behind if anything fails. Returns the summary text.
