@@ -78,7 +78,7 @@ struct PolynomialModel {
   bool ImgFromCam(const Vec3<T>& X, Vec2<T>* uv, double rho_hint = -1) const {
     using std::sqrt;
     const double xd = ScalarPart(X(0)), yd = ScalarPart(X(1)), zd = ScalarPart(X(2));
-    const double nd = std::hypot(xd, yd);
+    const double nd = std::sqrt(xd * xd + yd * yd);  // not hypot (slower; bearings are far from overflow)
     if (nd == 0) {
       if (!(zd * ScalarPart(poly[0]) > 0)) return false;
       *uv = ImgFromSensor(Vec2<T>(T(0), T(0)));

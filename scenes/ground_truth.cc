@@ -208,6 +208,8 @@ std::vector<CornerTruth> VisibleSidecarCorners(const nlohmann::json& side, const
       const std::vector<double> b = JsonNumbers(c, "board", 2, 2, where), px = JsonNumbers(c, "pixel", 2, 2, where);
       t.board_xy = Vec2d(b[0], b[1]);
       t.pixel = Vec2d(px[0], px[1]);
+      if (c.contains("world")) t.world = Vec3d(JsonNumbers(c, "world", 3, 3, where).data());
+      if (c.contains("mirror_point")) t.mirror_point = Vec3d(JsonNumbers(c, "mirror_point", 3, 3, where).data());
       HOVS_REQUIRE(t.board_xy.allFinite() && t.pixel.allFinite() && t.board_xy.cwiseAbs().maxCoeff() <= 100 &&
                        t.pixel.cwiseAbs().maxCoeff() <= 1e6,
                    where, "corner ", t.id, " has non-finite or absurd coordinates");

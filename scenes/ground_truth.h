@@ -35,7 +35,8 @@ nlohmann::json BoardToJson(const BoardInstance& board);
 nlohmann::json FrameSidecar(const SceneConfig& config, const raytrace::RayScene& scene, int unit);
 
 // The visible corners of the first board of a sidecar file written from FrameSidecar (truth/*.json): id, board
-// position and exact pixel. Throws hovs::Error naming the file when it is not such a sidecar.
+// position and exact pixel, and the world point and the reflection point on the mirror where the file has them. Throws
+// hovs::Error naming the file when it is not such a sidecar.
 std::vector<CornerTruth> VisibleSidecarCorners(const std::filesystem::path& sidecar);
 // The same from a sidecar already parsed (`where` names it).
 std::vector<CornerTruth> VisibleSidecarCorners(const nlohmann::json& sidecar, const std::string& where);
