@@ -21,12 +21,14 @@
 #include "apps/unwrap_viewer.h"
 #include "core/error.h"
 #include "core/io.h"
+#include "core/json.h"
 #include "core/large_pages.h"
 #include "core/statistics.h"
 #include "raytrace/render.h"
 #include "scenes/ground_truth.h"
 #include "scenes/scene_config.h"
 #include "scenes/truth_views.h"
+#include "unwrap/colmap_export.h"
 #include "unwrap/remap.h"
 #include "unwrap/view_report.h"
 #include "io/image_io.h"
@@ -42,7 +44,7 @@ struct Options {
   int tile = 0;
   std::string truth_scene;
   int truth_samples = 4;
-  bool interactive = false, fixed_elevation = false;
+  bool interactive = false, fixed_elevation = false, colmap = false;
   std::string layout_out = "layout.yaml";
 };
 
@@ -166,6 +168,32 @@ nlohmann::json UnwrapFrames(const Options& o, bool quiet, const std::vector<Inpu
   return frames_json;
 }
 
+// The frames for COLMAP: each frame's unit pose from its ground-truth sidecar when the input is a rendered
+// dataset, else none (unwrap/colmap_export.h).
+std::vector<unwrap::ColmapFrame> ColmapFrames(const Options& o, const std::vector<InputFrame>& frames) {
+  std::map<fs::path, fs::path> sidecar_of;  // image -> sidecar
+  if (fs::is_regular_file(o.input) && fs::path(o.input).extension() == ".json") {
+    const nlohmann::json m = LoadDatasetManifest(o.input);
+    for (const auto& f : m["frames"])
+      for (const auto& v : f["views"])
+        if (v.contains("ground_truth"))
+          sidecar_of[ManifestPath(o.input, v["image"]).lexically_normal()] =
+              ManifestPath(o.input, v["ground_truth"]["sidecar"]);
+  }
+  std::vector<unwrap::ColmapFrame> out;
+  for (const auto& f : frames) {
+    unwrap::ColmapFrame c{f.name, std::nullopt};
+    const auto it = sidecar_of.find(f.image.lexically_normal());
+    if (it != sidecar_of.end()) {
+      const nlohmann::json side = ReadJsonFile(it->second);
+      HOVS_REQUIRE(side.is_object() && side.contains("unit"), it->second.string(), "not a hovs ground-truth sidecar");
+      c.world_from_mirror = scenes::UnitFromJson(side["unit"], it->second.string() + " (unit)").world_from_mirror;
+    }
+    out.push_back(c);
+  }
+  return out;
+}
+
 int RunUnwrap(const Options& o, const GlobalOptions& global) {
   HOVS_REQUIRE(o.model.empty() != o.map.empty(), "hovs unwrap", "give either --model or --map");
   if (o.interactive) {
@@ -194,6 +222,7 @@ int RunUnwrap(const Options& o, const GlobalOptions& global) {
   const double table_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
   if (!global.quiet)
     std::printf("hovs unwrap: %zu views, mapping %s in %.0f ms\n", table.views.size(), source.c_str(), table_ms);
+  if (o.colmap) unwrap::FormatColmapModel(table, {});  // refuses a layout without perspective views, before any work
   // The mapping file is saved once everything else has succeeded: a failed run leaves no new file.
   if (o.input.empty()) {
     if (!o.save_map.empty()) unwrap::SaveRemapTable(o.save_map, table);
@@ -227,6 +256,14 @@ int RunUnwrap(const Options& o, const GlobalOptions& global) {
                         {"note", "remap of all views of one frame, this machine, threads: TBB default"}}}};
   if (!truth_json.empty())
     j["truth"] = {{"scene", o.truth_scene}, {"samples", o.truth_samples}, {"per_frame", truth_json}};
+  if (o.colmap) {
+    const unwrap::ColmapModel colmap = unwrap::FormatColmapModel(table, ColmapFrames(o, frames));
+    fs::create_directories(staged.staging() / "colmap");
+    WriteFileAtomic(staged.staging() / "colmap" / "cameras.txt", colmap.cameras);
+    WriteFileAtomic(staged.staging() / "colmap" / "images.txt", colmap.images);
+    WriteFileAtomic(staged.staging() / "colmap" / "points3D.txt", colmap.points3d);
+    j["colmap"] = {{"folder", "colmap"}, {"cameras", colmap.cameras_count}, {"images", colmap.images_count}};
+  }
   WriteFileAtomic(staged.staging() / "views.json", j.dump(1));
   if (!o.save_map.empty()) unwrap::SaveRemapTable(o.save_map, table);
   staged.Commit();
@@ -262,6 +299,9 @@ Runner SetupUnwrap(CLI::App* sub, const GlobalOptions* global) {
                   "scene YAML the input was rendered from: render each perspective view with a pinhole camera at the "
                   "unit's viewpoint and report PSNR against it");
   AddBounded(sub, "--truth-samples", &o->truth_samples, "samples per pixel of the truth renders", 1, 4096);
+  sub->add_flag("--colmap", o->colmap,
+                "also write COLMAP's text model of the perspective views (colmap/: cameras.txt, images.txt, "
+                "points3D.txt; world poses from a rendered dataset's ground truth)");
   sub->add_flag("--interactive", o->interactive,
                 "control panel: adjust each view live on the first input frame (needs a display; s saves the layout)");
   sub->add_option("--layout-out", o->layout_out, "where --interactive saves the adjusted layout")
