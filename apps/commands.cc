@@ -105,9 +105,11 @@ const std::vector<Command>& Commands() {
        SetupCompare},
       {"merge", "Join the shards of a dataset (hovs dataset --shard I/N) into the set one process writes", SetupMerge},
       {"convert",
-       "A camera model into other tools' files: Kalibr camchain, MEI YAML; refits to double sphere, EUCM, "
-       "Kannala-Brandt with their error",
+       "A camera model into other tools' files: Kalibr camchain, MEI YAML, OpenCV omnidir YAML; refits to double "
+       "sphere, EUCM, Kannala-Brandt with their error",
        SetupConvert},
+      {"export", "A rendered dataset for learning pipelines: equirectangular RGB, range and mask, and the poses",
+       SetupExport},
       {"position", "Visual positioning: the camera's offset from the mirror design, from the rim in one image",
        SetupPosition},
       {"live",

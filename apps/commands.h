@@ -82,5 +82,6 @@ Runner SetupPosition(CLI::App* sub, const GlobalOptions* global);
 Runner SetupCompare(CLI::App* sub, const GlobalOptions* global);
 Runner SetupConvert(CLI::App* sub, const GlobalOptions* global);
 Runner SetupMerge(CLI::App* sub, const GlobalOptions* global);
+Runner SetupExport(CLI::App* sub, const GlobalOptions* global);
 
 }  // namespace hovs::apps

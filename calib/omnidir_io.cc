@@ -2,7 +2,11 @@
 
 #include <opencv2/core.hpp>
 
+#include <algorithm>
+#include <cctype>
 #include <cmath>
+#include <cstdlib>
+#include <map>
 #include <set>
 #include <vector>
 
@@ -177,23 +181,121 @@ bool LooksLikeOmnidirXml(const std::string& text) {
 
 namespace {
 
-// A node of the XML file as numbers: a scalar, or an opencv-matrix of rows x cols (rows -1: any number of rows).
-std::vector<double> XmlMatrix(const cv::FileStorage& fs, const std::string& key, int rows, int cols,
-                              const std::string& source) {
-  const cv::FileNode n = fs[key];
-  HOVS_REQUIRE(!n.empty(), source + " (" + key + ")", "missing");
-  if (n.isReal() || n.isInt()) {
-    HOVS_REQUIRE(rows * cols == 1, source + " (" + key + ")", "expected a ", rows, " x ", cols, " matrix");
-    return {static_cast<double>(n.real())};
+// The XML form, read by hand rather than by cv::FileStorage (whose parsers take gigabytes on some malformed
+// files, as the YAML reader above notes): the top level of <opencv_storage> is a list of elements, each holding
+// text (a number, a string, a sequence) or child elements (an opencv-matrix: rows, cols, dt, data). Deeper
+// nesting, unclosed or mismatched tags are errors.
+struct XmlNode {
+  std::string text;
+  std::map<std::string, XmlNode> children;
+};
+
+class XmlReader {
+ public:
+  XmlReader(const std::string& text, const std::string& source) : t_(text), source_(source) {}
+
+  std::map<std::string, XmlNode> Storage() {
+    pos_ = t_.find("<opencv_storage>");
+    HOVS_REQUIRE(pos_ != std::string::npos, source_, "no <opencv_storage> element");
+    pos_ += 16;
+    std::map<std::string, XmlNode> top = Children("opencv_storage", 0);
+    return top;
   }
-  cv::Mat m;
-  n >> m;
-  HOVS_REQUIRE(!m.empty() && m.channels() == 1 && m.cols == cols && (rows < 0 || m.rows == rows),
-               source + " (" + key + ")", "expected a ", rows < 0 ? std::string("N") : std::to_string(rows), " x ",
-               cols, " matrix");
-  m.convertTo(m, CV_64F);
-  std::vector<double> v(m.begin<double>(), m.end<double>());
-  for (double x : v) HOVS_REQUIRE(std::isfinite(x), source + " (" + key + ")", "holds a non-finite number");
+
+ private:
+  [[noreturn]] void Fail(const std::string& what) const {
+    const size_t line = 1 + std::count(t_.begin(), t_.begin() + std::min(pos_, t_.size()), '\n');
+    throw Error(source_ + ":" + std::to_string(line), what);
+  }
+  void SkipSpaceAndComments() {
+    for (;;) {
+      while (pos_ < t_.size() && std::isspace(static_cast<unsigned char>(t_[pos_]))) ++pos_;
+      if (t_.compare(pos_, 4, "<!--") != 0) return;
+      const size_t end = t_.find("-->", pos_ + 4);
+      if (end == std::string::npos) Fail("unclosed comment");
+      pos_ = end + 3;
+    }
+  }
+  // Elements up to the closing tag of `parent`.
+  std::map<std::string, XmlNode> Children(const std::string& parent, int depth) {
+    std::map<std::string, XmlNode> out;
+    for (;;) {
+      SkipSpaceAndComments();
+      if (pos_ >= t_.size()) Fail("<" + parent + "> is not closed");
+      if (t_.compare(pos_, 2, "</") == 0) {
+        const std::string close = "</" + parent + ">";
+        if (t_.compare(pos_, close.size(), close) != 0) Fail("expected " + close);
+        pos_ += close.size();
+        return out;
+      }
+      if (t_[pos_] != '<') Fail("expected an element inside <" + parent + ">");
+      const size_t name_end = t_.find_first_of(" \t\r\n/>", pos_ + 1);
+      if (name_end == std::string::npos || name_end == pos_ + 1) Fail("malformed tag");
+      const std::string name = t_.substr(pos_ + 1, name_end - pos_ - 1);
+      const size_t tag_end = t_.find('>', name_end);
+      if (tag_end == std::string::npos) Fail("unclosed tag <" + name + ">");
+      XmlNode node;
+      pos_ = tag_end + 1;
+      if (t_[tag_end - 1] != '/') {  // not <name/>
+        SkipSpaceAndComments();
+        if (pos_ < t_.size() && t_[pos_] == '<' && t_.compare(pos_, 2, "</") != 0) {
+          if (depth >= 1) Fail("<" + name + "> nests deeper than an OpenCV matrix");
+          node.children = Children(name, depth + 1);
+        } else {
+          const std::string close = "</" + name + ">";
+          const size_t end = t_.find(close, pos_);
+          if (end == std::string::npos) Fail("<" + name + "> is not closed");
+          node.text = t_.substr(pos_, end - pos_);
+          pos_ = end + close.size();
+        }
+      }
+      if (!out.emplace(name, std::move(node)).second) Fail("<" + name + "> appears twice");
+    }
+  }
+
+  const std::string& t_;
+  std::string source_;
+  size_t pos_ = 0;
+};
+
+std::vector<double> XmlNumbers(const std::string& text, const std::string& where) {
+  std::vector<double> v;
+  const char* p = text.c_str();
+  const char* end = p + text.size();
+  while (p < end) {
+    while (p < end && std::isspace(static_cast<unsigned char>(*p))) ++p;
+    if (p >= end) break;
+    char* next = nullptr;
+    const double x = std::strtod(p, &next);
+    HOVS_REQUIRE(next != p && std::isfinite(x), where, "expected numbers");
+    HOVS_REQUIRE(v.size() < 600000, where, "too many numbers");
+    v.push_back(x);
+    p = next;
+  }
+  return v;
+}
+
+// A node as numbers: a scalar, or an opencv-matrix of rows x cols (rows -1: any number of rows).
+std::vector<double> XmlMatrix(const std::map<std::string, XmlNode>& top, const std::string& key, int rows, int cols,
+                              const std::string& source) {
+  const std::string where = source + " (" + key + ")";
+  const auto it = top.find(key);
+  HOVS_REQUIRE(it != top.end(), where, "missing");
+  const XmlNode& n = it->second;
+  if (n.children.empty()) {
+    const auto v = XmlNumbers(n.text, where);
+    HOVS_REQUIRE(v.size() == 1 && rows * cols == 1, where, "expected a ", rows, " x ", cols, " matrix");
+    return v;
+  }
+  for (const char* k : {"rows", "cols", "data"})
+    HOVS_REQUIRE(n.children.count(k), where, "an opencv-matrix needs rows, cols, dt and data");
+  const auto r = XmlNumbers(n.children.at("rows").text, where + ".rows");
+  const auto c = XmlNumbers(n.children.at("cols").text, where + ".cols");
+  HOVS_REQUIRE(
+      r.size() == 1 && c.size() == 1 && c[0] == cols && r[0] >= 1 && r[0] <= 100000 && (rows < 0 || r[0] == rows),
+      where, "expected a ", rows < 0 ? std::string("N") : std::to_string(rows), " x ", cols, " matrix");
+  const auto v = XmlNumbers(n.children.at("data").text, where + ".data");
+  HOVS_REQUIRE(v.size() == size_t(r[0]) * cols, where, "expected ", size_t(r[0]) * cols, " numbers");
   return v;
 }
 
@@ -202,30 +304,27 @@ std::vector<double> XmlMatrix(const cv::FileStorage& fs, const std::string& key,
 OmnidirFile ParseOmnidirXml(const std::string& text, const std::string& source) {
   HOVS_REQUIRE(text.size() <= (size_t(64) << 20), source, "larger than 64 MB: not a camera file");
   HOVS_REQUIRE(LooksLikeOmnidirXml(text), source, "not an OpenCV FileStorage XML file with a camera_matrix");
+  const std::map<std::string, XmlNode> top = XmlReader(text, source).Storage();
   OmnidirFile f;
   auto& m = f.model;
-  try {
-    cv::FileStorage fs(text, cv::FileStorage::READ | cv::FileStorage::MEMORY | cv::FileStorage::FORMAT_XML);
-    HOVS_REQUIRE(fs.isOpened(), source, "OpenCV cannot read it as a FileStorage XML file");
-    const auto integer = [&](const char* key) {
-      const cv::FileNode n = fs[key];
-      HOVS_REQUIRE(n.isInt(), source + " (" + key + ")", "expected an integer");
-      return static_cast<int>(n);
-    };
-    if (!fs["image_width"].empty()) m.width = integer("image_width");
-    if (!fs["image_height"].empty()) m.height = integer("image_height");
-    const auto K = XmlMatrix(fs, "camera_matrix", 3, 3, source);
-    HOVS_REQUIRE(K[3] == 0 && K[6] == 0 && K[7] == 0 && K[8] == 1, source + " (camera_matrix)",
-                 "must be [fx s cx; 0 fy cy; 0 0 1]");
-    m.fx = K[0], m.skew = K[1], m.cx = K[2], m.fy = K[4], m.cy = K[5];
-    const auto D = XmlMatrix(fs, "distortion_coefficients", 1, 4, source);
-    m.distortion = {D[0], D[1], D[2], D[3]};
-    m.xi = XmlMatrix(fs, "xi", 1, 1, source)[0];
-    if (!fs["rms"].empty()) f.rms_px = XmlMatrix(fs, "rms", 1, 1, source)[0];
-    if (!fs["extrinsic_parameters"].empty())
-      f.cam_from_board =
-          PosesFromRows(XmlMatrix(fs, "extrinsic_parameters", -1, 6, source), source + " (extrinsic_parameters)");
-  } catch (const cv::Exception& e) { throw Error(source, "malformed FileStorage XML: " + e.msg); }
+  const auto integer = [&](const char* key) {
+    const auto v = XmlMatrix(top, key, 1, 1, source);
+    HOVS_REQUIRE(v[0] == std::floor(v[0]) && std::abs(v[0]) <= 1e6, source + " (" + key + ")", "expected an integer");
+    return static_cast<int>(v[0]);
+  };
+  if (top.count("image_width")) m.width = integer("image_width");
+  if (top.count("image_height")) m.height = integer("image_height");
+  const auto K = XmlMatrix(top, "camera_matrix", 3, 3, source);
+  HOVS_REQUIRE(K[3] == 0 && K[6] == 0 && K[7] == 0 && K[8] == 1, source + " (camera_matrix)",
+               "must be [fx s cx; 0 fy cy; 0 0 1]");
+  m.fx = K[0], m.skew = K[1], m.cx = K[2], m.fy = K[4], m.cy = K[5];
+  const auto D = XmlMatrix(top, "distortion_coefficients", 1, 4, source);
+  m.distortion = {D[0], D[1], D[2], D[3]};
+  m.xi = XmlMatrix(top, "xi", 1, 1, source)[0];
+  if (top.count("rms")) f.rms_px = XmlMatrix(top, "rms", 1, 1, source)[0];
+  if (top.count("extrinsic_parameters"))
+    f.cam_from_board =
+        PosesFromRows(XmlMatrix(top, "extrinsic_parameters", -1, 6, source), source + " (extrinsic_parameters)");
   Finish(&f, source);
   return f;
 }

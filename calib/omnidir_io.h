@@ -39,7 +39,7 @@ std::string FormatOmnidirYaml(const OmnidirFile& file);
 // Throws hovs::Error naming the file and key: not a FileStorage file, missing or malformed keys, non-positive
 // focal lengths, an image size outside 1..65535 when given, a negative xi.
 OmnidirFile ParseOmnidirYaml(const std::string& text, const std::string& source);
-// The XML form the sample writes by default (cv::FileStorage's parser, on at most 64 MB).
+// The XML form the sample writes by default (read by hovs' own small reader, not cv::FileStorage; at most 64 MB).
 OmnidirFile ParseOmnidirXml(const std::string& text, const std::string& source);
 // Either form, by its first bytes.
 OmnidirFile LoadOmnidirYaml(const std::filesystem::path& path);

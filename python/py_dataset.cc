@@ -127,9 +127,21 @@ class Dataset {
   nlohmann::json manifest_;
 };
 
+py::dict ReadExrFile(const std::string& path) {
+  const io::ExrChannels ch = [&] {
+    py::gil_scoped_release release;
+    return io::ReadExr(path);
+  }();
+  py::dict d;
+  for (const auto& [name, values] : ch.channels) d[py::str(name)] = NewFloatImage(ch.width, ch.height, values.data());
+  return d;
+}
+
 }  // namespace
 
 void BindDataset(py::module_& m) {
+  m.def("read_exr", &ReadExrFile, py::arg("path"),
+        "An OpenEXR file's channels by name, each float32 (H, W) (ground truth, range exports).");
   py::class_<Dataset>(m, "Dataset", "A hovs dataset (its dataset.json manifest): rendered sets and real captures.")
       .def(py::init<const std::string&>(), py::arg("path"))
       .def_property_readonly("path", &Dataset::path)
