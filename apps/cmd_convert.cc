@@ -29,7 +29,7 @@ Runner SetupConvert(CLI::App* sub, const GlobalOptions* global) {
       ->required();
   sub->add_option("--to", o->to,
                   "kalibr (camchain, omni + radtan) | mei (CamOdoCal / VINS-Fusion) | omnidir (OpenCV omnidir YAML) | "
-                  "ds | eucm | kb (refits, written as a Kalibr camchain)")
+                  "ds | eucm | kb (refits, written as a Kalibr camchain) | basalt (double-sphere refit, Basalt's JSON)")
       ->required();
   sub->add_option("--image-size", o->size,
                   "WxH: the image size of a model file that has none (OpenCV's omni_calibration sample output)");
@@ -43,8 +43,8 @@ Runner SetupConvert(CLI::App* sub, const GlobalOptions* global) {
   sub->add_option("-o,--out", o->out, "output folder (replaced atomically)")->capture_default_str();
   return [o, global]() {
     const bool unified_file = o->to == "kalibr" || o->to == "mei" || o->to == "omnidir";
-    HOVS_REQUIRE(unified_file || o->to == "ds" || o->to == "eucm" || o->to == "kb", "--to",
-                 "expected kalibr, mei, omnidir, ds, eucm or kb (got '", o->to, "')");
+    HOVS_REQUIRE(unified_file || o->to == "ds" || o->to == "eucm" || o->to == "kb" || o->to == "basalt", "--to",
+                 "expected kalibr, mei, omnidir, ds, eucm, kb or basalt (got '", o->to, "')");
     ImageSize size;
     if (!o->size.empty()) ParseImageSize(o->size, "--image-size", &size.width, &size.height);
     HOVS_REQUIRE(o->kind == "auto" || o->kind == "physical" || o->kind == "polynomial" || o->kind == "unified",
@@ -86,7 +86,7 @@ Runner SetupConvert(CLI::App* sub, const GlobalOptions* global) {
         summary += " (the unified model as it is)\n";
       } else {
         calib::RefitOptions ro;
-        ro.kind = unified_file ? "omni" : o->to;
+        ro.kind = unified_file ? "omni" : o->to == "basalt" ? "ds" : o->to;
         ro.grid_step_px = o->grid_step;
         const calib::Refit refit = calib::RefitModel(src, ro);
         cams.push_back(calib::KalibrFromRefit(refit, src.width(), src.height()));
@@ -103,11 +103,15 @@ Runner SetupConvert(CLI::App* sub, const GlobalOptions* global) {
       j["cameras"].push_back(cj);
     }
     if (cams.size() == 2) cams[1].T_cn_cnm1 = calib::ToolsFromMirrorPose(right_from_left, gamma[0], gamma[1]);
-    const std::string file = o->to == "mei" ? "mei.yaml" : o->to == "omnidir" ? "unified.yaml" : "camchain.yaml";
+    const std::string file = o->to == "mei"       ? "mei.yaml"
+                             : o->to == "omnidir" ? "unified.yaml"
+                             : o->to == "basalt"  ? "basalt_calib.json"
+                                                  : "camchain.yaml";
     calib::OmnidirFile omnidir;
     if (mei) omnidir.model = *mei;
     const std::string text = o->to == "mei"       ? calib::FormatMeiYaml(*mei, o->name)
                              : o->to == "omnidir" ? calib::FormatOmnidirYaml(omnidir)
+                             : o->to == "basalt"  ? calib::FormatBasaltCalibration(cams)
                                                   : calib::FormatKalibrCamchain(cams);
     j["file"] = file;
     summary += "  -> " + file + "\n";

@@ -4,6 +4,7 @@
 
 #include <cmath>
 #include <cstdio>
+#include <nlohmann/json.hpp>
 #include <sstream>
 
 #include "core/error.h"
@@ -60,6 +61,65 @@ KalibrCamera KalibrFromRefit(const Refit& r, int width, int height) {
     c.intrinsics = r.values;
   }
   return c;
+}
+
+std::string FormatBasaltCalibration(const std::vector<KalibrCamera>& cams) {
+  const auto pose = [](const Eigen::Matrix4d& T) {
+    const Eigen::Quaterniond q(Eigen::Matrix3d(T.topLeftCorner<3, 3>()));
+    return nlohmann::ordered_json{{"px", T(0, 3)}, {"py", T(1, 3)}, {"pz", T(2, 3)}, {"qx", q.x()},
+                                  {"qy", q.y()},   {"qz", q.z()},   {"qw", q.w()}};
+  };
+  nlohmann::ordered_json v, poses = nlohmann::ordered_json::array(), intr = nlohmann::ordered_json::array(),
+                            res = nlohmann::ordered_json::array();
+  Eigen::Matrix4d body_from_cam = Eigen::Matrix4d::Identity();
+  for (size_t i = 0; i < cams.size(); ++i) {
+    const KalibrCamera& c = cams[i];
+    const std::string where = "Basalt export (cam" + std::to_string(i) + ")";
+    if (i > 0) {
+      HOVS_REQUIRE(c.T_cn_cnm1.has_value(), where, "needs its pose relative to the previous camera");
+      body_from_cam = body_from_cam * c.T_cn_cnm1->inverse();
+    }
+    poses.push_back(pose(body_from_cam));
+    const auto& k = c.intrinsics;
+    nlohmann::ordered_json in;
+    if (c.camera_model == "ds" && k.size() == 6) {
+      in = {{"camera_type", "ds"},
+            {"intrinsics", {{"fx", k[2]}, {"fy", k[3]}, {"cx", k[4]}, {"cy", k[5]}, {"xi", k[0]}, {"alpha", k[1]}}}};
+    } else if (c.camera_model == "eucm" && k.size() == 6) {
+      in = {{"camera_type", "eucm"},
+            {"intrinsics", {{"fx", k[2]}, {"fy", k[3]}, {"cx", k[4]}, {"cy", k[5]}, {"alpha", k[0]}, {"beta", k[1]}}}};
+    } else if (c.camera_model == "pinhole" && c.distortion_model == "equidistant" && k.size() == 4 &&
+               c.distortion.size() == 4) {
+      const auto& d = c.distortion;
+      in = {{"camera_type", "kb4"},
+            {"intrinsics",
+             {{"fx", k[0]},
+              {"fy", k[1]},
+              {"cx", k[2]},
+              {"cy", k[3]},
+              {"k1", d[0]},
+              {"k2", d[1]},
+              {"k3", d[2]},
+              {"k4", d[3]}}}};
+    } else {
+      throw Error(where, "Basalt has no " + c.camera_model + " + " + c.distortion_model +
+                             " camera: refit to ds, eucm or kb (hovs convert --to basalt refits to ds)");
+    }
+    intr.push_back(in);
+    res.push_back({c.width, c.height});
+  }
+  const auto identity = pose(Eigen::Matrix4d::Identity());
+  v["T_imu_cam"] = poses;
+  v["intrinsics"] = intr;
+  v["resolution"] = res;
+  v["vignette"] = nlohmann::ordered_json::array();
+  v["calib_accel_bias"] = std::vector<double>(9, 0.0);
+  v["calib_gyro_bias"] = std::vector<double>(12, 0.0);
+  v["imu_update_rate"] = 200.0;
+  v["accel_noise_std"] = 0.0, v["gyro_noise_std"] = 0.0, v["accel_bias_std"] = 0.0, v["gyro_bias_std"] = 0.0;
+  v["T_mocap_world"] = identity, v["T_imu_marker"] = identity;
+  v["mocap_time_offset_ns"] = 0, v["mocap_to_imu_offset_ns"] = 0, v["cam_time_offset_ns"] = 0;
+  return nlohmann::ordered_json{{"value0", v}}.dump(4) + "\n";
 }
 
 Eigen::Matrix4d ToolsFromMirrorPose(const Rigid3d& T, double gamma_left, double gamma_right) {

@@ -37,6 +37,13 @@ KalibrCamera KalibrFromRefit(const Refit& refit, int width, int height);
 Eigen::Matrix4d ToolsFromMirrorPose(const Rigid3d& right_from_left, double gamma_left = 0, double gamma_right = 0);
 
 std::string FormatKalibrCamchain(const std::vector<KalibrCamera>& cameras);
+
+// Basalt's calibration file (its cereal JSON, as in Basalt's own data/euroc_ds_calib.json) for cameras that are
+// refits Basalt models: ds (double sphere), eucm, or pinhole + equidistant (Basalt's kb4). There is no IMU: the
+// body frame is cam0's (T_imu_cam of cam0 is the identity, of cam i the pose chained from T_cn_cnm1), biases,
+// noise and time offsets are zero and the IMU rate is 200 Hz, values Basalt reads but that mean nothing here.
+// Throws naming the camera when its model is not one of those.
+std::string FormatBasaltCalibration(const std::vector<KalibrCamera>& cameras);
 // Throws hovs::Error naming the file and key: not a camchain, missing or malformed keys.
 std::vector<KalibrCamera> ParseKalibrCamchain(const std::string& text, const std::string& source);
 // The camera as hovs' unified model; throws unless it is omni with radtan (or no) distortion.

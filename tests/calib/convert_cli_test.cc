@@ -2,6 +2,7 @@
 // model itself (hovs compare reads it back: 0 px), the refits report their cost, bad input is refused.
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <cstdio>
 
 #include <nlohmann/json.hpp>
@@ -52,6 +53,23 @@ TEST(ConvertCli, WritesOtherToolsFilesAndRefusesBadInput) {
   const std::string chain = ReadFile(dir / "pair" / "camchain.yaml");
   EXPECT_NE(chain.find("cam1:\n  T_cn_cnm1:"), std::string::npos) << chain;
   EXPECT_NE(chain.find("- [0, 0, 1, -0.014"), std::string::npos) << "z flips with the frame: " << chain;
+  // Basalt's calibration file: the double-sphere refit under Basalt's names, cam1 placed by the stereo pose.
+  const auto basalt = test::Hovs("-q convert " + json + " --kind polynomial --right " + json + " --stereo " +
+                                 (dir / "stereo.json").string() + " --to basalt --out " + (dir / "b").string());
+  ASSERT_EQ(basalt.exit_code, 0) << basalt.output;
+  const auto bj = nlohmann::json::parse(ReadFile(dir / "b" / "basalt_calib.json"))["value0"];
+  const auto refit = nlohmann::json::parse(ReadFile(dir / "b" / "convert.json"))["cameras"][0]["refit"]["parameters"];
+  ASSERT_EQ(bj["intrinsics"].size(), 2u);
+  EXPECT_EQ(bj["intrinsics"][0]["camera_type"], "ds");
+  for (const char* k : {"fx", "fy", "cx", "cy", "xi", "alpha"})
+    EXPECT_EQ(bj["intrinsics"][0]["intrinsics"][k].get<double>(), refit[k].get<double>()) << k;
+  EXPECT_EQ(bj["T_imu_cam"][0]["qw"].get<double>(), 1.0);
+  // cam1's centre in cam0's frame: the baseline, 0.64 m.
+  const double bx = bj["T_imu_cam"][1]["px"], by = bj["T_imu_cam"][1]["py"], bz = bj["T_imu_cam"][1]["pz"];
+  EXPECT_NEAR(std::sqrt(bx * bx + by * by + bz * bz), std::sqrt(0.64 * 0.64 + 0.007 * 0.007 + 0.014 * 0.014), 1e-9);
+  for (const char* key : {"resolution", "vignette", "calib_accel_bias", "calib_gyro_bias", "imu_update_rate",
+                          "T_mocap_world", "T_imu_marker", "cam_time_offset_ns"})
+    EXPECT_TRUE(bj.contains(key)) << key << ": every field Basalt's reader expects";
   // OpenCV's file, and the omni_calibration sample's (no image size: --image-size gives it).
   const auto omnidir = test::Hovs("-q convert " + json + " --kind unified --to omnidir --out " + (dir / "o").string());
   ASSERT_EQ(omnidir.exit_code, 0) << omnidir.output;
@@ -77,7 +95,7 @@ TEST(ConvertCli, WritesOtherToolsFilesAndRefusesBadInput) {
     EXPECT_NE(r.output.find(needle), std::string::npos) << r.output;
     EXPECT_FALSE(fs::exists(dir / "bad"));
   };
-  refused("convert " + json + " --to basalt", "expected kalibr, mei, omnidir, ds, eucm or kb");
+  refused("convert " + json + " --to colmap", "expected kalibr, mei, omnidir, ds, eucm, kb or basalt");
   refused("convert " + json + " --right " + json + " --to kalibr", "needs both --right and --stereo");
   refused("convert " + json + " --right " + json + " --stereo " + json + " --to kalibr", "no right_from_left");
   refused("convert " + (dir / "missing.json").string() + " --to ds", "file not found");
