@@ -17,9 +17,10 @@ struct Camera {
   std::string source;
 };
 
-void BindCamera(py::module_& m);   // Camera, load_camera
-void BindUnwrap(py::module_& m);   // Unwrapper
-void BindDataset(py::module_& m);  // Dataset
-void BindStudy(py::module_& m);    // design metrics and studies, stereo triangulation
+void BindCamera(py::module_& m);       // Camera, load_camera
+void BindUnwrap(py::module_& m);       // Unwrapper
+void BindDataset(py::module_& m);      // Dataset
+void BindStudy(py::module_& m);        // design metrics and studies, stereo triangulation
+void BindCalibration(py::module_& m);  // calibrate
 
 }  // namespace hovs::python

@@ -32,4 +32,5 @@ PYBIND11_MODULE(_hovs, m) {
   hovs::python::BindUnwrap(m);
   hovs::python::BindDataset(m);
   hovs::python::BindStudy(m);
+  hovs::python::BindCalibration(m);
 }

@@ -74,6 +74,14 @@ class Dataset:
     def camera(self, unit: str = "", scene_distance: float = 10.0) -> Camera: ...
     def world_from_mirror(self, unit: str = "") -> npt.NDArray[np.float64]: ...
 
+def calibrate(
+    observations: List[Dict[str, Any]],
+    width: int,
+    height: int,
+    degree: int = 4,
+    loss: str = "none",
+    uncertainty: bool = False,
+) -> Tuple[Dict[str, Any], Camera, Camera]: ...
 def design_metrics(config: str, a: float, b: float, rim_diameter: float = 0.0) -> Dict[str, Any]: ...
 def radial_resolution(
     config: str, a: float, b: float, rim_diameter: float = 0.0, n: int = 200
