@@ -47,15 +47,15 @@ Rows AsRows(const py::handle& object, int k, const std::string& what) {
   return r;
 }
 
-py::array_t<double> NewRows(py::ssize_t n, int k, bool single) {
+py::array_t<double> NewRows(py::ssize_t n, int k, bool single, bool fill) {
   py::array_t<double> a = single ? py::array_t<double>({py::ssize_t(k)}) : py::array_t<double>({n, py::ssize_t(k)});
-  std::fill_n(a.mutable_data(), a.size(), std::numeric_limits<double>::quiet_NaN());
+  if (fill) std::fill_n(a.mutable_data(), a.size(), std::numeric_limits<double>::quiet_NaN());
   return a;
 }
 
-py::array_t<bool> NewFlags(py::ssize_t n, bool single) {
+py::array_t<bool> NewFlags(py::ssize_t n, bool single, bool fill) {
   py::array_t<bool> a = single ? py::array_t<bool>(std::vector<py::ssize_t>{}) : py::array_t<bool>({n});
-  std::fill_n(a.mutable_data(), a.size(), false);
+  if (fill) std::fill_n(a.mutable_data(), a.size(), false);
   return a;
 }
 

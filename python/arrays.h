@@ -23,10 +23,12 @@ struct Rows {
 };
 Rows AsRows(const py::handle& object, int k, const std::string& what);
 
-// A new float64 array of shape (n, k), or (k) when single; NaN-filled.
-py::array_t<double> NewRows(py::ssize_t n, int k, bool single);
-// A new bool array of shape (n), or a 0-d array when single.
-py::array_t<bool> NewFlags(py::ssize_t n, bool single);
+// A new float64 array of shape (n, k), or (k) when single; NaN-filled unless `fill` is false (the caller then
+// writes every element, from its worker threads: on large outputs the first touch of fresh pages costs as much
+// as the projection, and a single-threaded fill would take it under the GIL).
+py::array_t<double> NewRows(py::ssize_t n, int k, bool single, bool fill = true);
+// A new bool array of shape (n), or a 0-d array when single; false-filled unless `fill` is false.
+py::array_t<bool> NewFlags(py::ssize_t n, bool single, bool fill = true);
 
 // An 8-bit image: (H, W) grey, (H, W, 1) grey or (H, W, 3) RGB, uint8, C-contiguous (copied if it is not).
 // TypeError for another dtype, hovs.Error for another shape; both name `what`.

@@ -5,6 +5,7 @@
 #include <tbb/parallel_for.h>
 
 #include <filesystem>
+#include <limits>
 #include <optional>
 #include <utility>
 
@@ -28,8 +29,8 @@ void ParallelRows(py::ssize_t n, const Body& body) {
 
 py::tuple Project(const Camera& c, const py::handle& points, bool bounded) {
   const Rows in = AsRows(points, 3, "points");
-  py::array_t<double> uv = NewRows(in.n, 2, in.single);
-  py::array_t<bool> valid = NewFlags(in.n, in.single);
+  py::array_t<double> uv = NewRows(in.n, 2, in.single, /*fill=*/false);
+  py::array_t<bool> valid = NewFlags(in.n, in.single, /*fill=*/false);
   const double* p = in.data();
   double* out = uv.mutable_data();
   bool* ok = valid.mutable_data();
@@ -37,17 +38,18 @@ py::tuple Project(const Camera& c, const py::handle& points, bool bounded) {
   ParallelRows(in.n, [&](py::ssize_t i) {
     const Vec3d X(p[3 * i], p[3 * i + 1], p[3 * i + 2]);
     Vec2d q;
-    if (!X.allFinite() || X.squaredNorm() == 0) return;
-    if (!(bounded ? model.ImgFromMirror(X, &q) : model.ImgFromPointUnbounded(X, &q))) return;
-    out[2 * i] = q(0), out[2 * i + 1] = q(1), ok[i] = true;
+    const bool good = X.allFinite() && X.squaredNorm() > 0 &&
+                      (bounded ? model.ImgFromMirror(X, &q) : model.ImgFromPointUnbounded(X, &q));
+    if (!good) q.setConstant(std::numeric_limits<double>::quiet_NaN());
+    out[2 * i] = q(0), out[2 * i + 1] = q(1), ok[i] = good;
   });
   return py::make_tuple(uv, valid);
 }
 
 py::tuple Unproject(const Camera& c, const py::handle& pixels) {
   const Rows in = AsRows(pixels, 2, "pixels");
-  py::array_t<double> rays = NewRows(in.n, 3, in.single);
-  py::array_t<bool> valid = NewFlags(in.n, in.single);
+  py::array_t<double> rays = NewRows(in.n, 3, in.single, /*fill=*/false);
+  py::array_t<bool> valid = NewFlags(in.n, in.single, /*fill=*/false);
   const double* p = in.data();
   double* out = rays.mutable_data();
   bool* ok = valid.mutable_data();
@@ -55,8 +57,9 @@ py::tuple Unproject(const Camera& c, const py::handle& pixels) {
   ParallelRows(in.n, [&](py::ssize_t i) {
     const Vec2d uv(p[2 * i], p[2 * i + 1]);
     Vec3d b;
-    if (!uv.allFinite() || !model.MirrorFromImg(uv, &b)) return;
-    out[3 * i] = b(0), out[3 * i + 1] = b(1), out[3 * i + 2] = b(2), ok[i] = true;
+    const bool good = uv.allFinite() && model.MirrorFromImg(uv, &b);
+    if (!good) b.setConstant(std::numeric_limits<double>::quiet_NaN());
+    out[3 * i] = b(0), out[3 * i + 1] = b(1), out[3 * i + 2] = b(2), ok[i] = good;
   });
   return py::make_tuple(rays, valid);
 }
