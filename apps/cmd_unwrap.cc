@@ -168,28 +168,14 @@ nlohmann::json UnwrapFrames(const Options& o, bool quiet, const std::vector<Inpu
   return frames_json;
 }
 
-// The frames for COLMAP: each frame's unit pose from its ground-truth sidecar when the input is a rendered
-// dataset, else none (unwrap/colmap_export.h).
+// The frames for COLMAP, with each frame's unit pose when the input is a rendered dataset.
 std::vector<unwrap::ColmapFrame> ColmapFrames(const Options& o, const std::vector<InputFrame>& frames) {
-  std::map<fs::path, fs::path> sidecar_of;  // image -> sidecar
-  if (fs::is_regular_file(o.input) && fs::path(o.input).extension() == ".json") {
-    const nlohmann::json m = LoadDatasetManifest(o.input);
-    for (const auto& f : m["frames"])
-      for (const auto& v : f["views"])
-        if (v.contains("ground_truth"))
-          sidecar_of[ManifestPath(o.input, v["image"]).lexically_normal()] =
-              ManifestPath(o.input, v["ground_truth"]["sidecar"]);
-  }
+  const bool manifest = fs::is_regular_file(o.input) && fs::path(o.input).extension() == ".json";
+  const auto poses = manifest ? scenes::ViewPosesByImage(o.input) : std::map<fs::path, Rigid3d>();
   std::vector<unwrap::ColmapFrame> out;
   for (const auto& f : frames) {
-    unwrap::ColmapFrame c{f.name, std::nullopt};
-    const auto it = sidecar_of.find(f.image.lexically_normal());
-    if (it != sidecar_of.end()) {
-      const nlohmann::json side = ReadJsonFile(it->second);
-      HOVS_REQUIRE(side.is_object() && side.contains("unit"), it->second.string(), "not a hovs ground-truth sidecar");
-      c.world_from_mirror = scenes::UnitFromJson(side["unit"], it->second.string() + " (unit)").world_from_mirror;
-    }
-    out.push_back(c);
+    const auto it = poses.find(f.image.lexically_normal());
+    out.push_back({f.name, it == poses.end() ? std::nullopt : std::optional<Rigid3d>(it->second)});
   }
   return out;
 }

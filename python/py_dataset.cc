@@ -19,6 +19,16 @@ namespace {
 
 namespace fs = std::filesystem;
 
+py::dict ReadExrFile(const std::string& path) {
+  const io::ExrChannels ch = [&] {
+    py::gil_scoped_release release;
+    return io::ReadExr(path);
+  }();
+  py::dict d;
+  for (const auto& [name, values] : ch.channels) d[py::str(name)] = NewFloatImage(ch.width, ch.height, values.data());
+  return d;
+}
+
 class Dataset {
  public:
   explicit Dataset(const std::string& path) : path_(path), manifest_(LoadDatasetManifest(path)) {}
@@ -73,14 +83,7 @@ class Dataset {
   }
 
   py::dict GroundTruth(int64_t id, const std::string& unit) const {
-    const fs::path exr = ManifestPath(path_, Truth(id, unit)["exr"]);
-    const io::ExrChannels ch = [&] {
-      py::gil_scoped_release release;
-      return io::ReadExr(exr);
-    }();
-    py::dict d;
-    for (const auto& [name, values] : ch.channels) d[py::str(name)] = NewFloatImage(ch.width, ch.height, values.data());
-    return d;
+    return ReadExrFile(ManifestPath(path_, Truth(id, unit)["exr"]).string());
   }
 
   py::dict Corners(int64_t id, const std::string& unit) const {
@@ -126,16 +129,6 @@ class Dataset {
   fs::path path_;
   nlohmann::json manifest_;
 };
-
-py::dict ReadExrFile(const std::string& path) {
-  const io::ExrChannels ch = [&] {
-    py::gil_scoped_release release;
-    return io::ReadExr(path);
-  }();
-  py::dict d;
-  for (const auto& [name, values] : ch.channels) d[py::str(name)] = NewFloatImage(ch.width, ch.height, values.data());
-  return d;
-}
 
 }  // namespace
 

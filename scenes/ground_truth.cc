@@ -5,6 +5,7 @@
 #include "core/error.h"
 #include "core/io.h"
 #include "core/json.h"
+#include "core/manifest.h"
 #include "raytrace/render.h"
 
 namespace hovs::scenes {
@@ -220,6 +221,21 @@ std::vector<CornerTruth> VisibleSidecarCorners(const nlohmann::json& side, const
   } catch (const nlohmann::json::exception& e) {
     throw Error(where, std::string("not a hovs ground-truth sidecar with board corners: ") + e.what());
   }
+}
+
+std::map<std::filesystem::path, Rigid3d> ViewPosesByImage(const std::filesystem::path& manifest) {
+  const nlohmann::json m = LoadDatasetManifest(manifest);
+  std::map<std::filesystem::path, Rigid3d> poses;
+  for (const auto& f : m["frames"])
+    for (const auto& v : f["views"]) {
+      if (!v.contains("ground_truth")) continue;
+      const std::filesystem::path sidecar = ManifestPath(manifest, v["ground_truth"]["sidecar"]);
+      const nlohmann::json side = ReadJsonFile(sidecar);
+      HOVS_REQUIRE(side.is_object() && side.contains("unit"), sidecar.string(), "not a hovs ground-truth sidecar");
+      poses[ManifestPath(manifest, v["image"]).lexically_normal()] =
+          UnitFromJson(side["unit"], sidecar.string() + " (unit)").world_from_mirror;
+    }
+  return poses;
 }
 
 }  // namespace hovs::scenes

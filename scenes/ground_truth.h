@@ -4,6 +4,7 @@
 #pragma once
 
 #include <filesystem>
+#include <map>
 #include <nlohmann/json.hpp>
 #include <string>
 #include <vector>
@@ -40,5 +41,10 @@ nlohmann::json FrameSidecar(const SceneConfig& config, const raytrace::RayScene&
 std::vector<CornerTruth> VisibleSidecarCorners(const std::filesystem::path& sidecar);
 // The same from a sidecar already parsed (`where` names it).
 std::vector<CornerTruth> VisibleSidecarCorners(const nlohmann::json& sidecar, const std::string& where);
+
+// Each view's unit pose (world_from_mirror) in a rendered dataset, read from its ground-truth sidecar, keyed by the
+// view's image path (ManifestPath, lexically normal); views without ground truth are absent. Throws naming a
+// sidecar that is not one.
+std::map<std::filesystem::path, Rigid3d> ViewPosesByImage(const std::filesystem::path& manifest);
 
 }  // namespace hovs::scenes
