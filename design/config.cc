@@ -10,6 +10,39 @@
 
 namespace hovs::design {
 namespace {
+std::string KnownObjectives() {
+  std::string s;
+  for (Objective o : {Objective::kSmallestSystem, Objective::kWidestField, Objective::kLargestRim,
+                      Objective::kLongRange, Objective::kNearGround})
+    s += (s.empty() ? "" : ", ") + std::string(ToString(o));
+  return s;
+}
+
+std::vector<FamilyMember> ParseFamily(const YamlReader& r, const YAML::Node& f) {
+  std::vector<FamilyMember> out;
+  HOVS_REQUIRE(f.IsSequence() && f.size() >= 1 && f.size() <= 16, r.Where(f, "family"),
+               "expected a list of 1 to 16 mirrors, each {name, objective, purpose}");
+  for (size_t i = 0; i < f.size(); ++i) {
+    const std::string key = "family[" + std::to_string(i) + "]";
+    r.OnlyKeys(f[i], key, {"name", "objective", "purpose"});
+    HOVS_REQUIRE(f[i]["name"] && f[i]["objective"], r.Where(f[i], key), "needs a name and an objective");
+    FamilyMember m;
+    m.name = r.String(f[i]["name"], key + ".name");
+    HOVS_REQUIRE(!m.name.empty() && m.name.find_first_of("/\\ ") == std::string::npos, r.Where(f[i], key),
+                 "name must be non-empty without spaces or slashes");
+    for (const auto& other : out)
+      HOVS_REQUIRE(other.name != m.name, r.Where(f[i], key), "mirror name '", m.name, "' is given twice");
+    const std::string o = r.String(f[i]["objective"], key + ".objective");
+    const auto obj = ObjectiveFromString(o);
+    HOVS_REQUIRE(obj.has_value(), r.Where(f[i]["objective"], key + ".objective"), "unknown objective '", o,
+                 "' (known: ", KnownObjectives(), ")");
+    m.objective = *obj;
+    if (f[i]["purpose"]) m.purpose = r.String(f[i]["purpose"], key + ".purpose");
+    out.push_back(m);
+  }
+  return out;
+}
+
 Range RangeOf(const YamlReader& r, const YAML::Node& n, const std::string& key) {
   if (n.IsScalar()) {
     const double v = r.Number(n, key);
@@ -27,7 +60,7 @@ DesignConfig ParseDesignConfigUnguarded(const std::string& text, const std::stri
   HOVS_REQUIRE(root.IsMap(), source, "expected a YAML mapping at the top level");
   r.OnlyKeys(root, "",
              {"name", "camera", "mirror", "mounting_height", "constraints", "objective", "search", "marked_design",
-              "resolution_samples"});
+              "resolution_samples", "long_range_elevation_deg", "near_ground_radius", "family"});
   DesignConfig cfg;
   cfg.source = source;
   cfg.text = text;
@@ -53,11 +86,14 @@ DesignConfig ParseDesignConfigUnguarded(const std::string& text, const std::stri
     p.d = {d, d};
   }
   if (root["mounting_height"]) p.mounting_height = r.Number(root["mounting_height"], "mounting_height");
+  if (root["long_range_elevation_deg"])
+    p.long_range_elevation_deg = r.Number(root["long_range_elevation_deg"], "long_range_elevation_deg");
+  if (root["near_ground_radius"]) p.near_ground_radius = r.Number(root["near_ground_radius"], "near_ground_radius");
   if (root["constraints"]) {
     const YAML::Node k = root["constraints"];
     r.OnlyKeys(k, "constraints",
                {"max_upper_elevation_deg", "rim_margin_px", "min_vertical_field_deg", "min_rim_radius_px",
-                "max_system_length"});
+                "max_system_length", "rod_travel"});
     Constraints& c = p.constraints;
     if (k["max_upper_elevation_deg"])
       c.max_upper_elevation_deg = r.Number(k["max_upper_elevation_deg"], "constraints.max_upper_elevation_deg");
@@ -66,14 +102,20 @@ DesignConfig ParseDesignConfigUnguarded(const std::string& text, const std::stri
       c.min_vertical_field_deg = r.Number(k["min_vertical_field_deg"], "constraints.min_vertical_field_deg");
     if (k["min_rim_radius_px"]) c.min_rim_radius_px = r.Number(k["min_rim_radius_px"], "constraints.min_rim_radius_px");
     if (k["max_system_length"]) c.max_system_length = r.Number(k["max_system_length"], "constraints.max_system_length");
+    if (k["rod_travel"]) {
+      HOVS_REQUIRE(k["rod_travel"].IsSequence(), r.Where(k["rod_travel"], "constraints.rod_travel"),
+                   "expected [min, max]: the mounting plate's height above the pinhole the rod can set (m)");
+      c.rod_travel = RangeOf(r, k["rod_travel"], "constraints.rod_travel");
+    }
   }
   if (root["objective"]) {
     const std::string o = r.String(root["objective"], "objective");
     const auto obj = ObjectiveFromString(o);
     HOVS_REQUIRE(obj.has_value(), r.Where(root["objective"], "objective"), "unknown objective '", o,
-                 "' (known: smallest_system, widest_field, largest_rim)");
+                 "' (known: ", KnownObjectives(), ")");
     p.objective = *obj;
   }
+  if (root["family"]) cfg.family = ParseFamily(r, root["family"]);
   if (root["search"]) {
     const YAML::Node s = root["search"];
     r.OnlyKeys(s, "search", {"a", "b", "d", "grid", "integer_mm"});

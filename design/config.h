@@ -5,10 +5,18 @@
 #include <filesystem>
 #include <optional>
 #include <string>
+#include <vector>
 
 #include "design/design.h"
 
 namespace hovs::design {
+
+// One mirror of a turret family: the design that is optimal for its objective under the shared constraints.
+struct FamilyMember {
+  std::string name;     // e.g. "reference", "long-range"
+  Objective objective;  // what this mirror is for
+  std::string purpose;  // one line for the report
+};
 
 struct DesignConfig {
   std::string name = "design";
@@ -17,8 +25,9 @@ struct DesignConfig {
   bool integer_mm = true;
   std::optional<DesignPoint> marked;  // a design to mark on the figures (e.g. the article's a = 48, b = 44)
   int resolution_samples = 200;
-  std::string source;  // the file it came from
-  std::string text;    // its text, echoed into reports
+  std::vector<FamilyMember> family;  // non-empty: a turret family study instead of one design
+  std::string source;                // the file it came from
+  std::string text;                  // its text, echoed into reports
 };
 
 DesignConfig ParseDesignConfig(const std::string& yaml_text, const std::string& source);

@@ -21,10 +21,28 @@ constexpr double kDeg = M_PI / 180.0;
 template <class T>
 struct Geometry {
   T c, rim_z, upper, lower, rim_px, reflection_px;
+  T upper_res, long_range_res, near_ground_mpx;  // px / deg, px / deg, Mpx
 };
 
+// Radial resolution (px per degree of elevation) at the sheet point of radius r, for a pinhole of focal length
+// f px at F2 on the axis: rho(r) = f r / (z(r) + 2c) and elevation(r) = atan2(z(r), r), so
+// d rho / d elevation = (d rho / dr) / (d elevation / dr). RadialResolution computes the same through the
+// core's projection; a test keeps the two equal.
 template <class T>
-Geometry<T> ComputeGeometry(const T& a, const T& b, const T& d, const CameraSpec& camera) {
+T ResolutionAtRadius(const HyperboloidMirror<T>& mirror, const T& f, const T& r) {
+  using std::abs;
+  const T z = mirror.SheetZ(r);
+  const T dz = mirror.Slope(r, T(0))(0);
+  const T depth = z + T(2) * mirror.c();
+  const T drho = f * (depth - r * dz) / (depth * depth);
+  const T delev = (r * dz - z) / (r * r + z * z);
+  return abs(drho / delev) * T(kDeg);
+}
+
+template <class T>
+Geometry<T> ComputeGeometry(const T& a, const T& b, const T& d, const CameraSpec& camera,
+                            double long_range_elevation_deg = -5.0, double near_ground_radius = 3.0,
+                            double mounting_height = 1.3) {
   using std::atan2;
   using std::sqrt;
   CatadioptricCamera<T> rig = CatadioptricCamera<T>::Aligned(
@@ -46,7 +64,31 @@ Geometry<T> ComputeGeometry(const T& a, const T& b, const T& d, const CameraSpec
   g.reflection_px = rig.mirror.PointAlong(Vec3<T>(rig.occluder_radius, T(0), T(-2) * g.c), &M)
                         ? radius_px(M)
                         : T(std::numeric_limits<double>::infinity());
+  const T f = rig.camera.fx;
+  g.upper_res = ResolutionAtRadius(rig.mirror, f, rig.mirror.RimRadius());
+  // The mirror point seen at a given elevation (its radius; may lie beyond the rim, where the sheet continues).
+  const auto radius_at = [&](double elevation, T* r) {
+    Vec3<T> P;
+    if (!rig.mirror.PointAlong(Vec3<T>(T(std::cos(elevation)), T(0), T(std::sin(elevation))), &P)) return false;
+    *r = P(0);
+    return true;
+  };
+  T r;
+  g.long_range_res = radius_at(long_range_elevation_deg * kDeg, &r) ? ResolutionAtRadius(rig.mirror, f, r) : T(0);
+  // Near ground: the ground point at near_ground_radius is imaged at rho_g unless it lies beyond the field's
+  // top, where the whole imaged ground is nearer (rho_g = rim).
+  const double ground_elevation = -std::atan2(mounting_height, near_ground_radius);
+  T rho_g = g.rim_px;
+  if (ScalarPart(g.upper) > ground_elevation && radius_at(ground_elevation, &r))
+    rho_g = radius_px(Vec3<T>(r, T(0), rig.mirror.SheetZ(r)));
+  const T area = T(M_PI) * (rho_g * rho_g - g.reflection_px * g.reflection_px) * T(1e-6);
+  g.near_ground_mpx = ScalarPart(area) > 0 ? area : T(0);
   return g;
+}
+
+template <class T>
+Geometry<T> ComputeGeometry(const T& a, const T& b, const T& d, const DesignProblem& p) {
+  return ComputeGeometry(a, b, d, p.camera, p.long_range_elevation_deg, p.near_ground_radius, p.mounting_height);
 }
 
 // Constraint k as g <= 0, in natural units, for any scalar type.
@@ -60,6 +102,13 @@ std::vector<T> ConstraintVector(const Geometry<T>& g, const DesignProblem& p) {
   if (k.min_vertical_field_deg) out.push_back(T(*k.min_vertical_field_deg) - (g.upper - g.lower) / T(kDeg));
   if (k.min_rim_radius_px) out.push_back(T(*k.min_rim_radius_px) - g.rim_px);
   if (k.max_system_length) out.push_back(T(2) * g.c - T(*k.max_system_length));
+  if (k.rod_travel) {
+    const T plate = g.rim_z + T(2) * g.c;
+    out.push_back(T(k.rod_travel->min) - plate);
+    out.push_back(plate - T(k.rod_travel->max));
+  }
+  if (p.objective == Objective::kLongRange) out.push_back(T(p.long_range_elevation_deg) - g.upper / T(kDeg));
+  if (p.objective == Objective::kNearGround) out.push_back(T(p.NearGroundElevationDeg()) - g.upper / T(kDeg));
   return out;
 }
 
@@ -73,6 +122,14 @@ std::vector<ConstraintValue> DescribeConstraints(const std::vector<double>& v, c
   if (k.min_vertical_field_deg) out.push_back({"min_vertical_field", v[i++], *k.min_vertical_field_deg, "deg"});
   if (k.min_rim_radius_px) out.push_back({"min_rim_radius", v[i++], *k.min_rim_radius_px, "px"});
   if (k.max_system_length) out.push_back({"max_system_length", v[i++], *k.max_system_length, "m"});
+  if (k.rod_travel) {
+    out.push_back({"rod_travel_min", v[i++], k.rod_travel->min, "m"});
+    out.push_back({"rod_travel_max", v[i++], k.rod_travel->max, "m"});
+  }
+  if (p.objective == Objective::kLongRange)
+    out.push_back({"long_range_elevation_in_field", v[i++], p.long_range_elevation_deg, "deg"});
+  if (p.objective == Objective::kNearGround)
+    out.push_back({"near_ground_disc_in_field", v[i++], p.NearGroundElevationDeg(), "deg"});
   return out;
 }
 
@@ -82,6 +139,8 @@ T ObjectiveOf(const Geometry<T>& g, Objective o) {
     case Objective::kSmallestSystem: return T(2) * g.c;
     case Objective::kWidestField: return -(g.upper - g.lower) / T(kDeg);
     case Objective::kLargestRim: return -g.rim_px;
+    case Objective::kLongRange: return -g.long_range_res;
+    case Objective::kNearGround: return -g.near_ground_mpx;
   }
   return T(0);
 }
@@ -92,11 +151,20 @@ std::vector<double> ConstraintScales(const DesignProblem& p) {
   if (p.constraints.min_vertical_field_deg) s.push_back(1.0);
   if (p.constraints.min_rim_radius_px) s.push_back(10.0);
   if (p.constraints.max_system_length) s.push_back(0.001);
+  if (p.constraints.rod_travel) s.insert(s.end(), {0.001, 0.001});
+  if (p.objective == Objective::kLongRange || p.objective == Objective::kNearGround) s.push_back(1.0);
   return s;
 }
 
 double ObjectiveScale(Objective o) {
-  return o == Objective::kSmallestSystem ? 0.001 : o == Objective::kWidestField ? 1.0 : 10.0;
+  switch (o) {
+    case Objective::kSmallestSystem: return 0.001;
+    case Objective::kWidestField: return 1.0;
+    case Objective::kLargestRim: return 10.0;
+    case Objective::kLongRange: return 0.1;
+    case Objective::kNearGround: return 0.01;
+  }
+  return 1.0;
 }
 
 void CheckFinitePositive(double v, const std::string& where, const std::string& what) {
@@ -111,12 +179,15 @@ const char* ToString(Objective o) {
     case Objective::kSmallestSystem: return "smallest_system";
     case Objective::kWidestField: return "widest_field";
     case Objective::kLargestRim: return "largest_rim";
+    case Objective::kLongRange: return "long_range_resolution";
+    case Objective::kNearGround: return "near_ground_coverage";
   }
   return "?";
 }
 
 std::optional<Objective> ObjectiveFromString(const std::string& s) {
-  for (Objective o : {Objective::kSmallestSystem, Objective::kWidestField, Objective::kLargestRim})
+  for (Objective o : {Objective::kSmallestSystem, Objective::kWidestField, Objective::kLargestRim,
+                      Objective::kLongRange, Objective::kNearGround})
     if (s == ToString(o)) return o;
   return std::nullopt;
 }
@@ -127,6 +198,8 @@ void CameraSpec::Check(const std::string& where) const {
   CheckFinitePositive(lens_aperture, where + ".lens_aperture", "lens aperture");
   HOVS_REQUIRE(width > 0 && height > 0, where, "sensor size must be positive (got ", width, " x ", height, ")");
 }
+
+double DesignProblem::NearGroundElevationDeg() const { return -std::atan2(mounting_height, near_ground_radius) / kDeg; }
 
 double DesignProblem::RimLimitPx() const {
   return 0.5 * std::min(camera.width, camera.height) - constraints.rim_margin_px;
@@ -156,6 +229,15 @@ void DesignProblem::Check(const std::string& where) const {
                  where + ".constraints.min_rim_radius_px", "must be positive");
   if (k.max_system_length)
     CheckFinitePositive(*k.max_system_length, where + ".constraints.max_system_length", "maximum system length");
+  if (k.rod_travel) {
+    CheckFinitePositive(k.rod_travel->min, where + ".constraints.rod_travel", "rod travel minimum");
+    CheckFinitePositive(k.rod_travel->max, where + ".constraints.rod_travel", "rod travel maximum");
+    HOVS_REQUIRE(k.rod_travel->min < k.rod_travel->max, where + ".constraints.rod_travel", "minimum ",
+                 k.rod_travel->min, " must be below maximum ", k.rod_travel->max);
+  }
+  HOVS_REQUIRE(std::isfinite(long_range_elevation_deg) && std::abs(long_range_elevation_deg) < 90,
+               where + ".long_range_elevation_deg", "must be a finite angle in (-90, 90) degrees");
+  CheckFinitePositive(near_ground_radius, where + ".near_ground_radius", "near-ground radius");
 }
 
 void SweepSpec::Check(const std::string& where) const {
@@ -170,7 +252,7 @@ CatadioptricCamera<double> RigOf(const DesignPoint& p, const CameraSpec& camera)
 }
 
 Metrics Evaluate(const DesignPoint& p, const DesignProblem& problem) {
-  const Geometry<double> g = ComputeGeometry(p.a, p.b, p.d, problem.camera);
+  const Geometry<double> g = ComputeGeometry(p.a, p.b, p.d, problem);
   Metrics m;
   m.p = p;
   m.c = g.c;
@@ -186,11 +268,15 @@ Metrics Evaluate(const DesignPoint& p, const DesignProblem& problem) {
   m.ground_radius_inner = problem.mounting_height / std::tan(-g.lower);
   m.ground_radius_outer =
       g.upper < 0 ? problem.mounting_height / std::tan(-g.upper) : std::numeric_limits<double>::infinity();
+  m.plate_height = g.rim_z + 2 * g.c;
+  m.upper_px_per_deg = g.upper_res;
+  m.long_range_px_per_deg = ScalarPart(g.upper) / kDeg >= problem.long_range_elevation_deg ? g.long_range_res : 0.0;
+  m.near_ground_mpx = g.near_ground_mpx;
   return m;
 }
 
 std::vector<ConstraintValue> EvaluateConstraints(const Metrics& m, const DesignProblem& problem) {
-  const Geometry<double> g = ComputeGeometry(m.p.a, m.p.b, m.p.d, problem.camera);
+  const Geometry<double> g = ComputeGeometry(m.p.a, m.p.b, m.p.d, problem);
   return DescribeConstraints(ConstraintVector(g, problem), problem);
 }
 
@@ -205,6 +291,8 @@ double ObjectiveValue(const Metrics& m, Objective o) {
     case Objective::kSmallestSystem: return m.system_length;
     case Objective::kWidestField: return -m.field_deg;
     case Objective::kLargestRim: return -m.rim_radius_px;
+    case Objective::kLongRange: return -m.long_range_px_per_deg;
+    case Objective::kNearGround: return -m.near_ground_mpx;
   }
   return 0;
 }
@@ -253,7 +341,7 @@ SweepResult Sweep(const DesignProblem& problem, const SweepSpec& spec) {
                         const int ib = static_cast<int>(row % spec.nb), id = static_cast<int>(row / spec.nb);
                         for (int ia = 0; ia < spec.na; ++ia) {
                           const size_t k = r.Index(ia, ib, id);
-                          const Geometry<double> g = ComputeGeometry(r.A(ia), r.B(ib), r.D(id), problem.camera);
+                          const Geometry<double> g = ComputeGeometry(r.A(ia), r.B(ib), r.D(id), problem);
                           r.upper_deg[k] = g.upper / kDeg;
                           r.lower_deg[k] = g.lower / kDeg;
                           r.field_deg[k] = (g.upper - g.lower) / kDeg;
@@ -298,14 +386,14 @@ double Scaled(const std::vector<double>& x, std::vector<double>& grad, SolverCon
     J xj[3], abd[3];
     for (size_t i = 0; i < x.size(); ++i) xj[i] = J(x[i], static_cast<int>(i));
     Unpack(*ctx, xj, abd);
-    const Geometry<J> g = ComputeGeometry(abd[0], abd[1], abd[2], p.camera);
+    const Geometry<J> g = ComputeGeometry(abd[0], abd[1], abd[2], p);
     const J v = k < 0 ? ObjectiveOf(g, p.objective) : ConstraintVector(g, p)[k];
     for (size_t i = 0; i < x.size(); ++i) grad[i] = v.v(static_cast<int>(i)) / scale;
     return v.a / scale;
   }
   double abd[3];
   Unpack(*ctx, x.data(), abd);
-  const Geometry<double> g = ComputeGeometry(abd[0], abd[1], abd[2], p.camera);
+  const Geometry<double> g = ComputeGeometry(abd[0], abd[1], abd[2], p);
   const double v = k < 0 ? ObjectiveOf(g, p.objective) : ConstraintVector(g, p)[k];
   return v / scale;
 }

@@ -9,12 +9,21 @@
 //   system length                       2c (viewpoint to pinhole)
 //   ground radii (mounting height h)    h / tan(-lower) .. h / tan(-upper)   (infinite if upper >= 0)
 //   radial resolution                   d(rho) / d(elevation), px per degree, through ceres::Jet
+//   resolution at the field's top       the radial resolution at the rim ray (the elevation nearest the horizon)
+//   long-range resolution               the radial resolution at long_range_elevation_deg
+//   near-ground coverage                image area (Mpx) of the ground disc of radius near_ground_radius around
+//                                       the unit, outside the camera's own reflection
+//   plate height (rod position)         z_rim + 2c: the rim plane (mounting plate) above the pinhole
 // Constraints are written g <= 0 (feasible) in natural units (degrees, pixels, metres):
 //   upper_bound_below_limit        upper - max_upper_elevation_deg           (the article: below the horizon)
 //   rim_inside_image               rim radius - (min(W, H) / 2 - margin)     (the whole rim on the sensor, which
 //                                                                             is also "the camera sees the mirror")
 //   camera_reflection_inside_rim   camera reflection radius - rim radius     (the lower bound point is imaged)
-//   optional: min_vertical_field, min_rim_radius, max_system_length
+//   optional: min_vertical_field, min_rim_radius, max_system_length,
+//             rod_travel_min / rod_travel_max  (the plate height the push rod can reach)
+//   long_range_elevation_in_field       long_range_elevation_deg - upper  (objective long_range_resolution only)
+//   near_ground_disc_in_field           ground ring's elevation - upper    (objective near_ground_coverage only:
+//                                                                             the whole near disc is seen)
 #pragma once
 
 #include <optional>
@@ -37,9 +46,14 @@ struct CameraSpec {
   void Check(const std::string& where) const;
 };
 
-enum class Objective { kSmallestSystem, kWidestField, kLargestRim };
+enum class Objective { kSmallestSystem, kWidestField, kLargestRim, kLongRange, kNearGround };
 const char* ToString(Objective o);
 std::optional<Objective> ObjectiveFromString(const std::string& s);
+
+struct Range {
+  double min = 0, max = 0;
+  bool Fixed() const { return min == max; }
+};
 
 struct Constraints {
   double max_upper_elevation_deg = 0.0;  // upper bound of the field stays below this
@@ -47,22 +61,21 @@ struct Constraints {
   std::optional<double> min_vertical_field_deg;
   std::optional<double> min_rim_radius_px;
   std::optional<double> max_system_length;  // m
-};
-
-struct Range {
-  double min = 0, max = 0;
-  bool Fixed() const { return min == max; }
+  std::optional<Range> rod_travel;          // m, plate height (z_rim + 2c) the rod can set
 };
 
 struct DesignProblem {
   CameraSpec camera;
-  double mounting_height = 1.3;  // m, viewpoint above the ground
+  double mounting_height = 1.3;            // m, viewpoint above the ground
+  double long_range_elevation_deg = -5.0;  // where long_range_resolution is measured
+  double near_ground_radius = 3.0;         // m, the ground disc near_ground_coverage counts
   Constraints constraints;
   Objective objective = Objective::kSmallestSystem;
   Range a{0.020, 0.080}, b{0.020, 0.080}, d{0.080, 0.080};  // search box, m
 
   void Check(const std::string& where) const;
   double RimLimitPx() const;
+  double NearGroundElevationDeg() const;  // elevation of the ground ring at near_ground_radius
 };
 
 struct DesignPoint {
@@ -75,6 +88,10 @@ struct Metrics {
   double upper_deg = 0, lower_deg = 0, field_deg = 0;
   double rim_radius_px = 0, reflection_radius_px = 0;
   double ground_radius_inner = 0, ground_radius_outer = 0;  // m; outer is +inf when upper >= 0
+  double plate_height = 0;                                  // m, rim plane above the pinhole (rod position)
+  double upper_px_per_deg = 0;                              // radial resolution at the rim ray
+  double long_range_px_per_deg = 0;                         // at long_range_elevation_deg (0 outside the field)
+  double near_ground_mpx = 0;                               // image area of the near ground disc, Mpx
 };
 
 struct ConstraintValue {
@@ -90,7 +107,8 @@ CatadioptricCamera<double> RigOf(const DesignPoint& p, const CameraSpec& camera)
 Metrics Evaluate(const DesignPoint& p, const DesignProblem& problem);
 std::vector<ConstraintValue> EvaluateConstraints(const Metrics& m, const DesignProblem& problem);
 double MaxViolation(const std::vector<ConstraintValue>& g);
-// The objective as a value to minimise: 2c (m), -field (deg), -rim radius (px).
+// The objective as a value to minimise: 2c (m), -field (deg), -rim radius (px), -long-range resolution
+// (px / deg), -near-ground coverage (Mpx).
 double ObjectiveValue(const Metrics& m, Objective o);
 
 struct ResolutionSample {

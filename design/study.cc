@@ -33,6 +33,10 @@ nlohmann::json MetricsJson(const Metrics& m) {
   j["ground_radius_inner"] = m.ground_radius_inner;
   j["ground_radius_outer"] =
       std::isfinite(m.ground_radius_outer) ? nlohmann::json(m.ground_radius_outer) : nlohmann::json("infinite");
+  j["plate_height"] = m.plate_height;
+  j["upper_px_per_deg"] = m.upper_px_per_deg;
+  j["long_range_px_per_deg"] = m.long_range_px_per_deg;
+  j["near_ground_mpx"] = m.near_ground_mpx;
   return j;
 }
 
@@ -50,8 +54,6 @@ nlohmann::json OptimumJson(const Optimum& o) {
   j["constraints"] = cs;
   return j;
 }
-
-namespace {
 
 nlohmann::json ProblemJson(const DesignConfig& cfg) {
   const DesignProblem& p = cfg.problem;
@@ -76,9 +78,14 @@ nlohmann::json ProblemJson(const DesignConfig& cfg) {
   if (p.constraints.min_vertical_field_deg) k["min_vertical_field_deg"] = *p.constraints.min_vertical_field_deg;
   if (p.constraints.min_rim_radius_px) k["min_rim_radius_px"] = *p.constraints.min_rim_radius_px;
   if (p.constraints.max_system_length) k["max_system_length"] = *p.constraints.max_system_length;
+  if (p.constraints.rod_travel) k["rod_travel"] = {p.constraints.rod_travel->min, p.constraints.rod_travel->max};
   j["constraints"] = k;
+  j["long_range_elevation_deg"] = p.long_range_elevation_deg;
+  j["near_ground_radius"] = p.near_ground_radius;
   return j;
 }
+
+namespace {
 
 // The (a, b) slice of the sweep at the d index nearest to d.
 int SliceIndex(const SweepResult& s, double d) {
@@ -149,6 +156,19 @@ std::vector<std::string> MetricsRow(const std::string& label, const Optimum& o) 
 }
 
 }  // namespace
+
+double ObjectiveDisplay(Objective o, double value) { return o == Objective::kSmallestSystem ? value * 1e3 : -value; }
+
+std::string ObjectiveLabel(Objective o) {
+  switch (o) {
+    case Objective::kSmallestSystem: return "2c (mm)";
+    case Objective::kWidestField: return "field (deg)";
+    case Objective::kLargestRim: return "rim (px)";
+    case Objective::kLongRange: return "long-range resolution (px/deg)";
+    case Objective::kNearGround: return "near-ground coverage (Mpx)";
+  }
+  return "objective";
+}
 
 std::map<std::string, std::string> DesignVersions() {
   auto v = results::ResultsVersions();
@@ -294,13 +314,11 @@ std::string WriteDesignReport(const DesignConfig& cfg, const DesignStudy& st, co
       const SweepResult z = Sweep(zoom, SweepSpec{161, 161, 1});
       std::vector<double> objective(z.size()), upper(z.size()), rim(z.size());
       for (size_t i = 0; i < z.size(); ++i) {
-        objective[i] = cfg.problem.objective == Objective::kSmallestSystem ? z.system_length[i] * 1e3 : -z.objective[i];
+        objective[i] = ObjectiveDisplay(cfg.problem.objective, z.objective[i]);
         upper[i] = z.upper_deg[i];
         rim[i] = z.rim_px[i];
       }
-      const char* label = cfg.problem.objective == Objective::kSmallestSystem ? "2c (mm)"
-                          : cfg.problem.objective == Objective::kWidestField  ? "field (deg)"
-                                                                              : "rim (px)";
+      const std::string label = ObjectiveLabel(cfg.problem.objective);
       auto f = SliceFigure(z, 0, objective, "Feasible region near the optimum", label);
       const double lo = *std::min_element(objective.begin(), objective.end());
       const double hi = *std::max_element(objective.begin(), objective.end());

@@ -30,6 +30,7 @@ Optimum EvaluateDesign(const DesignPoint& p, const DesignProblem& problem, const
 
 // The JSON forms of design.json: a design's metrics and constraints, and the whole study (without versions).
 nlohmann::json MetricsJson(const Metrics& m);
+nlohmann::json ProblemJson(const DesignConfig& config);
 nlohmann::json OptimumJson(const Optimum& o);
 nlohmann::json DesignStudyJson(const DesignConfig& config, const DesignStudy& study);
 
@@ -37,6 +38,10 @@ nlohmann::json DesignStudyJson(const DesignConfig& config, const DesignStudy& st
 // index.html, summary.txt. Nothing is left behind if anything fails. Returns the summary text.
 std::string WriteDesignReport(const DesignConfig& config, const DesignStudy& study,
                               const std::filesystem::path& out_dir);
+
+// The objective in its natural sign and unit (2c in mm, field in deg, ...) and that unit's label.
+double ObjectiveDisplay(Objective o, double value);
+std::string ObjectiveLabel(Objective o);
 
 // Versions of every library the design layer uses.
 std::map<std::string, std::string> DesignVersions();
