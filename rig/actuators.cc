@@ -1,0 +1,100 @@
+#include "rig/actuators.h"
+
+#include <cmath>
+
+#include "core/error.h"
+
+namespace hovs::rig {
+
+const char* AxisName(AxisId axis) {
+  static const char* const kNames[kAxisCount] = {"turret", "rod", "x", "y", "tilt_x", "tilt_y", "focus"};
+  return kNames[static_cast<int>(axis)];
+}
+
+void AxisSpec::Check(const std::string& where) const {
+  HOVS_REQUIRE(std::isfinite(min) && std::isfinite(max) && min < max, where, "travel [", min, ", ", max,
+               "] must be finite with min < max");
+  HOVS_REQUIRE(std::isfinite(step) && step > 0 && step < max - min, where,
+               "step must be positive and below the travel");
+  HOVS_REQUIRE(std::isfinite(time_constant) && time_constant > 0 && time_constant <= 100, where,
+               "time_constant must be in (0, 100] s");
+  HOVS_REQUIRE(std::isfinite(backlash) && backlash >= 0 && backlash < 0.1 * (max - min), where,
+               "backlash must be >= 0 and below a tenth of the travel");
+  HOVS_REQUIRE(std::isfinite(noise) && noise >= 0 && noise < 0.1 * (max - min), where,
+               "noise must be >= 0 and below a tenth of the travel");
+}
+
+SimulatedAxis::SimulatedAxis(AxisId id, const AxisSpec& spec, double start, uint64_t seed)
+    : id_(id), spec_(spec), rng_(seed) {
+  spec_.Check(std::string("axis ") + AxisName(id));
+  HOVS_REQUIRE(start >= spec.min && start <= spec.max, std::string("axis ") + AxisName(id), "start ", start,
+               " outside the travel [", spec.min, ", ", spec.max, "]");
+  commanded_ = goal_ = motor_ = output_ = start;
+}
+
+void SimulatedAxis::MoveTo(double target) {
+  const std::string where = std::string("axis ") + AxisName(id_);
+  HOVS_REQUIRE(std::isfinite(target), where, "target is not a finite number");
+  const double q = spec_.min + std::round((target - spec_.min) / spec_.step) * spec_.step;
+  HOVS_REQUIRE(q >= spec_.min - 1e-12 && q <= spec_.max + 1e-12, where, "target ", target, " outside the travel [",
+               spec_.min, ", ", spec_.max, "]");
+  if (q == commanded_) return;
+  // Lost steps: the motor covers only part of the move; the controller counts it all.
+  goal_ = motor_ + (q - commanded_) * (1.0 - fault_.lost_steps);
+  commanded_ = q;
+  moving_ = true;
+}
+
+void SimulatedAxis::Advance(double dt) {
+  if (!moving_) return;
+  motor_ += (goal_ - motor_) * (1.0 - std::exp(-dt / spec_.time_constant));
+  const bool done = std::abs(goal_ - motor_) < 0.01 * spec_.step;
+  if (done) motor_ = goal_;
+  if (!fault_.stuck) {
+    // The output is dragged by the motor once the dead band is taken up.
+    const double half = 0.5 * spec_.backlash;
+    if (motor_ - output_ > half) output_ = motor_ - half;
+    if (output_ - motor_ > half) output_ = motor_ + half;
+  }
+  if (done) {
+    moving_ = false;
+    if (!fault_.stuck && spec_.noise > 0) offset_ = std::normal_distribution<double>(0, spec_.noise)(rng_);
+  }
+}
+
+SimulatedMachine::SimulatedMachine(const std::array<AxisSpec, kAxisCount>& specs,
+                                   const std::array<double, kAxisCount>& start, uint64_t seed, double tick)
+    : tick_(tick) {
+  HOVS_REQUIRE(std::isfinite(tick) && tick > 0 && tick <= 1, "simulated machine", "tick must be in (0, 1] s");
+  for (int i = 0; i < kAxisCount; ++i)
+    axes_[i] = std::make_unique<SimulatedAxis>(AxisAt(i), specs[i], start[i], seed * 1000003u + 7919u * (i + 1));
+}
+
+void SimulatedMachine::Advance(double dt) {
+  for (auto& a : axes_) a->Advance(dt);
+  now_ += dt;
+}
+
+void SimulatedMachine::WaitIdle(double timeout_s) {
+  const double end = now_ + timeout_s;
+  const auto any_moving = [&] {
+    for (const auto& a : axes_)
+      if (a->Moving()) return true;
+    return false;
+  };
+  while (any_moving() && now_ < end) Advance(tick_);
+  if (any_moving()) {
+    std::string names;
+    for (const auto& a : axes_)
+      if (a->Moving()) names += (names.empty() ? "" : ", ") + std::string(AxisName(a->id()));
+    throw Error("simulated machine", "axes still moving after " + std::to_string(timeout_s) + " s: " + names);
+  }
+}
+
+std::array<double, kAxisCount> SimulatedMachine::TruePositions() const {
+  std::array<double, kAxisCount> out;
+  for (int i = 0; i < kAxisCount; ++i) out[i] = axes_[i]->Output();
+  return out;
+}
+
+}  // namespace hovs::rig
