@@ -42,7 +42,9 @@ std::string FileSystemMessage(const std::filesystem::filesystem_error& e) {
 
 // A given --out is checked before the command does any work (CheckOutputFolder): every other option whose value
 // names an existing file or folder is one of its inputs. The command checks again when it writes.
-void CheckOutputOption(const CLI::App& sub) {
+void CheckOutputOption(const CLI::App& sub, const std::string& parent = "") {
+  const std::string name = parent.empty() ? sub.get_name() : parent + " " + sub.get_name();
+  for (const CLI::App* nested : sub.get_subcommands()) CheckOutputOption(*nested, name);  // hovs rig align ...
   const CLI::Option* out = sub.get_option_no_throw("--out");
   if (out == nullptr || out->count() == 0) return;
   const std::string target = out->results().front();
@@ -55,7 +57,7 @@ void CheckOutputOption(const CLI::App& sub) {
       if (!value.empty() && std::filesystem::exists(value, ec)) inputs.emplace_back(value);
     }
   }
-  CheckOutputFolder(target, sub.get_name(), inputs);
+  CheckOutputFolder(target, name, inputs);
 }
 
 }  // namespace
@@ -110,6 +112,10 @@ const std::vector<Command>& Commands() {
        SetupConvert},
       {"export", "A rendered dataset for learning pipelines: equirectangular RGB, range and mask, and the poses",
        SetupExport},
+      {"rig",
+       "The variable-scale unit in simulation: align a mirror from disturbed starts, switch mirrors (turret, rod, "
+       "alignment, focus)",
+       SetupRig},
       {"position", "Visual positioning: the camera's offset from the mirror design, from the rim in one image",
        SetupPosition},
       {"live",

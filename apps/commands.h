@@ -83,5 +83,6 @@ Runner SetupCompare(CLI::App* sub, const GlobalOptions* global);
 Runner SetupConvert(CLI::App* sub, const GlobalOptions* global);
 Runner SetupMerge(CLI::App* sub, const GlobalOptions* global);
 Runner SetupExport(CLI::App* sub, const GlobalOptions* global);
+Runner SetupRig(CLI::App* sub, const GlobalOptions* global);
 
 }  // namespace hovs::apps

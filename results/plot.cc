@@ -376,6 +376,7 @@ void WritePng(const LineFigure& f, const std::filesystem::path& path) {
     line->SetColor(static_cast<unsigned char>(255 * s.rgb[0]), static_cast<unsigned char>(255 * s.rgb[1]),
                    static_cast<unsigned char>(255 * s.rgb[2]), 255);
     line->SetWidth(static_cast<float>(s.line_width));
+    line->SetLegendVisibility(s.in_legend);
     if (s.points) {
       auto* points = vtkPlotPoints::SafeDownCast(line);
       points->SetMarkerStyle(vtkPlotPoints::CIRCLE);

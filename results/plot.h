@@ -59,6 +59,7 @@ struct Series {
   double line_width = 2.0;
   bool points = false;  // a scatter of markers (marker_size px) instead of a line
   double marker_size = 4.0;
+  bool in_legend = true;  // false: drawn but not listed (many runs of one kind)
 };
 
 struct LineFigure {

@@ -80,8 +80,9 @@ std::array<double, kAxisCount> DisturbedStart(const TurretSpec& spec, int k, con
 }
 
 void PidGains::Check(const std::string& where) const {
-  HOVS_REQUIRE(std::isfinite(kp) && kp > 0 && kp <= 2, where, "kp must be in (0, 2]");
+  HOVS_REQUIRE(std::isfinite(kp) && kp >= 0 && kp <= 2, where, "kp must be in [0, 2]");
   HOVS_REQUIRE(std::isfinite(ki) && ki >= 0 && ki <= 1, where, "ki must be in [0, 1]");
+  HOVS_REQUIRE(kp + ki > 0, where, "kp and ki cannot both be 0");
   HOVS_REQUIRE(std::isfinite(kd) && kd >= 0 && kd <= 1, where, "kd must be in [0, 1]");
 }
 

@@ -64,18 +64,18 @@ TEST(LabelPose, ACoveredLabelIsAnErrorNamingIt) {
   }
 }
 
-struct AlignRun {
+struct LoopRun {
   AlignResult result;
   MirrorPose start;
 };
 
-AlignRun AlignFrom(int k, uint64_t seed, const std::function<void(SimulatedUnit&)>& fault = {}) {
+LoopRun AlignFrom(int k, uint64_t seed, const std::function<void(SimulatedUnit&)>& fault = {}) {
   const TurretSpec& s = Spec();
   const auto seats = DrawSeats(s, 100 + seed);
   const auto start = DisturbedStart(s, k, seats[k], s.mirrors[k].PlateHeight(), 2e-3, 1.5 * kDeg, 3e-3, seed);
   SimulatedUnit unit(s, k, start, seats, seed);
   if (fault) fault(unit);
-  AlignRun r{Align(unit, s, {}), *unit.Truth()};
+  LoopRun r{Align(unit, s, {}), *unit.Truth()};
   r.start = *r.result.steps.front().truth;
   return r;
 }
@@ -83,7 +83,7 @@ AlignRun AlignFrom(int k, uint64_t seed, const std::function<void(SimulatedUnit&
 TEST(Positioning, EveryMirrorConvergesFromTheDisturbedStart) {
   for (int k = 0; k < static_cast<int>(Spec().mirrors.size()); ++k) {
     SCOPED_TRACE(Spec().mirrors[k].id);
-    const AlignRun r = AlignFrom(k, 1 + k);
+    const LoopRun r = AlignFrom(k, 1 + k);
     EXPECT_NEAR(r.start.LateralM(), 2e-3, 0.05e-3);
     EXPECT_NEAR(r.start.TiltRad(), 1.5 * kDeg, 0.05 * kDeg);
     EXPECT_NEAR(std::abs(r.start.offset.z()), 3e-3, 0.05e-3);
@@ -97,7 +97,7 @@ TEST(Positioning, EveryMirrorConvergesFromTheDisturbedStart) {
 }
 
 TEST(Positioning, AStuckAxisEndsTheLoopNamingIt) {
-  const AlignRun r = AlignFrom(0, 5, [](SimulatedUnit& u) { u.sim().sim(AxisId::kY).SetFault({true, 0.0}); });
+  const LoopRun r = AlignFrom(0, 5, [](SimulatedUnit& u) { u.sim().sim(AxisId::kY).SetFault({true, 0.0}); });
   EXPECT_FALSE(r.result.converged);
   EXPECT_EQ(r.result.failing, "y") << r.result.failure;
   EXPECT_NE(r.result.failure.find("axis y does not move"), std::string::npos) << r.result.failure;
@@ -105,7 +105,7 @@ TEST(Positioning, AStuckAxisEndsTheLoopNamingIt) {
 }
 
 TEST(Positioning, LostStepsEndTheLoopNamingTheAxis) {
-  const AlignRun r = AlignFrom(0, 6, [](SimulatedUnit& u) { u.sim().sim(AxisId::kRod).SetFault({false, 0.5}); });
+  const LoopRun r = AlignFrom(0, 6, [](SimulatedUnit& u) { u.sim().sim(AxisId::kRod).SetFault({false, 0.5}); });
   EXPECT_FALSE(r.result.converged);
   EXPECT_EQ(r.result.failing, "rod") << r.result.failure;
   EXPECT_NE(r.result.failure.find("axis rod loses steps"), std::string::npos) << r.result.failure;
@@ -113,7 +113,7 @@ TEST(Positioning, LostStepsEndTheLoopNamingTheAxis) {
 }
 
 TEST(Positioning, ACoveredLabelEndsTheLoopNamingTheMeasurement) {
-  const AlignRun r = AlignFrom(1, 7, [](SimulatedUnit& u) { u.CoverLabel(true); });
+  const LoopRun r = AlignFrom(1, 7, [](SimulatedUnit& u) { u.CoverLabel(true); });
   EXPECT_FALSE(r.result.converged);
   EXPECT_EQ(r.result.failing, "label");
   EXPECT_NE(r.result.failure.find("could not be measured in 3 images"), std::string::npos) << r.result.failure;
