@@ -340,6 +340,12 @@ RigFolder LoadRigFolder(const std::filesystem::path& rig_json, const TurretSpec&
                "expected {\"mirrors\": {\"<id>\": {\"calibration\": ..., \"map\": ...}}}");
   RigFolder r;
   r.root = rig_json.parent_path();
+  if (j.contains("downscale")) {
+    HOVS_REQUIRE(
+        j["downscale"].is_number_integer() && j["downscale"].get<int>() >= 1 && j["downscale"].get<int>() <= 16,
+        where + " (downscale)", "must be an integer 1..16");
+    r.downscale = j["downscale"].get<int>();
+  }
   for (const auto& [id, e] : j["mirrors"].items()) {
     spec.MirrorIndex(id);
     HOVS_REQUIRE(e.is_object() && e.contains("calibration") && e["calibration"].is_string() && e.contains("map") &&

@@ -135,7 +135,10 @@ TurretSpec ParseUnguarded(const std::string& text, const std::string& source, co
   }
   if (root["render"]) {
     const YAML::Node& o = root["render"];
-    r.OnlyKeys(o, "render", {"downscale", "samples", "seed"});
+    r.OnlyKeys(o, "render", {"downscale", "samples", "board_samples", "seed"});
+    if (o["board_samples"]) s.board_samples = r.Integer(o["board_samples"], "render.board_samples");
+    HOVS_REQUIRE(s.board_samples >= 1 && s.board_samples <= 1024, r.Where(o, "render.board_samples"),
+                 "must be 1..1024");
     if (o["downscale"]) s.downscale = r.Integer(o["downscale"], "render.downscale");
     if (o["samples"]) s.samples = r.Integer(o["samples"], "render.samples");
     if (o["seed"]) s.seed = r.Seed(o["seed"], "render.seed");
@@ -239,10 +242,11 @@ CatadioptricCamera<double> RigAt(const TurretSpec& spec, int k, const MirrorPose
   return rig;
 }
 
-TurretImage RenderTurret(const TurretSpec& spec, int k, const MirrorPose& pose, double focus_distance, uint64_t seed,
-                         bool label_covered) {
-  const auto start = std::chrono::steady_clock::now();
-  raytrace::SceneDescription desc = spec.surroundings->description;
+scenes::SceneConfig TurretSceneConfig(const TurretSpec& spec, int k, const MirrorPose& pose, double focus_distance,
+                                      uint64_t seed, bool label_covered) {
+  scenes::SceneConfig cfg = *spec.surroundings;
+  cfg.name = spec.name + "-" + spec.mirrors.at(k).id;
+  raytrace::SceneDescription& desc = cfg.description;
   desc.units.clear();
   raytrace::CatadioptricUnit unit;
   unit.name = spec.mirrors.at(k).id;
@@ -281,13 +285,22 @@ TurretImage RenderTurret(const TurretSpec& spec, int k, const MirrorPose& pose, 
     rect.world_from_rect = unit.world_from_mirror * mirror_from_rect;
     desc.rects.push_back(rect);
   }
+  cfg.render.samples = spec.samples;
+  cfg.render.seed = seed;
+  cfg.render.lens_radius = spec.lens_aperture_radius;
+  cfg.render.focus_distance = focus_distance;
+  return cfg;
+}
+
+TurretImage RenderTurret(const TurretSpec& spec, int k, const MirrorPose& pose, double focus_distance, uint64_t seed,
+                         bool label_covered) {
+  const auto start = std::chrono::steady_clock::now();
+  scenes::SceneConfig cfg = TurretSceneConfig(spec, k, pose, focus_distance, seed, label_covered);
+  raytrace::SceneDescription desc = std::move(cfg.description);
   const raytrace::RayScene scene(std::move(desc));
-  raytrace::RenderOptions ro;
-  ro.samples = spec.samples;
-  ro.seed = seed;
+  raytrace::RenderOptions ro = cfg.render;
   ro.ground_truth = false;
-  ro.lens_radius = spec.lens_aperture_radius;
-  ro.focus_distance = focus_distance;
+  ro.progress = false;
   const raytrace::Frame frame = raytrace::Render(scene, raytrace::ViewCamera::Unit(0), ro);
   int channels = 0;
   const raytrace::PixelBuffer img = raytrace::ApplySensor(frame, ro.sensor, seed, &channels);

@@ -12,7 +12,8 @@
 //   label {dictionary, marker_length, margin, centres [[x, y], ...]}: marker i (id i) centred at (x, y) in the
 //     plate frame, 0.3 mm below the rim plane, facing the camera,
 //   axes {turret, rod, x, y, tilt_x, tilt_y, focus}: each {min, max, step, time_constant, backlash, noise},
-//   render {downscale, samples, seed}.
+//   render {downscale, samples, board_samples, seed}: samples per pixel of the loop's images and of the
+//     calibration boards' images.
 //
 // Pose of a mirror: its deviation from the nominal placement for its slot (camera pinhole at the mirror's second
 // focus, axes aligned), in the nominal mirror frame: the plate centre (on the axis, in the rim plane) displaced
@@ -67,6 +68,7 @@ struct TurretSpec {
   std::shared_ptr<const scenes::SceneConfig> surroundings;
   Rigid3d world_from_cam;  // the camera's fixed place
   int downscale = 2, samples = 4;
+  int board_samples = 16;  // calibration boards: corners a calibration can trust need less sampling noise
   uint64_t seed = 1;
 
   // The camera of the rendered images: `downscale` times fewer pixels, the same optics.
@@ -103,6 +105,10 @@ struct TurretImage {
   std::vector<uint8_t> grey;
   double render_seconds = 0;
 };
+// The scene of mirror k at `pose`: the surroundings, the unit (at spec.ImageCamera()'s resolution) and its label,
+// with the machine's render settings and the lens focused at focus_distance.
+scenes::SceneConfig TurretSceneConfig(const TurretSpec& spec, int k, const MirrorPose& pose, double focus_distance,
+                                      uint64_t seed, bool label_covered = false);
 // Renders mirror k at `pose` with the lens focused at focus_distance; label_covered hides the label (a fault).
 TurretImage RenderTurret(const TurretSpec& spec, int k, const MirrorPose& pose, double focus_distance, uint64_t seed,
                          bool label_covered = false);

@@ -84,23 +84,20 @@ TEST(RigCli, BadInputsExitTwoAndWriteNothing) {
   EXPECT_NE(r.output.find("mirror 'wide' needs the plate at"), std::string::npos) << r.output;
 }
 
-TEST(RigCli, SwitchAlignsFocusesAndLoadsTheMirrorsCalibration) {
-  // A rig folder for the reference mirror: its exact model as an omnidir file and a mapping file made from it.
+TEST(RigCli, ACalibrationStoredInTheRigFolderHoldsAfterASwitch) {
+  // The reference mirror calibrated where the loop put it (at half resolution), then a switch from the wide
+  // mirror back to it: align, focus, load its files, and a fresh board through the stored model.
   const fs::path rig = Scratch("rig", "folder");
-  fs::create_directories(rig);
-  const std::string scene = std::string(HOVS_SOURCE_DIR) + "/scenes/reference_board.yaml";
-  ASSERT_EQ(Hovs("convert " + scene + " --to omnidir --out " + (rig / "model").string()).exit_code, 0);
-  fs::path yaml;
-  for (const auto& e : fs::directory_iterator(rig / "model"))
-    if (e.path().extension() == ".yaml") yaml = e.path();
-  ASSERT_FALSE(yaml.empty());
-  const auto u = Hovs("unwrap --model " + yaml.string() + " --layout article --save-map " +
-                      (rig / "reference.hmap").string() + " --out " + (rig / "views").string());
-  ASSERT_EQ(u.exit_code, 0) << u.output;
-  std::ofstream(rig / "rig.json") << R"({"mirrors": {"reference": {"calibration": ")" +
-                                         fs::relative(yaml, rig).string() + R"(", "map": "reference.hmap"}}})";
+  const auto c = Hovs("rig calibrate --machine " + kMachine +
+                      " --downscale 2 --mirror reference --frames 5 --seed 3 --out " + rig.string());
+  ASSERT_EQ(c.exit_code, 0) << c.output;
+  EXPECT_TRUE(fs::exists(rig / "reference" / "views.hmap"));
+  const auto record = ReadJson(rig / "rig.json");
+  EXPECT_EQ(record["downscale"], 2);
+  EXPECT_LT(record["mirrors"]["reference"]["rms_px"].get<double>(), 0.15);
+
   const fs::path out = Scratch("rig", "switch");
-  const auto r = Hovs("rig switch --machine " + kMachine + " --downscale 2 --from wide --to reference --rig " +
+  const auto r = Hovs("rig switch --machine " + kMachine + " --downscale 2 --seed 3 --from wide --to reference --rig " +
                       (rig / "rig.json").string() + " --out " + out.string());
   ASSERT_EQ(r.exit_code, 0) << r.output;
   const auto j = ReadJson(out / "switch.json");
@@ -112,6 +109,14 @@ TEST(RigCli, SwitchAlignsFocusesAndLoadsTheMirrorsCalibration) {
   EXPECT_LT(j["final_truth"]["tilt_deg"].get<double>(), 0.02);
   EXPECT_GT(j["focus"]["focus_m"].get<double>(), 0.14);  // the reference mirror's image lies beyond its plate
   EXPECT_EQ(j["loaded"]["map_views"], 6);
+  EXPECT_EQ(j["fresh_board"]["corners"], 35);
+  EXPECT_LT(j["fresh_board"]["rms_px"].get<double>(), 0.1);
+
+  // The same folder at another resolution is refused before anything runs.
+  const auto bad = Hovs("rig switch --machine " + kMachine + " --to reference --rig " + (rig / "rig.json").string() +
+                        " --out " + Scratch("rig", "bad-switch").string());
+  EXPECT_EQ(bad.exit_code, 2) << bad.output;
+  EXPECT_NE(bad.output.find("give --downscale 2"), std::string::npos) << bad.output;
 }
 
 }  // namespace
