@@ -91,6 +91,7 @@ Runner SetupPosition(CLI::App* sub, const GlobalOptions* global) {
         {"rms_px", p.rms_px},
         {"converged", p.converged},
         {"rim_inliers", p.inliers},
+        {"edge_points_hidden_by_mount", p.occluded},
         {"rim_inlier_fraction", p.inlier_fraction}};
     char buf[512];
     std::snprintf(buf, sizeof buf,

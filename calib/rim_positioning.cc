@@ -112,6 +112,23 @@ RimEdge DetectRimEdge(const uint8_t* grey, int width, int height, const Catadiop
   return out;
 }
 
+bool ReflectionMeetsMount(const CatadioptricCamera<double>& rig, const Vec2d& pixel) {
+  Vec3d ray;
+  if (!rig.camera.CamFromImg(pixel, &ray)) return false;
+  const Rigid3d mirror_from_cam = rig.cam_from_mirror.Inverse();
+  const Vec3d c = mirror_from_cam.translation, v = mirror_from_cam.rotation * ray;
+  const double z = rig.mirror.RimZ();
+  if (!(std::abs(v.z()) > 1e-12)) return false;
+  // The rim point in the pixel's direction: the ray meets the rim plane; scaled onto the rim circle.
+  const Vec3d hit = c + v * ((z - c.z()) / v.z());
+  const double r = hit.head<2>().norm();
+  if (!(r > 0)) return false;
+  const Vec3d m(hit.x() * rig.mirror.RimRadius() / r, hit.y() * rig.mirror.RimRadius() / r, z);
+  const Vec3d in = (m - c).normalized(), n = rig.mirror.Normal(m);
+  const Vec3d out = in - 2 * in.dot(n) * n;
+  return out.z() > std::sin(-kRimClearanceDeg * M_PI / 180);
+}
+
 MirrorPosition EstimateMirrorPosition(const RimEdge& edge, const CatadioptricCamera<double>& rig) {
   HOVS_REQUIRE(edge.points.size() >= 20, "mirror positioning", "only ", edge.points.size(),
                " rim edge points (at least 20 needed): is the rim in the image?");
@@ -171,7 +188,22 @@ MirrorPosition LocateMirror(const uint8_t* grey, int width, int height, const Ca
   fine.search_px = std::max(3.0, o.search_px / 4);
   const RimEdge second = DetectRimEdge(grey, width, height, WithCameraOffset(nominal, first.offset), fine);
   if (edge) *edge = second;
-  const MirrorPosition p = estimate(second);
+  MirrorPosition p = estimate(second);
+  // Where the reflection at the rim leaves upwards (the field's top above the rim plane there: a camera off its
+  // focus, closer or to the side), the rays reflected next to the rim meet the mount ring's underside, the last
+  // pixels inside the rim image are dark and the visible edge lies up to a few pixels inside the rim. Those edge
+  // points are dropped and the position estimated again (twice: the first drop moves the estimate).
+  for (int pass = 0; pass < 2; ++pass) {
+    const CatadioptricCamera<double> rig = WithCameraOffset(nominal, p.offset);
+    RimEdge clear = second;
+    clear.points.clear();
+    for (const Vec2d& q : second.points)
+      if (!ReflectionMeetsMount(rig, q)) clear.points.push_back(q);
+    if (clear.points.size() == second.points.size() || clear.points.size() < 20) break;
+    const int occluded = static_cast<int>(second.points.size() - clear.points.size());
+    p = EstimateMirrorPosition(clear, nominal);
+    p.occluded = occluded;
+  }
   HOVS_REQUIRE(p.inlier_fraction >= kRimMinInlierFraction && p.inliers >= kRimMinRayFraction * second.rays, where,
                "no rim: of ", second.rays, " rays, ", p.inliers, " show an edge within ", kRimInlierPx,
                " px of one rim (", static_cast<int>(std::lround(100 * p.inlier_fraction)),

@@ -52,12 +52,35 @@ TEST(RimPositioning, RecoversTheCameraOffsetAndHeightFromTheRim) {
         1e3 * true_offset.x(), 1e3 * true_offset.y(), 1e3 * true_offset.z(), p.points, edge.rays, 1e3 * p.offset.x(),
         1e3 * p.offset.y(), 1e3 * p.offset.z(), p.rms_px, p.rim_radius_px, p.nominal_rim_radius_px);
     EXPECT_TRUE(p.converged);
-    EXPECT_GT(p.points, 250);  // rays whose search leaves the image (top and bottom of the rim) are skipped
-    // At 1375 x 1100 (23 px per mm of lateral offset, 8 px of rim radius per mm of height): measured errors
-    // 0.002-0.066 mm lateral, 0.001-0.13 mm in height (the camera 1 mm closer shows a bias not yet explained).
-    EXPECT_LT((p.offset.head<2>() - true_offset.head<2>()).norm(), 1e-4) << "lateral, m";
-    EXPECT_LT(std::abs(p.offset.z() - true_offset.z()), 2e-4) << "height, m";
+    // Rays whose search leaves the image (top and bottom of the rim) are skipped.
+    EXPECT_GT(p.points + p.occluded, 250);
+    // At 1375 x 1100 (23 px per mm of lateral offset, 8 px of rim radius per mm of height). The camera 1 mm closer
+    // and 1.5 mm to the side lifts the field's top above the rim plane on one side, where the mount ring hides
+    // the reflection next to the rim: those edge points are left out.
+    EXPECT_LT((p.offset.head<2>() - true_offset.head<2>()).norm(), 2e-5) << "lateral, m";
+    EXPECT_LT(std::abs(p.offset.z() - true_offset.z()), 3e-5) << "height, m";
+    if (height < 0) EXPECT_GT(p.occluded, 20);
     EXPECT_LT(p.rms_px, 0.6);
+  }
+}
+
+TEST(RimPositioning, ATiltedCameraReadsAsItsEquivalentTiltWithTheHeightKept) {
+  // The rim alone cannot tell a camera tilt from a lateral offset (hence the label of rig/label_pose.h): a tilt
+  // must come out as the equivalent tilt it reports, with the height unaffected to first order.
+  for (const Vec3d& tilt_deg : {Vec3d(0, 0.5, 0), Vec3d(-0.4, 0, 0)}) {
+    const Rendered r = RenderWithOffset(Vec3d::Zero(), 0.0, tilt_deg * M_PI / 180);
+    const MirrorPosition p =
+        LocateMirror(r.grey.data(), r.nominal.camera.width, r.nominal.camera.height, r.nominal, {});
+    std::printf(
+        "[ figure ] rim positioning, camera tilted (%.2f, %.2f) deg: equivalent tilt (%.4f, %.4f) deg, "
+        "lateral (%.4f, %.4f) mm, height %.4f mm\n",
+        tilt_deg.x(), tilt_deg.y(), p.equivalent_tilt_rad.x() * 180 / M_PI, p.equivalent_tilt_rad.y() * 180 / M_PI,
+        1e3 * p.offset.x(), 1e3 * p.offset.y(), 1e3 * p.offset.z());
+    // A turn about y moves the rim image along x (the offset's x), a turn about x along y.
+    const double magnitude = tilt_deg.norm(), reported = p.equivalent_tilt_rad.norm() * 180 / M_PI;
+    // The conversion is first order: measured 9.5 % over for both.
+    EXPECT_NEAR(reported, magnitude, 0.15 * magnitude);
+    EXPECT_LT(std::abs(p.offset.z()), 5e-5) << "height, m";
   }
 }
 
