@@ -251,12 +251,7 @@ std::string WriteFamilyReport(const DesignConfig& cfg, const MirrorFamily& famil
   page.Paragraph(
       "family.json (every design, constraint and solver log, the config and versions), family.csv (the "
       "table), radial_resolution.csv, config.yaml, summary.txt.");
-  page.Heading("Config");
-  page.Preformatted(cfg.text);
-  page.Heading("Versions");
-  std::vector<std::vector<std::string>> vrows;
-  for (const auto& [k, v] : versions) vrows.push_back({k, v});
-  page.Table({"library", "version"}, vrows);
+  AppendConfigAndVersions(&page, cfg.text, versions);
   WriteFileAtomic(dir / "index.html", page.Render());
   stage.Commit();
   return sum.str();

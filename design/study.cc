@@ -157,6 +157,16 @@ std::vector<std::string> MetricsRow(const std::string& label, const Optimum& o) 
 
 }  // namespace
 
+void AppendConfigAndVersions(results::HtmlPage* page, const std::string& config_text,
+                             const std::map<std::string, std::string>& versions) {
+  page->Heading("Config");
+  page->Preformatted(config_text);
+  page->Heading("Versions");
+  std::vector<std::vector<std::string>> rows;
+  for (const auto& [k, v] : versions) rows.push_back({k, v});
+  page->Table({"library", "version"}, rows);
+}
+
 double ObjectiveDisplay(Objective o, double value) { return o == Objective::kSmallestSystem ? value * 1e3 : -value; }
 
 std::string ObjectiveLabel(Objective o) {
@@ -430,12 +440,7 @@ std::string WriteDesignReport(const DesignConfig& cfg, const DesignStudy& st, co
   page.Heading("Files");
   page.Paragraph("design.json (every figure, the config and versions), sweep.csv (" + std::to_string(s.size()) +
                  " designs), radial_resolution.csv, config.yaml, summary.txt.");
-  page.Heading("Config");
-  page.Preformatted(cfg.text);
-  page.Heading("Versions");
-  std::vector<std::vector<std::string>> vrows;
-  for (const auto& [k, v] : versions) vrows.push_back({k, v});
-  page.Table({"library", "version"}, vrows);
+  AppendConfigAndVersions(&page, cfg.text, versions);
   WriteFileAtomic(dir / "index.html", page.Render());
 
   stage.Commit();

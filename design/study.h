@@ -10,6 +10,7 @@
 
 #include "design/config.h"
 #include "design/design.h"
+#include "results/html.h"
 
 namespace hovs::design {
 
@@ -38,6 +39,10 @@ nlohmann::json DesignStudyJson(const DesignConfig& config, const DesignStudy& st
 // index.html, summary.txt. Nothing is left behind if anything fails. Returns the summary text.
 std::string WriteDesignReport(const DesignConfig& config, const DesignStudy& study,
                               const std::filesystem::path& out_dir);
+
+// A report page's closing sections: the config's text and the libraries' versions.
+void AppendConfigAndVersions(results::HtmlPage* page, const std::string& config_text,
+                             const std::map<std::string, std::string>& versions);
 
 // The objective in its natural sign and unit (2c in mm, field in deg, ...) and that unit's label.
 double ObjectiveDisplay(Objective o, double value);
