@@ -13,6 +13,7 @@
 #include <opencv2/imgproc.hpp>
 
 #include "apps/commands.h"
+#include "apps/live_rig.h"
 #include "apps/model_files.h"
 #include "apps/sources.h"
 #include "core/error.h"
@@ -29,6 +30,7 @@ namespace {
 namespace fs = std::filesystem;
 struct Options {
   SourceOptions source;
+  RigLiveCliOptions rig;
   std::string model, unit, map, layout = "article", interp = "bilinear", out;
   int frames = 100, write_every = 0;
   double seconds = 0, timeout = 3, scene_distance = 10;
@@ -72,6 +74,15 @@ void CheckOptions(const Options& o) {
 }
 
 int RunLiveCommand(const Options& o, const GlobalOptions& global) {
+  if (!o.rig.rig_json.empty()) {
+    HOVS_REQUIRE(o.model.empty() && o.map.empty(), "--rig",
+                 "the rig folder gives each mirror's mapping; drop --model / --map");
+    HOVS_REQUIRE(o.source.cameras.empty() && o.source.replay.empty(), "--rig",
+                 "the unit runs in simulation (--simulate MACHINE.yaml)");
+    HOVS_REQUIRE(!o.display, "--rig", "--display is not available with a rig yet");
+    return RunRigLiveCommand(o.rig, {o.source.simulate, o.out, o.interp, o.frames, o.write_every, Versions()}, global);
+  }
+  HOVS_REQUIRE(o.rig.switches.empty() && o.rig.start.empty(), "--switch", "needs --rig");
   CheckOptions(o);
   hw::LiveOptions lo;
   lo.interpolation = unwrap::ParseInterpolation(o.interp);
@@ -149,6 +160,7 @@ int RunLiveCommand(const Options& o, const GlobalOptions& global) {
 Runner SetupLive(CLI::App* sub, const GlobalOptions* global) {
   auto o = std::make_shared<Options>();
   AddSourceOptions(sub, &o->source);
+  AddRigLiveOptions(sub, &o->rig);
   sub->add_option("--model", o->model, "model: scene YAML, dataset.json, calib_results.txt or calibration.json");
   sub->add_option("--unit", o->unit, "unit of a scene or manifest model");
   sub->add_option("--map", o->map, "a mapping file (hovs unwrap --save-map) instead of --model");

@@ -5,7 +5,8 @@
 //   calibrated models (+ sparse depth of the marker corners) -> six-view expansion and panorama of the street with
 //   the calibrated model, against pinhole renders -> dense depth of the street with the calibrated models and pose,
 //   against the range channel -> the real images of ../shared/data/vmr (detection, calibration beside OpenCV's
-//   omnidir, a panorama; no ground truth there).
+//   omnidir, a panorama; no ground truth there) -> the variable-scale unit: each turret mirror calibrated where the
+//   positioning loop put it, a round of switches checked on fresh boards, the same round in one live stream.
 //
 // Each stage runs the same code as its subcommand (in process, through the command table) and writes into
 // <out>/<stage folder>; metrics.json and report.html are rewritten after every stage, so a run stopped by bad
@@ -60,7 +61,8 @@ Runner SetupValidate(CLI::App* sub, const GlobalOptions* global) {
     if (o->stereo_pairs > 0) p.stereo_count = o->stereo_pairs;
     if (o->samples > 0) p.mono_samples = p.stereo_samples = p.street_samples = p.truth_samples = o->samples;
     const fs::path target = o->out.empty() ? fs::path("results") / ("validate-" + p.name) : fs::path(o->out);
-    for (const char* f : {"scenes/reference_stereo.yaml", "scenes/street.yaml", "design/reference.yaml"})
+    for (const char* f :
+         {"scenes/reference_stereo.yaml", "scenes/street.yaml", "design/reference.yaml", "scenes/turret.yaml"})
       HOVS_REQUIRE(fs::exists(fs::path(o->source) / f), "--source", "no ", f, " under '", o->source,
                    "' (run from the source tree or give --source)");
     // Staged like every report: a failed or interrupted run leaves an earlier report as it was.
@@ -72,6 +74,7 @@ Runner SetupValidate(CLI::App* sub, const GlobalOptions* global) {
     StereoCalibrations(v);
     ViewsAndDenseDepth(v);
     RealImages(v, o->real);
+    VariableScale(v, o->seed);
     v.Finish(std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());
     stage.Commit();
     if (global->json)

@@ -36,6 +36,7 @@ Preset MakePreset(const std::string& name) {
   // Pixel figures double at half resolution; angles and ranges get the same relative slack.
   p.detection_rms_px = 0.3, p.calibration_rms_px = 0.3;
   p.baseline_mm = 1.0, p.rotation_deg = 0.04, p.sparse_rel = 0.01;
+  p.rig_offset_mm = 0.1, p.rig_tilt_deg = 0.04;  // the label's pose at half resolution
   // The left unit's physical model at half resolution is off by about 0.25 deg (see the ray-angle targets): its
   // views reach 25 dB against the truth renders; the guard only catches gross breakage there.
   p.min_psnr_db = 23, p.dense_median_rel = 0.03;

@@ -25,6 +25,9 @@ struct Preset {
   int street_samples = 4, truth_samples = 4;
   int depth_width = 2048, depth_height = 512, disparities = 320;
   bool design = true, real = true;
+  int rig_frames = 9;  // calibration boards per turret mirror (5 leave a mirror's calibration short of fresh boards)
+  // The variable-scale acceptance (issue 45): pose after a switch, fresh board through the stored calibration.
+  double rig_offset_mm = 0.05, rig_tilt_deg = 0.02, rig_board_rms_px = 0.1;
   // Thresholds (issue numbers in the check names' notes).
   double detection_rms_px = 0.15, calibration_rms_px = 0.15;
   double baseline_mm = 0.5, rotation_deg = 0.02, sparse_rel = 0.01;
@@ -87,5 +90,8 @@ void MonoCalibrations(Validation& v);
 void StereoCalibrations(Validation& v);
 void ViewsAndDenseDepth(Validation& v);
 void RealImages(Validation& v, const std::string& real);
+// The variable-scale unit (scenes/turret.yaml): every mirror calibrated where the loop put it, a round of switches
+// each checked on a fresh board, and the same round in one live stream (frames held while the unit is not ready).
+void VariableScale(Validation& v, uint64_t seed);
 
 }  // namespace hovs::apps

@@ -13,17 +13,6 @@ using Clock = std::chrono::steady_clock;
 
 double Ms(Clock::time_point a, Clock::time_point b) { return std::chrono::duration<double, std::milli>(b - a).count(); }
 
-void WriteViews(const std::filesystem::path& dir, int frame, const unwrap::RemapTable& table,
-                const std::vector<unwrap::Image8>& views) {
-  for (size_t v = 0; v < views.size(); ++v) {
-    std::vector<float> fl(views[v].data.size());
-    for (size_t k = 0; k < fl.size(); ++k) fl[k] = views[v].data[k] / 255.f;
-    char rel[160];
-    std::snprintf(rel, sizeof rel, "frame%06d_%s.png", frame, table.views[v].spec.name.c_str());
-    io::WriteImage(dir / rel, views[v].width, views[v].height, views[v].channels, fl, 8);
-  }
-}
-
 void Loop(CameraSource& cam, const unwrap::RemapTable& table, const LiveOptions& o, std::atomic<bool>* stop,
           const std::function<void(const std::vector<unwrap::Image8>&)>& display, LiveRun* r) {
   unwrap::Remapper remapper(table);
@@ -55,7 +44,9 @@ void Loop(CameraSource& cam, const unwrap::RemapTable& table, const LiveOptions&
     remapper.Run({f->data.data(), f->width, f->height, size_t(f->width), o.format}, o.interpolation, &views);
     const auto t2 = Clock::now();
     if (o.write_every > 0 && r->processed % o.write_every == 0) {
-      WriteViews(o.out_dir, r->processed, table, views);
+      char stem[32];
+      std::snprintf(stem, sizeof stem, "frame%06d", r->processed);
+      WriteLiveViews(o.out_dir, stem, table, views);
       ++r->written;
     }
     const auto t3 = Clock::now();
@@ -72,6 +63,16 @@ void Loop(CameraSource& cam, const unwrap::RemapTable& table, const LiveOptions&
 }
 
 }  // namespace
+
+void WriteLiveViews(const std::filesystem::path& dir, const std::string& stem, const unwrap::RemapTable& table,
+                    const std::vector<unwrap::Image8>& views) {
+  for (size_t v = 0; v < views.size(); ++v) {
+    std::vector<float> fl(views[v].data.size());
+    for (size_t k = 0; k < fl.size(); ++k) fl[k] = views[v].data[k] / 255.f;
+    io::WriteImage(dir / (stem + "_" + table.views[v].spec.name + ".png"), views[v].width, views[v].height,
+                   views[v].channels, fl, 8);
+  }
+}
 
 LiveRun RunLive(CameraSource& cam, const unwrap::RemapTable& table, const LiveOptions& options, std::atomic<bool>* stop,
                 const std::function<void(const std::vector<unwrap::Image8>&)>& display) {

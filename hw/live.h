@@ -36,6 +36,10 @@ struct LiveRun {
   std::vector<double> wait_ms, remap_ms, write_ms, display_ms, total_ms;
 };
 
+// Writes the views of one frame as dir/<stem>_<view>.png (8 bits).
+void WriteLiveViews(const std::filesystem::path& dir, const std::string& stem, const unwrap::RemapTable& table,
+                    const std::vector<unwrap::Image8>& views);
+
 // Runs until `frames` frames are processed, `seconds` pass, the replay ends or *stop is set (Ctrl-C; the display
 // may set it too). Starts and stops the camera; throws hovs::Error naming the source when no complete frame
 // arrives in time or a frame does not match the mapping's size.

@@ -50,6 +50,7 @@ class SimulatedUnit final : public Plant {
                 std::vector<MirrorPose> seats, uint64_t seed);
   Machine& machine() override { return machine_; }
   SimulatedMachine& sim() { return machine_; }
+  const SimulatedMachine& sim() const { return machine_; }
   TurretImage Observe() override;
   std::optional<MirrorPose> Truth() const override;
   int Mirror() const override { return mirror_; }

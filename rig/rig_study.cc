@@ -339,6 +339,10 @@ RigFolder LoadRigFolder(const std::filesystem::path& rig_json, const TurretSpec&
         where + " (downscale)", "must be an integer 1..16");
     r.downscale = j["downscale"].get<int>();
   }
+  if (j.contains("seed")) {
+    HOVS_REQUIRE(j["seed"].is_number_unsigned(), where + " (seed)", "must be a non-negative integer");
+    r.seed = j["seed"].get<uint64_t>();
+  }
   for (const auto& [id, e] : j["mirrors"].items()) {
     spec.MirrorIndex(id);
     HOVS_REQUIRE(e.is_object() && e.contains("calibration") && e["calibration"].is_string() && e.contains("map") &&

@@ -77,7 +77,8 @@ std::string WriteAlignReport(const TurretSpec& spec, const AlignStudyOptions& op
 // the folder. Every id must be a mirror of the machine and every file must exist.
 struct RigFolder {
   std::filesystem::path root;
-  int downscale = 1;  // the image resolution its calibrations are for (1/downscale of the camera's)
+  int downscale = 1;             // the image resolution its calibrations are for (1/downscale of the camera's)
+  std::optional<uint64_t> seed;  // the machine's seats its calibrations were made on (hovs rig calibrate --seed)
   struct Entry {
     std::filesystem::path calibration, map;
   };

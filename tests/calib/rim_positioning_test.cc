@@ -59,7 +59,7 @@ TEST(RimPositioning, RecoversTheCameraOffsetAndHeightFromTheRim) {
     // the reflection next to the rim: those edge points are left out.
     EXPECT_LT((p.offset.head<2>() - true_offset.head<2>()).norm(), 2e-5) << "lateral, m";
     EXPECT_LT(std::abs(p.offset.z() - true_offset.z()), 3e-5) << "height, m";
-    if (height < 0) EXPECT_GT(p.occluded, 20);
+    if (height < 0) { EXPECT_GT(p.occluded, 20); }
     EXPECT_LT(p.rms_px, 0.6);
   }
 }

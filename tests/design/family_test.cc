@@ -122,7 +122,7 @@ TEST(FamilyResolution, ClosedFormMatchesTheCoreProjection) {
     const CatadioptricCamera<double> rig = RigOf(p, cfg.problem.camera);
     // Central difference of the core's projection of a direction at elevation e.
     const auto rho = [&](double e) {
-      Vec2<double> uv;
+      Vec2<double> uv = Vec2<double>::Zero();
       EXPECT_EQ(rig.ImgFromMirrorSvp(Vec3<double>(std::cos(e), 0, std::sin(e)), &uv), ProjectionStatus::kOk);
       return uv(0) - rig.camera.cx;
     };

@@ -1,6 +1,6 @@
 // hovs rig on the command line: an alignment study's JSON against the acceptance, a fault's exit code and error
 // naming the axis with the state written, bad inputs (exit 2, nothing written), and a switch that loads the new
-// mirror's calibration and mapping file from a rig folder.
+// mirror's calibration and mapping file from a rig folder; hovs live on the unit, with a switch during the stream.
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -117,6 +117,63 @@ TEST(RigCli, ACalibrationStoredInTheRigFolderHoldsAfterASwitch) {
                         " --out " + Scratch("rig", "bad-switch").string());
   EXPECT_EQ(bad.exit_code, 2) << bad.output;
   EXPECT_NE(bad.output.find("give --downscale 2"), std::string::npos) << bad.output;
+}
+
+TEST(RigCli, LiveHoldsEveryFrameTakenWhileTheUnitIsNotReady) {
+  // Two mirrors calibrated at half resolution; then a live stream that brings the unit up on the wide mirror and
+  // switches to the reference mirror during the stream. Every frame is either expanded with the mapping of the
+  // mirror it shows or held; no expanded frame's true pose misses the acceptance.
+  const fs::path rig = Scratch("rig", "live-folder");
+  const auto c = Hovs("rig calibrate --machine " + kMachine +
+                      " --downscale 2 --mirror wide --mirror reference --frames 5 "
+                      "--seed 5 --out " +
+                      rig.string());
+  ASSERT_EQ(c.exit_code, 0) << c.output;
+  const fs::path out = Scratch("rig", "live");
+  constexpr int kFrames = 100, kSwitchAt = 40;
+  const auto r = Hovs("live --rig " + (rig / "rig.json").string() + " --simulate " + kMachine +
+                      " --start wide --switch " + std::to_string(kSwitchAt) + ":reference --rig-fps 2 -n " +
+                      std::to_string(kFrames) + " --write-every 3 --out " + out.string());
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  const auto j = ReadJson(out / "live.json");
+  EXPECT_EQ(j["seed"], 5);  // the rig folder's seats
+  ASSERT_EQ(j["frames"].size(), static_cast<size_t>(kFrames));
+  EXPECT_EQ(j["frames_expanded"].get<int>() + j["frames_held"].get<int>(), kFrames);
+  EXPECT_EQ(j["ready_outside_tolerance"], 0);
+  EXPECT_EQ(j["mapping_swaps"], 1);
+  ASSERT_EQ(j["switches"].size(), 2u);  // the bring-up on wide, then the switch
+  for (const auto& s : j["switches"]) EXPECT_TRUE(s["converged"].get<bool>()) << s.dump();
+  EXPECT_EQ(j["switches"][1]["from"], "wide");
+  EXPECT_EQ(j["switches"][1]["to"], "reference");
+  for (const char* state : {"moving", "aligning", "focusing"})
+    EXPECT_GT(j["held_by_state"].value(state, 0), 0) << state;
+  const int64_t switch_first = j["switches"][1]["frames"][0], switch_last = j["switches"][1]["frames"][1];
+  EXPECT_EQ(switch_first, kSwitchAt);
+  ASSERT_LT(switch_last + 1, kFrames) << "the switch must end within the run";
+  int written = 0, expanded_after = 0;
+  for (const auto& f : j["frames"]) {
+    const int64_t i = f["index"];
+    const bool expanded = f["expanded"];
+    // Held exactly while a switch runs, expanded otherwise, with the mapping of the mirror the unit is on.
+    const bool in_switch = i <= j["switches"][0]["frames"][1].get<int64_t>() || (i >= switch_first && i <= switch_last);
+    EXPECT_EQ(expanded, !in_switch) << f.dump();
+    EXPECT_EQ(f["state"] == "ready", expanded) << f.dump();
+    if (expanded) {
+      EXPECT_TRUE(f["within_tolerance"].get<bool>()) << f.dump();
+      EXPECT_EQ(f["mirror"], i > switch_last ? "reference" : "wide") << f.dump();
+      expanded_after += i > switch_last;
+    }
+    if (f["state"] == "moving") { EXPECT_FALSE(expanded); }
+    if (f["written"].get<bool>()) {
+      ++written;
+      const std::string stem = "frame" + std::string(6 - std::to_string(i).size(), '0') + std::to_string(i) + "_" +
+                               f["mirror"].get<std::string>();
+      EXPECT_TRUE(fs::exists(out / (stem + "_view0.png"))) << stem;
+    }
+  }
+  EXPECT_GT(expanded_after, 0);
+  EXPECT_EQ(written, j["frames_written"].get<int>());
+  EXPECT_GT(written, 0);
 }
 
 }  // namespace

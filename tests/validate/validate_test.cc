@@ -40,6 +40,12 @@ TEST(Validate, ReducedPresetPassesEveryGateEndToEnd) {
   EXPECT_TRUE(fs::exists(out / "depth" / "error_map.png"));
   EXPECT_TRUE(fs::exists(out / "calib-left" / "calib_results.txt"));
   EXPECT_TRUE(fs::exists(out / "calib-left" / "figures" / "left_0000.png"));  // detection + reprojection plot
+  // The variable-scale stage: four switches, each checked on a fresh board, and the live round.
+  const auto& vs = m["figures"]["variable_scale"];
+  ASSERT_EQ(vs["switches"].size(), 4u) << vs.dump();
+  EXPECT_EQ(vs["live"]["mapping_swaps"], 4);
+  EXPECT_EQ(vs["live"]["ready_outside_tolerance"], 0);
+  EXPECT_TRUE(fs::exists(out / "rig-live" / "live.json"));
   fs::remove_all(out.parent_path());
 }
 
@@ -51,6 +57,7 @@ TEST(Validate, BadInputStopsTheRunNamingTheStageAndLeavesTheEarlierReportAlone) 
   fs::copy_file(std::string(HOVS_SOURCE_DIR) + "/scenes/reference_stereo.yaml",
                 dir / "src/scenes/reference_stereo.yaml");
   fs::copy_file(std::string(HOVS_SOURCE_DIR) + "/design/reference.yaml", dir / "src/design/reference.yaml");
+  fs::copy_file(std::string(HOVS_SOURCE_DIR) + "/scenes/turret.yaml", dir / "src/scenes/turret.yaml");
   WriteFileAtomic(dir / "src/scenes/street.yaml", "name: street\nunits: 12\n");
   // An earlier report of hovs validate in the output folder.
   fs::create_directories(dir / "run");
