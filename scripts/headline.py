@@ -20,6 +20,7 @@ CHECKS = [
     ("dense depth: worst median relative error, 1-8 m", "dense depth, worst median relative error 1-8 m"),
     ("real: calibration RMS, polynomial model", "real VMR images: polynomial RMS"),
     ("real: calibration RMS, unified model", "real VMR images: unified RMS"),
+    ("variable scale: worst fresh-board RMS after a switch", "variable scale: stored calibration after a mirror switch"),
 ]
 
 
