@@ -83,6 +83,7 @@ Runner SetupDataset(CLI::App* sub, const GlobalOptions* global) {
     std::string unit;
     std::vector<double> elevation, distance;
     std::string board, shard;
+    bool resume = false;
   };
   auto o = std::make_shared<Options>();
   sub->add_option("-s,--scene", o->scene, "base scene: units, background (its boards are replaced)")
@@ -110,6 +111,8 @@ Runner SetupDataset(CLI::App* sub, const GlobalOptions* global) {
   sub->add_option("--board", o->board,
                   "mono_calibration: checkerboard COLSxROWSxSQUARE, inner corners and square (m), e.g. 7x11x0.03, or "
                   "charuco:SXxSYxSQUARExMARKER[:DICTIONARY] (squares; sides in m), e.g. charuco:8x12x0.03x0.022");
+  sub->add_flag("--resume", o->resume,
+                "continue a run of the same command that was killed or interrupted: its whole frames are kept");
   sub->add_option("--shard", o->shard,
                   "I/N: render shard I (from 0) of N of the set (hovs merge joins them); default: from "
                   "SLURM_ARRAY_TASK_ID and SLURM_ARRAY_TASK_COUNT when Slurm sets them");
@@ -140,6 +143,7 @@ Runner SetupDataset(CLI::App* sub, const GlobalOptions* global) {
     d.Check("dataset options");
     d.seed = o->seed;
     d.progress = !global->quiet;
+    d.resume = o->resume;
     d.step_m = o->step, d.heading_deg = o->heading, d.yaw_step_deg = o->yaw_step;
     if (d.kind == "depth_sequence")
       scenes::WriteDepthSequence(cfg, d, o->out, Versions());

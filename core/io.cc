@@ -8,9 +8,11 @@
 #include <cctype>
 #include <cerrno>
 #include <chrono>
+#include <cstdio>
 #include <cstring>
 #include <fstream>
 #include <mutex>
+#include <optional>
 #include <nlohmann/json.hpp>
 #include <sstream>
 
@@ -159,27 +161,51 @@ fs::path HiddenSibling(const fs::path& parent, const std::string& name, const ch
 // exists. A folder of a live process (another run writing the same target now) is left alone. Staging folders
 // are removed, or with `keep` renamed to <name>.interrupted-<pid>; old outputs are removed (their replacement
 // was committed).
+// The pid in a hidden sibling's name (.<name><tag><pid>-...), when the sibling is one and its process is gone.
+std::optional<pid_t> DeadSiblingPid(const std::string& f, const std::string& name, const char* tag) {
+  const std::string prefix = "." + name + tag;
+  if (f.rfind(prefix, 0) != 0) return std::nullopt;
+  const size_t end = f.find('-', prefix.size());
+  const std::string digits =
+      f.substr(prefix.size(), end == std::string::npos ? std::string::npos : end - prefix.size());
+  if (digits.empty() || digits.size() > 9 || !std::all_of(digits.begin(), digits.end(), ::isdigit)) return std::nullopt;
+  const pid_t pid = static_cast<pid_t>(std::stol(digits));
+  if (pid <= 0 || ::kill(pid, 0) == 0 || errno != ESRCH) return std::nullopt;
+  return pid;
+}
+
 void CleanStaleStaging(const fs::path& parent, const std::string& name, bool keep) {
   std::error_code ec;
   for (const auto& e : fs::directory_iterator(parent, ec)) {
     const std::string f = e.path().filename().string();
     for (const char* tag : {kStagingTag, kOldTag}) {
-      const std::string prefix = "." + name + tag;
-      if (f.rfind(prefix, 0) != 0) continue;
-      const size_t end = f.find('-', prefix.size());
-      const std::string digits =
-          f.substr(prefix.size(), end == std::string::npos ? std::string::npos : end - prefix.size());
-      if (digits.empty() || digits.size() > 9 || !std::all_of(digits.begin(), digits.end(), ::isdigit)) continue;
-      const pid_t pid = static_cast<pid_t>(std::stol(digits));
-      if (pid <= 0 || ::kill(pid, 0) == 0 || errno != ESRCH) continue;
+      const auto pid = DeadSiblingPid(f, name, tag);
+      if (!pid) continue;
       std::error_code ignore;
       if (keep && tag == kStagingTag) {
-        fs::rename(e.path(), parent / (name + ".interrupted-" + digits), ignore);
+        fs::rename(e.path(), parent / (name + ".interrupted-" + std::to_string(*pid)), ignore);
         if (!ignore) continue;
       }
       fs::remove_all(e.path(), ignore);
     }
   }
+}
+
+std::string MarkerCommand(const fs::path& folder);
+
+// The newest staging folder a killed run of `command` left for parent/name, or nothing.
+std::optional<fs::path> NewestDeadStaging(const fs::path& parent, const std::string& name, const std::string& command) {
+  std::error_code ec;
+  std::optional<fs::path> best;
+  fs::file_time_type best_time;
+  for (const auto& e : fs::directory_iterator(parent, ec)) {
+    if (!DeadSiblingPid(e.path().filename().string(), name, kStagingTag) || MarkerCommand(e.path()) != command)
+      continue;
+    const auto t = fs::last_write_time(e.path(), ec);
+    if (ec) continue;
+    if (!best || t > best_time) best = e.path(), best_time = t;
+  }
+  return best;
 }
 
 std::string MarkerText(const std::string& command) {
@@ -263,7 +289,7 @@ void CheckOutputFile(const fs::path& path, const std::string& signature, const s
 }
 
 StagedDirectory::StagedDirectory(fs::path target, std::string command, std::vector<fs::path> inputs,
-                                 bool keep_interrupted)
+                                 bool keep_interrupted, bool resume)
     : target_(std::move(target)), command_(std::move(command)), inputs_(std::move(inputs)) {
   HOVS_REQUIRE(!target_.empty(), "output folder", "empty path");
   if (target_.filename().empty()) target_ = target_.parent_path();
@@ -274,20 +300,48 @@ StagedDirectory::StagedDirectory(fs::path target, std::string command, std::vect
   std::error_code ec;
   fs::create_directories(parent, ec);
   HOVS_REQUIRE(!ec, parent.string(), "cannot create folder: ", ec.message());
-  CleanStaleStaging(parent, target_.filename().string(), keep_interrupted);
   staging_ = HiddenSibling(parent, target_.filename().string(), kStagingTag);
-  fs::create_directory(staging_, ec);
-  HOVS_REQUIRE(!ec, staging_.string(), "cannot create the staging folder: ", ec.message());
+  if (resume) {
+    if (const auto earlier = NewestDeadStaging(parent, target_.filename().string(), command_)) {
+      fs::rename(*earlier, staging_, ec);
+      HOVS_REQUIRE(!ec, earlier->string(), "cannot take over the interrupted run's folder: ", ec.message());
+      resumed_ = true;
+    }
+  }
+  CleanStaleStaging(parent, target_.filename().string(), keep_interrupted);
+  if (!resumed_) {
+    fs::create_directory(staging_, ec);
+    HOVS_REQUIRE(!ec, staging_.string(), "cannot create the staging folder: ", ec.message());
+  }
   RegisterForCleanup(staging_);
   WriteOutputMarker(staging_, command_);
 }
 
+void StagedDirectory::KeepOnFailure() { keep_ = true; }
+
 StagedDirectory::~StagedDirectory() {
-  if (!committed_) {
+  if (!committed_ && !keep_) {
     std::error_code ec;
     fs::remove_all(staging_, ec);
   }
   UnregisterCleanup(staging_);
+}
+
+std::string FileChecksum(const fs::path& path) {
+  std::ifstream in(path, std::ios::binary);
+  HOVS_REQUIRE(in.good(), path.string(), "cannot read the file for its checksum");
+  uint64_t h = 14695981039346656037ull;
+  std::vector<char> buf(1 << 16);
+  while (in) {
+    in.read(buf.data(), static_cast<std::streamsize>(buf.size()));
+    const std::streamsize n = in.gcount();
+    for (std::streamsize i = 0; i < n; ++i)
+      h = (h ^ static_cast<uint8_t>(buf[static_cast<size_t>(i)])) * 1099511628211ull;
+  }
+  HOVS_REQUIRE(in.eof(), path.string(), "read error while taking its checksum");
+  char text[40];
+  std::snprintf(text, sizeof text, "fnv1a64:%016llx", static_cast<unsigned long long>(h));
+  return text;
 }
 
 void StagedDirectory::Commit() {

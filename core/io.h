@@ -56,16 +56,22 @@ void CheckOutputFile(const std::filesystem::path& path, const std::string& signa
 // `target` is left untouched; an interrupt removes it too (core/interrupt.h). Staging folders that a killed run
 // left behind for the same target are removed (or, with keep_interrupted, renamed to a visible
 // <name>.interrupted-<pid> beside it: a capture's frames are kept).
+//
+// Resumable runs: with `resume`, the newest staging folder that a killed run of the same command left for the
+// same target becomes this run's staging folder, with what it holds (resumed() says so); KeepOnFailure() makes
+// an uncommitted staging folder stay when the object is destroyed, for such a later run.
 class StagedDirectory {
  public:
   StagedDirectory(std::filesystem::path target, std::string command, std::vector<std::filesystem::path> inputs = {},
-                  bool keep_interrupted = false);
+                  bool keep_interrupted = false, bool resume = false);
   ~StagedDirectory();
   StagedDirectory(const StagedDirectory&) = delete;
   StagedDirectory& operator=(const StagedDirectory&) = delete;
 
   const std::filesystem::path& staging() const { return staging_; }
   const std::filesystem::path& target() const { return target_; }
+  bool resumed() const { return resumed_; }
+  void KeepOnFailure();
   void Commit();
 
  private:
@@ -73,7 +79,11 @@ class StagedDirectory {
   std::string command_;
   std::vector<std::filesystem::path> inputs_;
   std::filesystem::path staging_;
-  bool committed_ = false;
+  bool committed_ = false, resumed_ = false, keep_ = false;
 };
+
+// A file's checksum as "fnv1a64:<16 hex digits>" (FNV-1a, 64 bits): enough to tell a complete file from a
+// truncated or rewritten one. Throws hovs::Error naming the file when it cannot be read.
+std::string FileChecksum(const std::filesystem::path& path);
 
 }  // namespace hovs

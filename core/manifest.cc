@@ -22,8 +22,8 @@ const std::set<std::string> kTopKeys = {"format",       "version",
                                         "status",       "unpaired_frames",
                                         "writer",       "incomplete_frames",
                                         "note",         "shard"};
-const std::set<std::string> kFrameKeys = {"id",  "views", "world_from_board", "world_from_rig", "render_seconds",
-                                          "rays"};
+const std::set<std::string> kFrameKeys = {"id",   "views",    "world_from_board", "world_from_rig", "render_seconds",
+                                          "rays", "checksums"};
 const std::set<std::string> kViewKeys = {"unit",      "image",    "ground_truth", "device_ns",
                                          "system_ns", "frame_id", "pixel_format", "width",
                                          "height",    "serial",   "exposure_us",  "gain"};
@@ -106,6 +106,12 @@ void CheckDatasetManifest(const nlohmann::json& m, const std::string& source) {
                  source + " (" + wf + ".id)", "a frame needs a non-negative integer 'id'");
     HOVS_REQUIRE(ids.insert(fr["id"].get<int64_t>()).second, source + " (" + wf + ".id)", "frame id ",
                  fr["id"].get<int64_t>(), " appears twice");
+    if (fr.contains("checksums")) {
+      HOVS_REQUIRE(fr["checksums"].is_object(), source + " (" + wf + ".checksums)", "expected {file: checksum}");
+      for (const auto& [file, sum] : fr["checksums"].items())
+        HOVS_REQUIRE(sum.is_string() && sum.get<std::string>().rfind("fnv1a64:", 0) == 0,
+                     source + " (" + wf + ".checksums." + file + ")", "expected \"fnv1a64:<hex>\"");
+    }
     std::set<std::string> units_seen;
     for (size_t v = 0; v < fr["views"].size(); ++v) {
       const auto& view = fr["views"][v];

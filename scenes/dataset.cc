@@ -1,16 +1,19 @@
 #include "scenes/dataset.h"
 
 #include <cmath>
+#include <atomic>
 #include <cstdio>
 #include <future>
 #include <random>
 
 #include "core/error.h"
 #include "core/format.h"
+#include "core/interrupt.h"
 #include "core/io.h"
 #include "core/manifest.h"
 #include "raytrace/render.h"
 #include "results/html.h"
+#include "scenes/frame_journal.h"
 #include "scenes/ground_truth.h"
 #include "io/image_io.h"
 
@@ -290,6 +293,23 @@ std::vector<Rigid3d> DrawBoardPoses(const SceneConfig& base, const DatasetOption
 
 namespace {
 void WriteDatasetPage(const fs::path& dir, const nlohmann::json& m);
+
+// What makes two runs' frames interchangeable: the manifest's head and generator, the shard, the render settings.
+nlohmann::json RunConfig(const nlohmann::json& m, const SceneConfig& base) {
+  nlohmann::json c = m;
+  c["render"] = {{"samples", base.render.samples}, {"ground_truth", base.render.ground_truth}};
+  return c;
+}
+
+// Between frames: an interrupt (Ctrl-C, a SIGTERM from a scheduler) leaves the staging folder and its journal for
+// `hovs dataset --resume` and ends the run with one error saying so.
+void StopIfInterrupted(const std::atomic<bool>& interrupted, StagedDirectory* stage, const fs::path& out, size_t done,
+                       size_t total) {
+  if (!interrupted.load()) return;
+  stage->KeepOnFailure();
+  throw Error(out.string(), "interrupted after " + std::to_string(done) + " of " + std::to_string(total) +
+                                " frames; the same command with --resume continues from there");
+}
 }  // namespace
 
 void WriteCalibrationDataset(const SceneConfig& base, const DatasetOptions& o, const fs::path& out,
@@ -297,7 +317,7 @@ void WriteCalibrationDataset(const SceneConfig& base, const DatasetOptions& o, c
   HOVS_REQUIRE(o.kind != "depth_sequence", "dataset", "depth_sequence datasets are written by WriteDepthSequence");
   CheckOutputFolder(out, "dataset", {base.source});
   const std::vector<Rigid3d> poses = DrawBoardPoses(base, o);
-  StagedDirectory stage(out, "dataset", {base.source});
+  StagedDirectory stage(out, "dataset", {base.source}, false, o.resume);
   nlohmann::json m = ManifestHead(base, o.kind, o.seed, versions);
   m["generator"] = {{"count", o.count},
                     {"distance", {o.min_distance, o.max_distance}},
@@ -312,7 +332,12 @@ void WriteCalibrationDataset(const SceneConfig& base, const DatasetOptions& o, c
                end = poses.size() * (o.shard_index + 1) / o.shard_count;
   if (o.shard_count > 1)
     m["shard"] = {{"index", o.shard_index}, {"count", o.shard_count}, {"first_frame", first}, {"end_frame", end}};
+  FrameJournal journal(stage.staging(), RunConfig(m, base), stage.resumed(), out.string());
+  if (o.progress && stage.resumed()) std::fprintf(stderr, "resuming: %zu whole frames kept\n", journal.kept());
+  std::atomic<bool> interrupted{false};
+  const InterruptScope interrupt_scope(&interrupted);
   for (size_t i = first; i < end; ++i) {
+    StopIfInterrupted(interrupted, &stage, out, i - first, end - first);
     SceneConfig cfg = base;
     // Replace the scene's boards by the calibration board at this pose.
     std::vector<raytrace::Rect> rects;
@@ -332,6 +357,16 @@ void WriteCalibrationDataset(const SceneConfig& base, const DatasetOptions& o, c
     cfg.description.rects.push_back(MakeBoardRect(b.spec, b.world_from_board, b.object_id));
     cfg.description.objects.push_back({b.object_id, b.name, "board"});
     cfg.boards.push_back(b);
+    // The manifest's board is frame 0's, whichever shard this is (the shards' manifests agree).
+    if (i == first) {
+      BoardInstance b0 = b;
+      b0.world_from_board = poses[0];
+      boards.push_back(BoardToJson(b0));
+    }
+    if (auto kept = journal.Kept(static_cast<int64_t>(i))) {  // written whole by the run this one resumes
+      frames.push_back(*kept);
+      continue;
+    }
     const raytrace::RayScene scene(cfg.description);
     if (o.progress) std::fprintf(stderr, "frame %zu/%zu\n", i + 1, poses.size());
     const size_t n_units = o.kind == "stereo_aruco" ? cfg.description.units.size() : 1;
@@ -347,18 +382,15 @@ void WriteCalibrationDataset(const SceneConfig& base, const DatasetOptions& o, c
       seconds += stats["seconds"].get<double>();
       rays += stats["rays"].get<uint64_t>();
     }
-    frames.push_back({{"id", i},
-                      {"views", views},
-                      {"world_from_board", PoseToJson(poses[i])},
-                      {"render_seconds", seconds},
-                      {"rays", rays}});
-    // The manifest's board is frame 0's, whichever shard this is (the shards' manifests agree).
-    if (i == first) {
-      BoardInstance b0 = b;
-      b0.world_from_board = poses[0];
-      boards.push_back(BoardToJson(b0));
-    }
+    nlohmann::json entry = {{"id", i},
+                            {"views", views},
+                            {"world_from_board", PoseToJson(poses[i])},
+                            {"render_seconds", seconds},
+                            {"rays", rays}};
+    journal.Record(&entry);
+    frames.push_back(entry);
   }
+  journal.Finish();
   m["boards"] = boards;
   m["frames"] = frames;
   m["generator"]["samples"] = base.render.samples;
@@ -520,7 +552,7 @@ void WriteDepthSequence(const SceneConfig& base, const DatasetOptions& o, const 
       u.world_from_mirror = WorldFromRigAt(base, o, i) * u.world_from_mirror;
       clearance.Check(u, "depth_sequence frame " + std::to_string(i));
     }
-  StagedDirectory stage(out, "dataset", {base.source});
+  StagedDirectory stage(out, "dataset", {base.source}, false, o.resume);
   nlohmann::json m = ManifestHead(base, o.kind, o.seed, versions);
   m["generator"] = {{"count", o.count},
                     {"step_m", o.step_m},
@@ -535,7 +567,16 @@ void WriteDepthSequence(const SceneConfig& base, const DatasetOptions& o, const 
   const int first = o.count * o.shard_index / o.shard_count, end = o.count * (o.shard_index + 1) / o.shard_count;
   if (o.shard_count > 1)
     m["shard"] = {{"index", o.shard_index}, {"count", o.shard_count}, {"first_frame", first}, {"end_frame", end}};
+  FrameJournal journal(stage.staging(), RunConfig(m, base), stage.resumed(), out.string());
+  if (o.progress && stage.resumed()) std::fprintf(stderr, "resuming: %zu whole frames kept\n", journal.kept());
+  std::atomic<bool> interrupted{false};
+  const InterruptScope interrupt_scope(&interrupted);
   for (int i = first; i < end; ++i) {
+    StopIfInterrupted(interrupted, &stage, out, static_cast<size_t>(i - first), static_cast<size_t>(end - first));
+    if (auto kept = journal.Kept(i)) {  // written whole by the run this one resumes
+      frames.push_back(*kept);
+      continue;
+    }
     SceneConfig cfg = base;
     const Rigid3d world_from_rig = WorldFromRigAt(base, o, i);
     for (auto& u : cfg.description.units) u.world_from_mirror = world_from_rig * u.world_from_mirror;
@@ -551,9 +592,12 @@ void WriteDepthSequence(const SceneConfig& base, const DatasetOptions& o, const 
           ViewJson(RenderView(cfg, scene, static_cast<int>(u), stage.staging(), stem, o.progress, &stats, &scratch)));
       seconds += stats["seconds"].get<double>();
     }
-    frames.push_back(
-        {{"id", i}, {"views", views}, {"world_from_rig", PoseToJson(world_from_rig)}, {"render_seconds", seconds}});
+    nlohmann::json entry = {
+        {"id", i}, {"views", views}, {"world_from_rig", PoseToJson(world_from_rig)}, {"render_seconds", seconds}};
+    journal.Record(&entry);
+    frames.push_back(entry);
   }
+  journal.Finish();
   m["frames"] = frames;
   m["generator"]["samples"] = base.render.samples;
   m["generator"]["ground_truth"] = base.render.ground_truth;

@@ -40,6 +40,9 @@ struct DatasetOptions {
   // of the same poses (all drawn, only these rendered; each frame seeded by its index), with "shard" in the
   // manifest. MergeDatasetShards joins the shards into the set one process writes.
   int shard_index = 0, shard_count = 1;
+  // Resume an interrupted run of the same command (killed, or interrupted between frames): the frames its
+  // journal lists whole, with files matching their checksums, are kept; the rest is rendered (frame_journal.h).
+  bool resume = false;
   void Check(const std::string& where) const;
   // Defaults for a kind (board, count, distances, visibility).
   static DatasetOptions ForKind(const std::string& kind);
@@ -49,6 +52,10 @@ struct DatasetOptions {
 void RenderSceneFolder(const SceneConfig& scene, const std::filesystem::path& out, bool progress,
                        const std::map<std::string, std::string>& versions);
 
+// A board dataset (mono_calibration or stereo_aruco) and a depth sequence: each frame entry of the manifest
+// carries "checksums" ({relative path: "fnv1a64:..."}) of its files; an interrupt between frames leaves the run
+// for --resume (DatasetOptions::resume).
+//
 // A board dataset (mono_calibration or stereo_aruco): board poses drawn so that the board is visible as the
 // kind asks, every unit that must see it rendered per frame, with ground truth.
 void WriteCalibrationDataset(const SceneConfig& base, const DatasetOptions& options, const std::filesystem::path& out,

@@ -1,6 +1,15 @@
 // Sharded datasets: N shards merged are the set one process writes (images, ground truth, manifest apart from
-// the render timings), and shards that do not belong together are refused by name.
+// the render timings), and shards that do not belong together are refused by name. A dataset killed mid-run
+// resumes (--resume) to the set an uninterrupted run writes.
 #include <gtest/gtest.h>
+#include <signal.h>
+#include <spawn.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <chrono>
+#include <sstream>
+#include <thread>
 
 #include <nlohmann/json.hpp>
 
@@ -99,6 +108,82 @@ TEST(DatasetShards, ADepthSequenceShardsAndMergesToo) {
       EXPECT_EQ(ReadFile(dir / "whole" / v["image"].get<std::string>()),
                 ReadFile(dir / "merged" / v["image"].get<std::string>()));
   EXPECT_TRUE(fs::exists(dir / "merged" / "index.html"));
+}
+
+// The staging folder a run writing dir/name is using (.name.partial-<pid>-...), or empty.
+fs::path StagingOf(const fs::path& dir, const std::string& name) {
+  for (const auto& e : fs::directory_iterator(dir))
+    if (e.path().filename().string().rfind("." + name + ".partial-", 0) == 0) return e.path();
+  return {};
+}
+
+size_t Lines(const fs::path& p) {
+  std::error_code ec;
+  if (!fs::is_regular_file(p, ec)) return 0;
+  std::istringstream in(ReadFile(p));
+  std::string line;
+  size_t n = 0;
+  while (std::getline(in, line)) n += !line.empty();
+  return n;
+}
+
+TEST(DatasetResume, AKilledRunResumesToTheSetAnUninterruptedRunWrites) {
+  const fs::path dir = test::Scratch("dataset", "resume");
+  const std::string args = "-q dataset --scene " + std::string(HOVS_SOURCE_DIR) +
+                           "/scenes/reference_calibration.yaml -n 6 --seed 4 --downscale 5 --samples 64 --out ";
+  ASSERT_EQ(test::Hovs(args + (dir / "whole").string()).exit_code, 0);
+  // A run killed (SIGKILL: nothing of hovs runs) once its journal lists two whole frames.
+  std::vector<std::string> argv = {HOVS_BINARY};
+  std::istringstream words(args + (dir / "resumed").string());
+  for (std::string w; words >> w;) argv.push_back(w);
+  std::vector<char*> cargv;
+  for (auto& a : argv) cargv.push_back(a.data());
+  cargv.push_back(nullptr);
+  pid_t pid = 0;
+  ASSERT_EQ(posix_spawn(&pid, HOVS_BINARY, nullptr, nullptr, cargv.data(), environ), 0);
+  fs::path staging;
+  for (int k = 0; k < 3000; ++k) {  // up to 60 s
+    staging = StagingOf(dir, "resumed");
+    if (!staging.empty() && Lines(staging / "frames.jsonl") >= 3) break;  // the header and two frames
+    std::this_thread::sleep_for(std::chrono::milliseconds(20));
+  }
+  kill(pid, SIGKILL);
+  int status = 0;
+  waitpid(pid, &status, 0);
+  ASSERT_FALSE(staging.empty());
+  ASSERT_GE(Lines(staging / "frames.jsonl"), 3u) << "the run ended before two frames were written";
+  ASSERT_FALSE(fs::exists(dir / "resumed"));
+  // What a kill mid-frame leaves: a half-written image; and a kept frame's file damaged since (redone).
+  WriteFileAtomic(staging / "images" / "half-written.png", "\x89PNG truncated");
+  const std::string journal = ReadFile(staging / "frames.jsonl");
+  const size_t second_line = journal.find('\n') + 1;
+  const auto first = nlohmann::json::parse(journal.substr(second_line, journal.find('\n', second_line) - second_line));
+  const size_t third_line = journal.find('\n', second_line) + 1;
+  const auto second = nlohmann::json::parse(journal.substr(third_line, journal.find('\n', third_line) - third_line));
+  const fs::path damaged = staging / first["views"][0]["image"].get<std::string>();
+  fs::resize_file(damaged, fs::file_size(damaged) / 2);
+  // The same command with --resume continues.
+  const auto r = test::Hovs(args + (dir / "resumed").string() + " --resume");
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_TRUE(StagingOf(dir, "resumed").empty());
+  const auto a = nlohmann::json::parse(ReadFile(dir / "whole" / "dataset.json"));
+  const auto b = nlohmann::json::parse(ReadFile(dir / "resumed" / "dataset.json"));
+  EXPECT_EQ(WithoutTimings(a), WithoutTimings(b));
+  size_t files = 0;
+  for (const auto& fr : a["frames"])
+    for (const auto& v : fr["views"])
+      for (const std::string& f : {v["image"].get<std::string>(), v["ground_truth"]["exr"].get<std::string>(),
+                                   v["ground_truth"]["sidecar"].get<std::string>()}) {
+        EXPECT_EQ(ReadFile(dir / "whole" / f), ReadFile(dir / "resumed" / f)) << f;
+        ++files;
+      }
+  EXPECT_EQ(files, 18u);
+  // The second frame was kept from the killed run (its render time is that run's), the damaged first redone.
+  EXPECT_EQ(b["frames"][second["id"].get<size_t>()]["render_seconds"], second["render_seconds"]);
+  EXPECT_NE(b["frames"][first["id"].get<size_t>()]["render_seconds"], first["render_seconds"]);
+  EXPECT_FALSE(fs::exists(dir / "resumed" / "images" / "half-written.png"));
+  EXPECT_FALSE(fs::exists(dir / "resumed" / "frames.jsonl"));
+  for (const auto& fr : b["frames"]) EXPECT_EQ(fr["checksums"].size(), 3u);
 }
 
 }  // namespace
