@@ -38,7 +38,8 @@ Runner SetupValidate(CLI::App* sub, const GlobalOptions* global) {
     int downscale = 0, mono_frames = 0, stereo_pairs = 0, samples = 0;
   };
   auto o = std::make_shared<Options>();
-  sub->add_option("--preset", o->preset, "full (the report's run, 12-15 min on 2 cores) | reduced (half resolution, CI)")
+  sub->add_option("--preset", o->preset,
+                  "full (the report's run, 12-15 min on 2 cores) | reduced (half resolution, CI)")
       ->capture_default_str();
   sub->add_option("-o,--out", o->out, "run folder (default results/validate-<preset>)");
   AddBounded(sub, "--seed", &o->seed, "seed of board poses and renders", 0, 9007199254740992.0);

@@ -106,6 +106,7 @@ const std::vector<Command>& Commands() {
       {"compare", "The difference between two models of one camera as a map over the image (px and degrees)",
        SetupCompare},
       {"merge", "Join the shards of a dataset (hovs dataset --shard I/N) into the set one process writes", SetupMerge},
+      {"slurm", "A sharded command as a Slurm array job: submit (and wait, merge), status", SetupSlurm},
       {"convert",
        "A camera model into other tools' files: Kalibr camchain, MEI YAML, OpenCV omnidir YAML; refits to double "
        "sphere, EUCM, Kannala-Brandt with their error",

@@ -78,6 +78,7 @@ Runner SetupStereoCalibrate(CLI::App* sub, const GlobalOptions* global);
 Runner SetupValidate(CLI::App* sub, const GlobalOptions* global);
 Runner SetupCapture(CLI::App* sub, const GlobalOptions* global);
 Runner SetupLive(CLI::App* sub, const GlobalOptions* global);
+Runner SetupSlurm(CLI::App* sub, const GlobalOptions* global);
 Runner SetupPosition(CLI::App* sub, const GlobalOptions* global);
 Runner SetupCompare(CLI::App* sub, const GlobalOptions* global);
 Runner SetupConvert(CLI::App* sub, const GlobalOptions* global);
