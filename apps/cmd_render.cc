@@ -112,7 +112,8 @@ Runner SetupDataset(CLI::App* sub, const GlobalOptions* global) {
                   "mono_calibration: checkerboard COLSxROWSxSQUARE, inner corners and square (m), e.g. 7x11x0.03, or "
                   "charuco:SXxSYxSQUARExMARKER[:DICTIONARY] (squares; sides in m), e.g. charuco:8x12x0.03x0.022");
   sub->add_flag("--resume", o->resume,
-                "continue a run of the same command that was killed or interrupted: its whole frames are kept");
+                "continue a killed run of the same command (its whole frames kept); with it, an interrupt keeps the "
+                "run for the next --resume");
   sub->add_option("--shard", o->shard,
                   "I/N: render shard I (from 0) of N of the set (hovs merge joins them); default: from "
                   "SLURM_ARRAY_TASK_ID and SLURM_ARRAY_TASK_COUNT when Slurm sets them");

@@ -4,6 +4,7 @@
 #include <atomic>
 #include <cstdio>
 #include <future>
+#include <optional>
 #include <random>
 
 #include "core/error.h"
@@ -11,6 +12,7 @@
 #include "core/interrupt.h"
 #include "core/io.h"
 #include "core/manifest.h"
+#include "core/progress.h"
 #include "raytrace/render.h"
 #include "results/html.h"
 #include "scenes/frame_journal.h"
@@ -301,8 +303,8 @@ nlohmann::json RunConfig(const nlohmann::json& m, const SceneConfig& base) {
   return c;
 }
 
-// Between frames: an interrupt (Ctrl-C, a SIGTERM from a scheduler) leaves the staging folder and its journal for
-// `hovs dataset --resume` and ends the run with one error saying so.
+// Between frames of a resumable run: an interrupt (Ctrl-C, a SIGTERM from a scheduler) leaves the staging folder
+// and its journal for the next `hovs dataset --resume` and ends the run with one error saying so.
 void StopIfInterrupted(const std::atomic<bool>& interrupted, StagedDirectory* stage, const fs::path& out, size_t done,
                        size_t total) {
   if (!interrupted.load()) return;
@@ -334,8 +336,13 @@ void WriteCalibrationDataset(const SceneConfig& base, const DatasetOptions& o, c
     m["shard"] = {{"index", o.shard_index}, {"count", o.shard_count}, {"first_frame", first}, {"end_frame", end}};
   FrameJournal journal(stage.staging(), RunConfig(m, base), stage.resumed(), out.string());
   if (o.progress && stage.resumed()) std::fprintf(stderr, "resuming: %zu whole frames kept\n", journal.kept());
+  // A resumable run (--resume, as every Slurm task runs) keeps its folder on an interrupt; any other ends by the
+  // signal with nothing left behind.
   std::atomic<bool> interrupted{false};
-  const InterruptScope interrupt_scope(&interrupted);
+  std::optional<InterruptScope> interrupt_scope;
+  if (o.resume) interrupt_scope.emplace(&interrupted);
+  const ProgressLine progress("frame", poses.size(), o.progress);
+  size_t rendered = 0;
   for (size_t i = first; i < end; ++i) {
     StopIfInterrupted(interrupted, &stage, out, i - first, end - first);
     SceneConfig cfg = base;
@@ -368,7 +375,7 @@ void WriteCalibrationDataset(const SceneConfig& base, const DatasetOptions& o, c
       continue;
     }
     const raytrace::RayScene scene(cfg.description);
-    if (o.progress) std::fprintf(stderr, "frame %zu/%zu\n", i + 1, poses.size());
+    progress.Step(i + 1, rendered++, end - i);
     const size_t n_units = o.kind == "stereo_aruco" ? cfg.description.units.size() : 1;
     nlohmann::json views = nlohmann::json::array();
     double seconds = 0;
@@ -569,8 +576,13 @@ void WriteDepthSequence(const SceneConfig& base, const DatasetOptions& o, const 
     m["shard"] = {{"index", o.shard_index}, {"count", o.shard_count}, {"first_frame", first}, {"end_frame", end}};
   FrameJournal journal(stage.staging(), RunConfig(m, base), stage.resumed(), out.string());
   if (o.progress && stage.resumed()) std::fprintf(stderr, "resuming: %zu whole frames kept\n", journal.kept());
+  // A resumable run (--resume, as every Slurm task runs) keeps its folder on an interrupt; any other ends by the
+  // signal with nothing left behind.
   std::atomic<bool> interrupted{false};
-  const InterruptScope interrupt_scope(&interrupted);
+  std::optional<InterruptScope> interrupt_scope;
+  if (o.resume) interrupt_scope.emplace(&interrupted);
+  const ProgressLine progress("frame", static_cast<size_t>(o.count), o.progress);
+  size_t rendered = 0;
   for (int i = first; i < end; ++i) {
     StopIfInterrupted(interrupted, &stage, out, static_cast<size_t>(i - first), static_cast<size_t>(end - first));
     if (auto kept = journal.Kept(i)) {  // written whole by the run this one resumes
@@ -581,7 +593,7 @@ void WriteDepthSequence(const SceneConfig& base, const DatasetOptions& o, const 
     const Rigid3d world_from_rig = WorldFromRigAt(base, o, i);
     for (auto& u : cfg.description.units) u.world_from_mirror = world_from_rig * u.world_from_mirror;
     const raytrace::RayScene scene(cfg.description);
-    if (o.progress) std::fprintf(stderr, "frame %d/%d\n", i + 1, o.count);
+    progress.Step(static_cast<size_t>(i + 1), rendered++, static_cast<size_t>(end - i));
     nlohmann::json views = nlohmann::json::array();
     double seconds = 0;
     for (size_t u = 0; u < cfg.description.units.size(); ++u) {

@@ -40,7 +40,7 @@ struct DatasetOptions {
   // of the same poses (all drawn, only these rendered; each frame seeded by its index), with "shard" in the
   // manifest. MergeDatasetShards joins the shards into the set one process writes.
   int shard_index = 0, shard_count = 1;
-  // Resume an interrupted run of the same command (killed, or interrupted between frames): the frames its
+  // Resume a killed run of the same command (or an interrupted one that itself ran with resume): the frames its
   // journal lists whole, with files matching their checksums, are kept; the rest is rendered (frame_journal.h).
   bool resume = false;
   void Check(const std::string& where) const;
@@ -53,8 +53,9 @@ void RenderSceneFolder(const SceneConfig& scene, const std::filesystem::path& ou
                        const std::map<std::string, std::string>& versions);
 
 // A board dataset (mono_calibration or stereo_aruco) and a depth sequence: each frame entry of the manifest
-// carries "checksums" ({relative path: "fnv1a64:..."}) of its files; an interrupt between frames leaves the run
-// for --resume (DatasetOptions::resume).
+// carries "checksums" ({relative path: "fnv1a64:..."}) of its files. A killed run leaves its staging folder for
+// a later --resume; with resume set, an interrupt (SIGINT, SIGTERM) between frames leaves it too, while without it
+// an interrupt removes it and ends the process by the signal (core/interrupt.h).
 //
 // A board dataset (mono_calibration or stereo_aruco): board poses drawn so that the board is visible as the
 // kind asks, every unit that must see it rendered per frame, with ground truth.
