@@ -63,8 +63,8 @@ RigLiveRun RunRigLive(rig::SimulatedRigStream& stream, const rig::TurretSpec& sp
     const unwrap::RemapTable& table = it->second;
     const rig::TurretImage& img = f.image.value();
     HOVS_REQUIRE(img.width == table.source_width && img.height == table.source_height, "rig live", "the frames are ",
-                 img.width, " x ", img.height, " but mirror '", spec.mirrors.at(f.mirror).id, "''s mapping is for ",
-                 table.source_width, " x ", table.source_height);
+                 img.width, " x ", img.height, " but the mapping of mirror '", spec.mirrors.at(f.mirror).id,
+                 "' is for ", table.source_width, " x ", table.source_height);
     r.swaps += current >= 0 && current != f.mirror;
     current = f.mirror;
     remappers.at(f.mirror)->Run(
