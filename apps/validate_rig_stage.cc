@@ -11,12 +11,6 @@
 namespace hovs::apps {
 namespace fs = std::filesystem;
 using json = nlohmann::json;
-namespace {
-
-json ReadJson(const fs::path& p) { return ReadJsonFile(p); }
-
-}  // namespace
-
 void VariableScale(Validation& v, uint64_t seed_value) {
   const Preset& p = v.preset();
   const fs::path& out = v.out();
@@ -45,7 +39,7 @@ void VariableScale(Validation& v, uint64_t seed_value) {
     json switches = json::array();
     double worst_board = 0, worst_lateral = 0, worst_tilt = 0, worst_height = 0;
     for (const auto& id : order) {
-      const json j = ReadJson(out / "rig-switch" / ("to-" + id) / "switch.json");
+      const json j = ReadJsonFile(out / "rig-switch" / ("to-" + id) / "switch.json");
       worst_board = std::max(worst_board, Num(j, {"fresh_board", "rms_px"}));
       worst_lateral = std::max(worst_lateral, Num(j, {"final_truth", "lateral_mm"}));
       worst_tilt = std::max(worst_tilt, Num(j, {"final_truth", "tilt_deg"}));
@@ -57,7 +51,7 @@ void VariableScale(Validation& v, uint64_t seed_value) {
                           {"final_truth", j["final_truth"]},
                           {"images", j["images"]}});
     }
-    const json l = ReadJson(out / "rig-live" / "live.json");
+    const json l = ReadJsonFile(out / "rig-live" / "live.json");
     int live_failures = 0;
     for (const auto& s : l["switches"]) live_failures += !s["failure"].get<std::string>().empty();
     v.Figure("variable_scale", {{"switches", switches},

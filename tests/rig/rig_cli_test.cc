@@ -63,7 +63,9 @@ TEST(RigCli, BadInputsExitTwoAndWriteNothing) {
                                 "rig align --machine " + kMachine + " --mirror fisheye",
                                 std::string("rig align --machine /nonexistent.yaml"),
                                 "rig switch --machine " + kMachine + " --to reference --rig /nonexistent.json",
-                                "rig switch --machine " + kMachine}) {
+                                "rig switch --machine " + kMachine, std::string("live --rig /nonexistent.json -n 5"),
+                                "live --rig /nonexistent.json --simulate " + kMachine + " -n 5",
+                                "live --switch 3:wide --simulate " + kMachine + " --model " + kMachine + " -n 5"}) {
     const auto r = Hovs(args + " --out " + out.string());
     EXPECT_EQ(r.exit_code, 2) << args << "\n" << r.output;
     EXPECT_EQ(std::count(r.output.begin(), r.output.end(), '\n'), 1) << r.output;
