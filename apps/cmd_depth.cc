@@ -69,7 +69,8 @@ DepthFrame LoadDepthFrame(const Options& o) {
     if (!t) continue;
     t->unit = v.at("unit");
     t->image = manifest.parent_path() / v.at("image").get<std::string>();
-    if (v.contains("ground_truth")) t->exr = manifest.parent_path() / v["ground_truth"].at("exr").get<std::string>();
+    if (v.contains("ground_truth") && v["ground_truth"].contains("exr"))
+      t->exr = manifest.parent_path() / v["ground_truth"]["exr"].get<std::string>();
   }
   HOVS_REQUIRE(!d.left_view.unit.empty() && !d.right_view.unit.empty(), o.dataset, "frame ", o.frame,
                " lacks a view of both units");

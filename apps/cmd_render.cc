@@ -10,6 +10,29 @@
 
 namespace hovs::apps {
 
+namespace {
+
+// --truth and --truth-compression: what the dataset writers store of a frame's per-pixel ground truth.
+struct TruthOptions {
+  std::string channels, compression;
+  void Add(CLI::App* sub) {
+    sub->add_option("--truth", channels,
+                    "ground-truth channels in the EXR: default (Z,N,id,mask), all (adds P and M), none (no EXR; the "
+                    "JSON sidecar stays), or a list of Z,P,N,id,mask,M (overrides the scene)");
+    sub->add_option("--truth-compression", compression,
+                    "the EXR's lossless compression: piz (default), zip, zips, rle, none (overrides the scene)");
+  }
+  void Apply(raytrace::RenderOptions* r) const {
+    if (!channels.empty()) r->truth_file.groups = raytrace::TruthFileOptions::ParseGroups(channels, "--truth");
+    if (!compression.empty()) {
+      r->truth_file.compression = compression;
+      r->truth_file.Check("--truth-compression");
+    }
+  }
+};
+
+}  // namespace
+
 Runner SetupRender(CLI::App* sub, const GlobalOptions* global) {
   struct Options {
     std::string scene = "scenes/reference_board.yaml";
@@ -17,6 +40,7 @@ Runner SetupRender(CLI::App* sub, const GlobalOptions* global) {
     int samples = 0;
     long long seed = -1;
     int downscale = 1;
+    TruthOptions truth;
   };
   auto o = std::make_shared<Options>();
   sub->add_option("-s,--scene", o->scene, "scene file (YAML)")->capture_default_str();
@@ -25,11 +49,13 @@ Runner SetupRender(CLI::App* sub, const GlobalOptions* global) {
       sub->add_option("--samples", o->samples, "samples per pixel (overrides the scene)")->check(Bounded(1, 4096));
   sub->add_option("--seed", o->seed, "render seed (overrides the scene)")->check(Bounded(0, 9007199254740992.0));
   AddBounded(sub, "--downscale", &o->downscale, "same optics at 1/N of the resolution (quick runs)", 1, 100);
+  o->truth.Add(sub);
   return [o, global, samples]() {
     scenes::SceneConfig cfg = scenes::LoadSceneConfig(o->scene);
     scenes::DownscaleCameras(&cfg, o->downscale);
     if (samples->count() > 0) cfg.render.samples = o->samples;
     if (o->seed >= 0) cfg.render.seed = static_cast<uint64_t>(o->seed);
+    o->truth.Apply(&cfg.render);
     cfg.render.Check("--samples/--seed");
     scenes::RenderSceneFolder(cfg, o->out, !global->quiet, Versions());
     if (!global->quiet) std::cout << "hovs render: " << cfg.name << " -> " << o->out << "/dataset.json\n";
@@ -84,6 +110,7 @@ Runner SetupDataset(CLI::App* sub, const GlobalOptions* global) {
     std::vector<double> elevation, distance;
     std::string board, shard;
     bool resume = false;
+    TruthOptions truth;
   };
   auto o = std::make_shared<Options>();
   sub->add_option("-s,--scene", o->scene, "base scene: units, background (its boards are replaced)")
@@ -117,11 +144,13 @@ Runner SetupDataset(CLI::App* sub, const GlobalOptions* global) {
   sub->add_option("--shard", o->shard,
                   "I/N: render shard I (from 0) of N of the set (hovs merge joins them); default: from "
                   "SLURM_ARRAY_TASK_ID and SLURM_ARRAY_TASK_COUNT when Slurm sets them");
+  o->truth.Add(sub);
   return [o, global, samples, count]() {
     scenes::SceneConfig cfg = scenes::LoadSceneConfig(o->scene);
     scenes::DownscaleCameras(&cfg, o->downscale);
     if (!o->unit.empty()) scenes::SelectUnit(&cfg, o->unit);
     if (samples->count() > 0) cfg.render.samples = o->samples;
+    o->truth.Apply(&cfg.render);
     cfg.render.Check("--samples");
     scenes::DatasetOptions d = scenes::DatasetOptions::ForKind(o->kind);
     if (count->count() > 0) d.count = o->count;

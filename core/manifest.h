@@ -8,7 +8,8 @@
 //   units     [ {name: string, ...}, ... ]              names non-empty and unique
 //   frames    [ {id: integer >= 0 (unique),
 //                views: [ {unit: string, image: string,  unit one of the units' names, one view per unit
-//                          ground_truth?: {exr: string, sidecar: string},   (absent for real captures)
+//                          ground_truth?: {exr?: string, sidecar: string},  (absent for real captures; exr
+//                                                                            absent without per-pixel channels)
 //                          device_ns?: unsigned integer, width?, height?: 1..65535, ...}, ... ]}, ... ]
 // Paths in views are relative to the manifest's folder and stay inside it (no absolute paths, no ".."): a
 // shared dataset cannot make hovs open files elsewhere.

@@ -110,6 +110,9 @@ EquirectExport ExportEquirect(const fs::path& manifest_path, const EquirectOptio
     for (const auto& v : f["views"]) {
       HOVS_REQUIRE(v.contains("ground_truth"), where, "frame ", f["id"].get<int64_t>(),
                    " has no ground truth: the export needs a rendered dataset");
+      HOVS_REQUIRE(v["ground_truth"].contains("exr"), where, "frame ", f["id"].get<int64_t>(),
+                   " has no ground-truth image: the export needs its Z and mask channels (hovs dataset --truth "
+                   "default or all)");
       const std::string unit = v["unit"].get<std::string>();
       const UnitExport* u = nullptr;
       for (const auto& candidate : units)

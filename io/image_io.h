@@ -70,9 +70,11 @@ struct ExrChannels {
 };
 ExrChannels ReadExr(const std::filesystem::path& path);
 
-// Writes interleaved float channels as OpenEXR (PIZ compression) atomically, with `metadata` as string attributes.
+// Writes interleaved float channels as OpenEXR atomically, with `metadata` as string attributes and OpenEXR's
+// `compression` (none, rle, zips, zip, piz: the lossless ones).
 void WriteExr(const std::filesystem::path& path, int width, int height, const std::vector<std::string>& names,
-              const float* values, const std::vector<std::pair<std::string, std::string>>& metadata);
+              const float* values, const std::vector<std::pair<std::string, std::string>>& metadata,
+              const std::string& compression = "piz");
 
 // "openimageio" and "openexr" (the libraries loaded), "libpng", "libjpeg".
 std::map<std::string, std::string> IoVersions();

@@ -83,7 +83,10 @@ class Dataset {
   }
 
   py::dict GroundTruth(int64_t id, const std::string& unit) const {
-    return ReadExrFile(ManifestPath(path_, Truth(id, unit)["exr"]).string());
+    const auto& truth = Truth(id, unit);
+    HOVS_REQUIRE(truth.contains("exr"), path_.string(), "frame ", id, " has no ground-truth image (written with ",
+                 "--truth none)");
+    return ReadExrFile(ManifestPath(path_, truth["exr"]).string());
   }
 
   py::dict Corners(int64_t id, const std::string& unit) const {

@@ -1,8 +1,13 @@
 #include "raytrace/film.h"
 
+#include <algorithm>
 #include <cmath>
 #include <cstddef>
 #include <limits>
+#include <set>
+#include <sstream>
+
+#include <tbb/parallel_for.h>
 
 #include "core/error.h"
 #include "core/vector_clones.h"
@@ -70,14 +75,96 @@ void GroundTruthLanes(int m, const unsigned char* __restrict valid, const int* _
   }
 }
 
+namespace {
+// Each group's first channel in GroundTruth::kNames and its channel count.
+struct GroupSpan {
+  const char* name;
+  int first, count;
+};
+constexpr GroupSpan kGroups[] = {{"Z", 0, 1}, {"P", 1, 3}, {"N", 4, 3}, {"id", 7, 1}, {"mask", 8, 1}, {"M", 9, 3}};
+}  // namespace
+
+const std::vector<std::string>& TruthFileOptions::AllGroups() {
+  static const std::vector<std::string> all = {"Z", "P", "N", "id", "mask", "M"};
+  return all;
+}
+
+const std::vector<std::string>& TruthFileOptions::Compressions() {
+  static const std::vector<std::string> all = {"none", "rle", "zips", "zip", "piz"};
+  return all;
+}
+
+std::vector<std::string> TruthFileOptions::ParseGroups(const std::string& text, const std::string& where) {
+  if (text == "default") return TruthFileOptions{}.groups;
+  if (text == "all") return AllGroups();
+  if (text == "none") return {};
+  std::set<std::string> wanted;
+  std::stringstream list(text);
+  std::string word;
+  while (std::getline(list, word, ',')) {
+    HOVS_REQUIRE(std::find(AllGroups().begin(), AllGroups().end(), word) != AllGroups().end(), where,
+                 "unknown ground-truth channel '", word,
+                 "' (expected default, all, none, or a list of Z, P, N, id, mask, M separated by commas)");
+    HOVS_REQUIRE(wanted.insert(word).second, where, "the channel '", word, "' is listed twice");
+  }
+  HOVS_REQUIRE(!wanted.empty() && text.back() != ',', where, "expected default, all, none, or a list of Z, P, N, id, ",
+               "mask, M separated by commas (got '", text, "')");
+  std::vector<std::string> groups;
+  for (const auto& g : AllGroups())
+    if (wanted.count(g)) groups.push_back(g);
+  return groups;
+}
+
+std::vector<int> TruthFileOptions::Channels() const {
+  std::vector<int> channels;
+  for (const GroupSpan& g : kGroups)
+    if (std::find(groups.begin(), groups.end(), g.name) != groups.end())
+      for (int c = 0; c < g.count; ++c) channels.push_back(g.first + c);
+  return channels;
+}
+
+std::string TruthFileOptions::GroupsText() const {
+  std::string text;
+  for (const auto& g : groups) text += (text.empty() ? "" : ",") + g;
+  return text.empty() ? "none" : text;
+}
+
+void TruthFileOptions::Check(const std::string& where) const {
+  std::string list;
+  for (const auto& g : groups) list += (list.empty() ? "" : ",") + g;
+  if (!list.empty())
+    HOVS_REQUIRE(ParseGroups(list, where + ".truth_channels") == groups, where + ".truth_channels",
+                 "lists its channels out of order or twice (", list, ")");
+  HOVS_REQUIRE(std::find(Compressions().begin(), Compressions().end(), compression) != Compressions().end(),
+               where + ".truth_compression", "unknown OpenEXR compression '", compression,
+               "' (none, rle, zips, zip, piz)");
+}
+
 void WriteGroundTruthExr(const std::filesystem::path& path, const Frame& frame,
-                         const std::vector<std::pair<std::string, std::string>>& metadata) {
+                         const std::vector<std::pair<std::string, std::string>>& metadata,
+                         const TruthFileOptions& file) {
   HOVS_REQUIRE(!frame.truth.data.empty(), path.string(), "the frame has no ground truth");
+  const std::vector<int> channels = file.Channels();
+  HOVS_REQUIRE(!channels.empty(), path.string(), "no ground-truth channel is selected");
   std::vector<std::pair<std::string, std::string>> attributes;
   for (const auto& [k, v] : metadata) attributes.emplace_back("hovs:" + k, v);
-  io::WriteExr(path, frame.width, frame.height,
-               std::vector<std::string>(GroundTruth::kNames, GroundTruth::kNames + GroundTruth::kChannels),
-               frame.truth.data.data(), attributes);
+  std::vector<std::string> names;
+  for (int c : channels) names.push_back(GroundTruth::kNames[c]);
+  const int n = static_cast<int>(channels.size());
+  if (n == GroundTruth::kChannels) {
+    io::WriteExr(path, frame.width, frame.height, names, frame.truth.data.data(), attributes, file.compression);
+    return;
+  }
+  // The selected channels, interleaved as the file stores them (row by row in parallel: 6 Mpx a full frame).
+  const std::size_t width = static_cast<std::size_t>(frame.width);
+  PixelBuffer picked(width * frame.height * n);
+  tbb::parallel_for(0, frame.height, [&](int y) {
+    const float* in = frame.truth.data.data() + y * width * GroundTruth::kChannels;
+    float* out = picked.data() + y * width * n;
+    for (std::size_t x = 0; x < width; ++x)
+      for (int k = 0; k < n; ++k) out[x * n + k] = in[x * GroundTruth::kChannels + channels[k]];
+  });
+  io::WriteExr(path, frame.width, frame.height, names, picked.data(), attributes, file.compression);
 }
 
 }  // namespace hovs::raytrace

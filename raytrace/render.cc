@@ -34,6 +34,7 @@ void RenderOptions::Check(const std::string& where) const {
   HOVS_REQUIRE(std::isfinite(exposure_time) && exposure_time >= 0 && exposure_time <= kMaxExposureTime,
                where + ".exposure_time", "must be in [0, ", kMaxExposureTime, "] s (got ", exposure_time, ")");
   sensor.Check(where + ".sensor");
+  truth_file.Check(where);
 }
 
 std::size_t FrameMemoryBytes(int width, int height, bool ground_truth) {

@@ -28,6 +28,24 @@ struct SensorOptions {
   void Check(const std::string& where) const;
 };
 
+// What a frame's ground-truth file holds: groups of GroundTruth's channels (Z, P, N, id, mask, M below; a group
+// is its channels in kNames order) and OpenEXR's lossless compression. The default, Z N id mask with PIZ, is
+// 24 MB for a 2750 x 2200 frame of the reference scene where all twelve channels take 82 MB: the world point P
+// and the mirror point M (about 30 MB each, as incompressible as any float position) are written on request.
+// Corner truth lives in the JSON sidecar whatever the file holds; with no group, no EXR is written.
+struct TruthFileOptions {
+  std::vector<std::string> groups = {"Z", "N", "id", "mask"};
+  std::string compression = "piz";
+  static const std::vector<std::string>& AllGroups();     // Z P N id mask M
+  static const std::vector<std::string>& Compressions();  // none rle zips zip piz (lossless for float data)
+  // "default", "all", "none", or groups separated by commas in any order (written in AllGroups' order). Throws
+  // hovs::Error naming `where` and the word it does not know.
+  static std::vector<std::string> ParseGroups(const std::string& text, const std::string& where);
+  std::vector<int> Channels() const;  // indices into GroundTruth::kNames, ascending
+  std::string GroupsText() const;     // "Z,N,id,mask"; "none" without any
+  void Check(const std::string& where) const;
+};
+
 struct RenderOptions {
   int samples = 4;           // per pixel; a perfect square gives a stratified grid, otherwise jittered
   uint64_t seed = 1;         // sample jitter and sensor noise
@@ -48,6 +66,7 @@ struct RenderOptions {
     bool Empty() const { return x1 <= x0 || y1 <= y0; }
   } region;
   SensorOptions sensor;
+  TruthFileOptions truth_file;  // what the dataset writers store of the ground truth
   void Check(const std::string& where) const;
 };
 
@@ -122,10 +141,11 @@ void CheckFrameMemory(const std::string& where, int width, int height, bool grou
 // The result is a PixelBuffer: written in parallel, in huge pages (no single-threaded zeroing of 72 MB first).
 PixelBuffer ApplySensor(const Frame& frame, const SensorOptions& sensor, uint64_t seed, int* channels);
 
-// The ground truth of a frame as OpenEXR (io::WriteExr; its channels above), `metadata` stored as "hovs:<key>"
-// string attributes.
+// The ground truth of a frame as OpenEXR (io::WriteExr): the channels `file` selects (all twelve by default) with
+// its compression, `metadata` stored as "hovs:<key>" string attributes.
 void WriteGroundTruthExr(const std::filesystem::path& path, const Frame& frame,
-                         const std::vector<std::pair<std::string, std::string>>& metadata);
+                         const std::vector<std::pair<std::string, std::string>>& metadata,
+                         const TruthFileOptions& file = TruthFileOptions{TruthFileOptions::AllGroups(), "piz"});
 
 // Versions of the libraries that make a render, for the outputs that record what made them: "embree" (the
 // headers built against; Debian ships them with the library) and io's (OpenImageIO, OpenEXR, libpng, libjpeg).

@@ -76,6 +76,9 @@ ViewRecord RenderView(const SceneConfig& cfg, const raytrace::RayScene& scene, i
                       const std::string& stem, bool progress, nlohmann::json* stats, raytrace::Frame* scratch) {
   raytrace::RenderOptions ro = cfg.render;
   ro.progress = progress;
+  // The sidecar (corner truth, the rig) comes from the scene; the per-pixel truth only where a channel is stored.
+  const bool sidecar = ro.ground_truth, exr = sidecar && !ro.truth_file.groups.empty();
+  ro.ground_truth = exr;
   raytrace::RenderInto(scene, raytrace::ViewCamera::Unit(u), ro, scratch);
   const raytrace::Frame& frame = *scratch;
   int channels = 0;
@@ -94,15 +97,18 @@ ViewRecord RenderView(const SceneConfig& cfg, const raytrace::RayScene& scene, i
       if (f.valid()) f.wait();
     }
   } join{image_written};
-  if (ro.ground_truth) {
-    v.exr = "truth/" + stem + ".exr";
+  if (sidecar) {
     v.sidecar = "truth/" + stem + ".json";
-    raytrace::WriteGroundTruthExr(dir / v.exr, frame,
-                                  {{"scene", cfg.name},
-                                   {"unit", unit},
-                                   {"frame", stem},
-                                   {"world_frame", "z up, metres"},
-                                   {"sidecar", v.sidecar}});
+    if (exr) {
+      v.exr = "truth/" + stem + ".exr";
+      raytrace::WriteGroundTruthExr(dir / v.exr, frame,
+                                    {{"scene", cfg.name},
+                                     {"unit", unit},
+                                     {"frame", stem},
+                                     {"world_frame", "z up, metres"},
+                                     {"sidecar", v.sidecar}},
+                                    ro.truth_file);
+    }
     nlohmann::json side = FrameSidecar(cfg, scene, u);
     side["image"] = v.image;
     side["render"] = {{"samples", ro.samples},
@@ -162,7 +168,8 @@ std::string Thumbnail(const fs::path& dir, const std::string& image, int size) {
 
 nlohmann::json ViewJson(const ViewRecord& v) {
   nlohmann::json j = {{"unit", v.unit}, {"image", v.image}};
-  if (!v.exr.empty()) j["ground_truth"] = {{"exr", v.exr}, {"sidecar", v.sidecar}};
+  if (!v.sidecar.empty()) j["ground_truth"] = {{"sidecar", v.sidecar}};
+  if (!v.exr.empty()) j["ground_truth"]["exr"] = v.exr;
   return j;
 }
 
@@ -299,7 +306,10 @@ void WriteDatasetPage(const fs::path& dir, const nlohmann::json& m);
 // What makes two runs' frames interchangeable: the manifest's head and generator, the shard, the render settings.
 nlohmann::json RunConfig(const nlohmann::json& m, const SceneConfig& base) {
   nlohmann::json c = m;
-  c["render"] = {{"samples", base.render.samples}, {"ground_truth", base.render.ground_truth}};
+  c["render"] = {{"samples", base.render.samples},
+                 {"ground_truth", base.render.ground_truth},
+                 {"truth_channels", base.render.truth_file.GroupsText()},
+                 {"truth_compression", base.render.truth_file.compression}};
   return c;
 }
 
@@ -402,6 +412,8 @@ void WriteCalibrationDataset(const SceneConfig& base, const DatasetOptions& o, c
   m["frames"] = frames;
   m["generator"]["samples"] = base.render.samples;
   m["generator"]["ground_truth"] = base.render.ground_truth;
+  m["generator"]["truth_channels"] = base.render.truth_file.GroupsText();
+  m["generator"]["truth_compression"] = base.render.truth_file.compression;
   WriteFileAtomic(stage.staging() / "dataset.json", m.dump(2) + "\n");
   WriteDatasetPage(stage.staging(), m);
   stage.Commit();
@@ -414,6 +426,8 @@ void WriteDatasetPage(const fs::path& dir, const nlohmann::json& m) {
   const auto& frames = m["frames"];
   const auto& gen = m["generator"];
   const std::string kind = m["kind"];
+  // (Sets written before the channels were selectable hold all twelve.)
+  const std::string channels = gen.value("truth_channels", std::string("Z,P,N,id,mask,M"));
   results::HtmlPage page("hovs dataset: " + m["name"].get<std::string>() + " (" + kind + ")");
   if (kind == "depth_sequence")
     page.Paragraph(std::to_string(frames.size()) + " frames, the rig moving " +
@@ -421,7 +435,8 @@ void WriteDatasetPage(const fs::path& dir, const nlohmann::json& m) {
                    FormatNumber("%g", gen["heading_deg"].get<double>()) + " deg, yaw step " +
                    FormatNumber("%g", gen["yaw_step_deg"].get<double>()) +
                    " deg); every unit rendered per frame with ground truth "
-                   "(truth/*.exr: Z, P, N, id, mask, M; truth/*.json: the rig of that frame).");
+                   "(truth/*.exr: " +
+                   channels + "; truth/*.json: the rig of that frame).");
   else
     page.Paragraph(std::to_string(frames.size()) + " frames (" + kind + "), board poses drawn with seed " +
                    std::to_string(m["seed"].get<uint64_t>()) +
@@ -429,10 +444,9 @@ void WriteDatasetPage(const fs::path& dir, const nlohmann::json& m) {
                    "render seed " +
                    std::to_string(m["render_seed"].get<uint64_t>()) + ", " + std::to_string(gen["samples"].get<int>()) +
                    " samples per pixel. " +
-                   (gen["ground_truth"].get<bool>()
-                        ? "Ground truth per frame: truth/*.exr (channels Z, P, N, id, mask, M) and "
-                          "truth/*.json (rig, board pose, exact corner pixels)."
-                        : "Rendered without ground truth (render.ground_truth: false)."));
+                   (gen["ground_truth"].get<bool>() ? "Ground truth per frame: truth/*.exr (channels " + channels +
+                                                          ") and truth/*.json (rig, board pose, exact corner pixels)."
+                                                    : "Rendered without ground truth (render.ground_truth: false)."));
   if (m.contains("shard"))
     page.Paragraph("Shard " + std::to_string(m["shard"]["index"].get<int>()) + " of " +
                    std::to_string(m["shard"]["count"].get<int>()) + " (hovs merge joins the shards).");
@@ -515,7 +529,8 @@ void MergeDatasetShards(const std::vector<fs::path>& shards, const fs::path& out
       for (const auto& view : fr["views"]) {
         std::vector<std::string> files = {view["image"].get<std::string>()};
         if (view.contains("ground_truth"))
-          files.push_back(view["ground_truth"]["exr"]), files.push_back(view["ground_truth"]["sidecar"]);
+          for (const char* k : {"exr", "sidecar"})
+            if (view["ground_truth"].contains(k)) files.push_back(view["ground_truth"][k]);
         for (const auto& f : files) {
           HOVS_REQUIRE(fs::exists(dir / f), (dir / f).string(), "is missing from its shard");
           fs::create_directories((stage.staging() / f).parent_path());
@@ -613,6 +628,8 @@ void WriteDepthSequence(const SceneConfig& base, const DatasetOptions& o, const 
   m["frames"] = frames;
   m["generator"]["samples"] = base.render.samples;
   m["generator"]["ground_truth"] = base.render.ground_truth;
+  m["generator"]["truth_channels"] = base.render.truth_file.GroupsText();
+  m["generator"]["truth_compression"] = base.render.truth_file.compression;
   WriteFileAtomic(stage.staging() / "dataset.json", m.dump(2) + "\n");
   WriteDatasetPage(stage.staging(), m);
   stage.Commit();

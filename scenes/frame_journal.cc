@@ -19,7 +19,8 @@ std::vector<std::string> EntryFiles(const nlohmann::json& entry) {
   for (const auto& v : entry.at("views")) {
     files.push_back(v.at("image").get<std::string>());
     if (v.contains("ground_truth"))
-      for (const char* k : {"exr", "sidecar"}) files.push_back(v["ground_truth"].at(k).get<std::string>());
+      for (const char* k : {"exr", "sidecar"})
+        if (v["ground_truth"].contains(k)) files.push_back(v["ground_truth"][k].get<std::string>());
   }
   return files;
 }

@@ -161,7 +161,8 @@ nlohmann::json FrameSidecar(const SceneConfig& cfg, const raytrace::RayScene& sc
       "mirror reflection point x (mirror frame, m)",
       "mirror reflection point y (mirror frame, m)",
       "mirror reflection point z (mirror frame, m)"};
-  for (int c = 0; c < raytrace::GroundTruth::kChannels; ++c)
+  // The channels the frame's EXR holds (render.truth_channels; none: the frame has no EXR).
+  for (int c : cfg.render.truth_file.Channels())
     channels.push_back({{"name", raytrace::GroundTruth::kNames[c]}, {"meaning", meaning[c]}});
   j["exr_channels"] = channels;
   j["pixel_convention"] = "u = column, v = row, centre of the top-left pixel at (0, 0); ground truth at pixel centres";

@@ -434,13 +434,20 @@ SceneConfig ParseSceneConfigUnguarded(const std::string& text, const std::string
   if (root["render"]) {
     const YAML::Node rn = root["render"];
     r.OnlyKeys(rn, "render",
-               {"samples", "seed", "ground_truth", "sensor", "lens_radius", "focus_distance", "exposure_time"});
+               {"samples", "seed", "ground_truth", "truth_channels", "truth_compression", "sensor", "lens_radius",
+                "focus_distance", "exposure_time"});
     if (rn["lens_radius"]) cfg.render.lens_radius = r.Number(rn["lens_radius"], "render.lens_radius");
     if (rn["focus_distance"]) cfg.render.focus_distance = r.Number(rn["focus_distance"], "render.focus_distance");
     if (rn["exposure_time"]) cfg.render.exposure_time = r.Number(rn["exposure_time"], "render.exposure_time");
     if (rn["samples"]) cfg.render.samples = r.Integer(rn["samples"], "render.samples");
     if (rn["seed"]) cfg.render.seed = r.Seed(rn["seed"], "render.seed");
     if (rn["ground_truth"]) cfg.render.ground_truth = r.Bool(rn["ground_truth"], "render.ground_truth");
+    if (rn["truth_channels"])
+      cfg.render.truth_file.groups =
+          raytrace::TruthFileOptions::ParseGroups(r.String(rn["truth_channels"], "render.truth_channels"),
+                                                  r.Where(rn["truth_channels"], "render.truth_channels"));
+    if (rn["truth_compression"])
+      cfg.render.truth_file.compression = r.String(rn["truth_compression"], "render.truth_compression");
     if (rn["sensor"]) {
       const YAML::Node s = rn["sensor"];
       r.OnlyKeys(s, "render.sensor", {"gain", "vignetting", "full_well", "read_noise", "bayer", "bit_depth"});

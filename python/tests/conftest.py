@@ -29,10 +29,11 @@ def source_dir():
 
 @pytest.fixture(scope="session")
 def dataset(tmp_path_factory):
-    """Six frames of the reference calibration scene at 1/5 of the resolution (550 x 440), one sample per pixel."""
+    """Six frames of the reference calibration scene at 1/5 of the resolution (550 x 440), one sample per pixel,
+    with every ground-truth channel (the export test checks the world point P)."""
     out = tmp_path_factory.mktemp("data") / "dataset"
     run_hovs("dataset", "--scene", SOURCE_DIR / "scenes" / "reference_calibration.yaml", "--downscale", 5,
-             "--samples", 1, "-n", 6, "--seed", 3, "--out", out)
+             "--samples", 1, "-n", 6, "--seed", 3, "--truth", "all", "--out", out)
     return out / "dataset.json"
 
 

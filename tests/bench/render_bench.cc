@@ -6,6 +6,8 @@
 
 #include <chrono>
 #include <filesystem>
+#include <fstream>
+#include <nlohmann/json.hpp>
 #include <optional>
 #include <random>
 #include <thread>
@@ -13,6 +15,7 @@
 #include "core/large_pages.h"
 #include "raytrace/render.h"
 #include "raytrace/texture.h"
+#include "scenes/dataset.h"
 #include "scenes/scene_config.h"
 #include "io/image_io.h"
 
@@ -320,6 +323,60 @@ void BM_WriteGroundTruthExr(benchmark::State& state) {
   std::filesystem::remove(path);
 }
 BENCHMARK(BM_WriteGroundTruthExr)->Unit(benchmark::kMillisecond)->UseRealTime()->Iterations(3);
+
+// The channel selections and compressions a dataset can store (hovs dataset --truth, --truth-compression): the
+// file's size and write time per frame. Args: selection (0 all twelve, 1 the default Z N id mask, 2 Z and mask),
+// compression (0 none, 1 rle, 2 zips, 3 zip, 4 piz).
+void BM_WriteGroundTruthChoice(benchmark::State& state) {
+  const auto& f = OneFrame();
+  const std::vector<std::vector<std::string>> selections = {
+      hovs::raytrace::TruthFileOptions::AllGroups(), hovs::raytrace::TruthFileOptions{}.groups, {"Z", "mask"}};
+  hovs::raytrace::TruthFileOptions file;
+  file.groups = selections[state.range(0)];
+  file.compression = hovs::raytrace::TruthFileOptions::Compressions()[state.range(1)];
+  const auto path = std::filesystem::temp_directory_path() / "hovs_bench_truth_choice.exr";
+  for (auto _ : state) hovs::raytrace::WriteGroundTruthExr(path, f, {}, file);
+  state.counters["MB"] = std::filesystem::file_size(path) / 1e6;
+  state.SetLabel(file.GroupsText() + " " + file.compression);
+  std::filesystem::remove(path);
+}
+BENCHMARK(BM_WriteGroundTruthChoice)
+    ->ArgsProduct({{0, 1, 2}, {0, 1, 2, 3, 4}})
+    ->Unit(benchmark::kMillisecond)
+    ->UseRealTime()
+    ->Iterations(2);
+
+// The dataset writer end to end: 3 full-size frames of the calibration scene at 4 samples per pixel with the
+// default ground truth (hovs dataset -n 3 --samples 4), as a user runs it. Counters per frame: the whole frame
+// (wall), its render (the manifest's render_seconds) and the rest, the writing (sensor model, PNG, EXR, sidecar,
+// thumbnail and page); write_share is writing over the whole (target: at most a third). Arg: 1 default channels,
+// 0 all twelve.
+void BM_DatasetFrame(benchmark::State& state) {
+  auto cfg = hovs::scenes::LoadSceneConfig(std::string(HOVS_SOURCE_DIR) + "/scenes/reference_calibration.yaml");
+  cfg.render.samples = 4;
+  if (state.range(0) == 0) cfg.render.truth_file.groups = hovs::raytrace::TruthFileOptions::AllGroups();
+  hovs::scenes::DatasetOptions o;
+  o.count = 3;
+  const auto out = std::filesystem::temp_directory_path() / "hovs_bench_dataset";
+  double wall = 0, render = 0;
+  for (auto _ : state) {
+    const auto start = std::chrono::steady_clock::now();
+    hovs::scenes::WriteCalibrationDataset(cfg, o, out, {{"hovs", "bench"}});
+    wall += std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    // (Read as plain JSON: a manifest loaded by the library counts as an input, which the next run's output
+    // folder may not replace.)
+    std::ifstream manifest(out / "dataset.json");
+    const nlohmann::json m = nlohmann::json::parse(manifest);
+    for (const auto& fr : m["frames"]) render += fr["render_seconds"].get<double>();
+    std::filesystem::remove_all(out);
+  }
+  const double frames = static_cast<double>(state.iterations() * o.count);
+  state.counters["frame_s"] = wall / frames;
+  state.counters["render_s"] = render / frames;
+  state.counters["write_s"] = (wall - render) / frames;
+  state.counters["write_share"] = (wall - render) / wall;
+}
+BENCHMARK(BM_DatasetFrame)->Arg(1)->Arg(0)->Unit(benchmark::kMillisecond)->UseRealTime()->Iterations(1);
 
 // The sensor model over one frame (vignetting, shot and read noise, 8-bit range), as the dataset writer applies it
 // before the PNG: a fresh 2750 x 2200 x 3 float image per frame.

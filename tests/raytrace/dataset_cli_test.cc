@@ -62,6 +62,7 @@ TEST(Dataset, DepthSequenceMovesTheRigAndItsGroundTruth) {
   auto cfg = scenes::LoadSceneConfig(std::string(HOVS_SOURCE_DIR) + "/scenes/street.yaml");
   scenes::DownscaleCameras(&cfg, 10);
   cfg.render.samples = 1;
+  cfg.render.truth_file.groups = raytrace::TruthFileOptions::AllGroups();  // P is checked against Z
   auto o = scenes::DatasetOptions::ForKind("depth_sequence");
   o.count = 3, o.step_m = 0.7, o.heading_deg = 90, o.yaw_step_deg = 5;
   const fs::path out = test::Scratch("dataset", "depth-seq");
@@ -123,7 +124,8 @@ TEST(Dataset, ADepthSequenceDrivenIntoAnObjectIsRefusedBeforeRendering) {
 }
 
 TEST(Dataset, CalibrationSetHasManifestImagesAndGroundTruth) {
-  const auto cfg = test::SmallCalibrationScene();
+  auto cfg = test::SmallCalibrationScene();
+  cfg.render.truth_file.groups = raytrace::TruthFileOptions::AllGroups();
   scenes::DatasetOptions o;
   o.count = 3;
   const fs::path out = test::Scratch("dataset", "calib");
