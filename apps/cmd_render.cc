@@ -7,6 +7,7 @@
 #include "core/error.h"
 #include "scenes/dataset.h"
 #include "scenes/scene_config.h"
+#include "study/tolerance.h"
 
 namespace hovs::apps {
 
@@ -63,35 +64,26 @@ Runner SetupRender(CLI::App* sub, const GlobalOptions* global) {
   };
 }
 
-namespace {
-
-// "I/N", or Slurm's array variables when no shard is given (and Slurm sets them); else the whole set.
-void ParseShard(const std::string& text, int* index, int* count) {
-  std::string spec = text, where = "--shard";
-  const char* id = std::getenv("SLURM_ARRAY_TASK_ID");
-  const char* n = std::getenv("SLURM_ARRAY_TASK_COUNT");
-  if (spec.empty() && id && n) spec = std::string(id) + "/" + n, where = "SLURM_ARRAY_TASK_ID/SLURM_ARRAY_TASK_COUNT";
-  if (spec.empty()) return;
-  int end = -1;
-  HOVS_REQUIRE(std::sscanf(spec.c_str(), "%d/%d%n", index, count, &end) == 2 && end == static_cast<int>(spec.size()),
-               where, "expected I/N (shard I from 0 of N), got '", spec, "'");
-  HOVS_REQUIRE(*count >= 1 && *index >= 0 && *index < *count, where, "needs 0 <= I < N (got ", spec, ")");
-}
-
-}  // namespace
-
 Runner SetupMerge(CLI::App* sub, const GlobalOptions* global) {
   struct Options {
     std::vector<std::string> shards;
     std::string out = "results/dataset";
   };
   auto o = std::make_shared<Options>();
-  sub->add_option("SHARDS", o->shards, "the shard folders of one dataset (hovs dataset --shard I/N)")->required();
-  sub->add_option("-o,--out", o->out, "merged dataset folder (replaced atomically)")->capture_default_str();
+  sub->add_option("SHARDS", o->shards,
+                  "the shard folders of one dataset or tolerance study (hovs dataset|tolerance --shard I/N)")
+      ->required();
+  sub->add_option("-o,--out", o->out, "merged folder (replaced atomically)")->capture_default_str();
   return [o, global]() {
     std::vector<std::filesystem::path> dirs(o->shards.begin(), o->shards.end());
-    scenes::MergeDatasetShards(dirs, o->out);
-    if (!global->quiet) std::cout << "hovs merge: " << dirs.size() << " shards -> " << o->out << "/dataset.json\n";
+    const bool tolerance = study::IsToleranceFolder(dirs.front());
+    if (tolerance)
+      study::MergeToleranceShards(dirs, o->out);
+    else
+      scenes::MergeDatasetShards(dirs, o->out);
+    if (!global->quiet)
+      std::cout << "hovs merge: " << dirs.size() << " shards -> " << o->out
+                << (tolerance ? "/tolerance.json\n" : "/dataset.json\n");
     return 0;
   };
 }

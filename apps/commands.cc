@@ -86,6 +86,18 @@ CLI::Validator Bounded(double lo, double hi, bool low_open) {
   return v;
 }
 
+void ParseShard(const std::string& text, int* index, int* count) {
+  std::string spec = text, where = "--shard";
+  const char* id = std::getenv("SLURM_ARRAY_TASK_ID");
+  const char* n = std::getenv("SLURM_ARRAY_TASK_COUNT");
+  if (spec.empty() && id && n) spec = std::string(id) + "/" + n, where = "SLURM_ARRAY_TASK_ID/SLURM_ARRAY_TASK_COUNT";
+  if (spec.empty()) return;
+  int end = -1;
+  HOVS_REQUIRE(std::sscanf(spec.c_str(), "%d/%d%n", index, count, &end) == 2 && end == static_cast<int>(spec.size()),
+               where, "expected I/N (shard I from 0 of N), got '", spec, "'");
+  HOVS_REQUIRE(*count >= 1 && *index >= 0 && *index < *count, where, "needs 0 <= I < N (got ", spec, ")");
+}
+
 const std::vector<Command>& Commands() {
   static const std::vector<Command> table = {
       {"design", "Mirror design study: sweep (a, b[, d]), constrained optima, report with figures", SetupDesign},
@@ -105,7 +117,12 @@ const std::vector<Command>& Commands() {
        SetupCapture},
       {"compare", "The difference between two models of one camera as a map over the image (px and degrees)",
        SetupCompare},
-      {"merge", "Join the shards of a dataset (hovs dataset --shard I/N) into the set one process writes", SetupMerge},
+      {"merge", "Join the shards of a dataset or a tolerance study (--shard I/N) into what one process writes",
+       SetupMerge},
+      {"tolerance",
+       "Tolerance study of a design: Monte-Carlo over manufacturing and assembly errors, sensitivities, the "
+       "tolerances a limit needs",
+       SetupTolerance},
       {"slurm", "A sharded command as a Slurm array job: submit (and wait, merge), status", SetupSlurm},
       {"convert",
        "A camera model into other tools' files: Kalibr camchain, MEI YAML, OpenCV omnidir YAML; refits to double "

@@ -66,6 +66,10 @@ void ParseImageSize(const std::string& text, const std::string& option, int* wid
 int RunCommandLine(int argc, const char* const* argv, bool rethrow);
 int RunCommandLine(const std::vector<std::string>& args, bool rethrow);  // args without the program name
 
+// --shard "I/N" into *index, *count; without it, Slurm's SLURM_ARRAY_TASK_ID and SLURM_ARRAY_TASK_COUNT where
+// Slurm sets them; else both stay as they are (the whole set). Throws naming the option or the variables.
+void ParseShard(const std::string& text, int* index, int* count);
+
 // One entry per subcommand, defined in cmd_<name>.cc.
 Runner SetupDesign(CLI::App* sub, const GlobalOptions* global);
 Runner SetupVersion(CLI::App* sub, const GlobalOptions* global);
@@ -85,5 +89,6 @@ Runner SetupConvert(CLI::App* sub, const GlobalOptions* global);
 Runner SetupMerge(CLI::App* sub, const GlobalOptions* global);
 Runner SetupExport(CLI::App* sub, const GlobalOptions* global);
 Runner SetupRig(CLI::App* sub, const GlobalOptions* global);
+Runner SetupTolerance(CLI::App* sub, const GlobalOptions* global);
 
 }  // namespace hovs::apps

@@ -12,6 +12,7 @@
 #include "core/error.h"
 #include "core/io.h"
 #include "scenes/dataset.h"
+#include "study/tolerance.h"
 
 extern char** environ;
 
@@ -22,7 +23,7 @@ namespace {
 
 // The commands whose runs can be split into shards and merged (their --shard I/N and hovs merge).
 const std::vector<std::string>& ShardableCommands() {
-  static const std::vector<std::string> names = {"dataset"};
+  static const std::vector<std::string> names = {"dataset", "tolerance"};
   return names;
 }
 
@@ -249,8 +250,12 @@ nlohmann::json TasksJson(const std::vector<TaskState>& tasks) {
 void MergeShards(const ShardedCommand& command, int shards, const fs::path& job_dir) {
   std::vector<fs::path> dirs;
   for (int i = 0; i < shards; ++i) dirs.push_back(ShardDir(job_dir, i));
-  HOVS_REQUIRE(command.name == "dataset", "hovs slurm", "no merge for '", command.name, "'");
-  scenes::MergeDatasetShards(dirs, command.out);
+  if (command.name == "tolerance")
+    study::MergeToleranceShards(dirs, command.out);
+  else if (command.name == "dataset")
+    scenes::MergeDatasetShards(dirs, command.out);
+  else
+    throw Error("hovs slurm", "no merge for '" + command.name + "'");
 }
 
 }  // namespace hovs::jobs

@@ -70,7 +70,8 @@ std::vector<TaskState> WaitForJob(const std::string& job_id, int shards, const s
 // The job folder's submission record and the tasks' states as JSON.
 nlohmann::json TasksJson(const std::vector<TaskState>& tasks);
 
-// Joins the shard outputs into command.out (scenes::MergeDatasetShards for hovs dataset).
+// Joins the shard outputs into command.out (scenes::MergeDatasetShards for hovs dataset,
+// study::MergeToleranceShards for hovs tolerance).
 void MergeShards(const ShardedCommand& command, int shards, const std::filesystem::path& job_dir);
 
 std::filesystem::path ShardDir(const std::filesystem::path& job_dir, int index);

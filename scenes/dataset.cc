@@ -128,8 +128,11 @@ ViewRecord RenderView(const SceneConfig& cfg, const raytrace::RayScene& scene, i
   return v;
 }
 
-// A thumbnail (longest side `size` px) of an image file, written next to it under thumbs/.
+// A thumbnail (longest side `size` px) of an image file, written next to it under thumbs/; one already there (a
+// merge links the shards' own) is kept.
 std::string Thumbnail(const fs::path& dir, const std::string& image, int size) {
+  const std::string existing = "thumbs/" + fs::path(image).filename().string();
+  if (fs::is_regular_file(dir / existing)) return existing;
   OIIO::ImageBuf src((dir / image).string());
   HOVS_REQUIRE(src.read(0, 0, true, OIIO::TypeDesc::FLOAT), image, "cannot read for the thumbnail");
   const auto& spec = src.spec();
@@ -528,6 +531,9 @@ void MergeDatasetShards(const std::vector<fs::path>& shards, const fs::path& out
                    fr["id"].dump(), " is out of order (expected ", merged["frames"].size(), ")");
       for (const auto& view : fr["views"]) {
         std::vector<std::string> files = {view["image"].get<std::string>()};
+        // The shard's thumbnail (the same bytes the merged page would make from the same image).
+        const std::string thumb = "thumbs/" + fs::path(view["image"].get<std::string>()).filename().string();
+        if (fs::is_regular_file(dir / thumb)) files.push_back(thumb);
         if (view.contains("ground_truth"))
           for (const char* k : {"exr", "sidecar"})
             if (view["ground_truth"].contains(k)) files.push_back(view["ground_truth"][k]);

@@ -129,6 +129,16 @@ assert files == 24, files
 print("merged == single:", files, "files")
 EOF
 
+# The tolerance study as a 4-task array: merged, the same files as one process.
+tolerance=(tolerance -c "$src/study/reference.yaml" -n 200)
+"$hovs" -q slurm submit --shards 4 --wait --poll 0.5 --timeout 300 -- "${tolerance[@]}" --out "$dir/tol-merged" \
+  > "$dir/tol-submit.out" 2>&1 || fail "hovs slurm submit tolerance: $(cat "$dir/tol-submit.out")"
+"$hovs" -q "${tolerance[@]}" --out "$dir/tol-single" > "$dir/tol-single.out" 2>&1 ||
+  fail "single tolerance run: $(cat "$dir/tol-single.out")"
+for f in tolerance.json samples.csv; do
+  cmp -s "$dir/tol-single/$f" "$dir/tol-merged/$f" || fail "the merged tolerance study's $f differs from one process's"
+done
+
 # A task that fails is named with its log; a command that cannot be sharded, or no sbatch, is refused.
 "$hovs" -q slurm submit --shards 2 --wait --poll 0.5 --timeout 300 -- dataset --scene "$dir/missing.yaml" \
   --out "$dir/bad" > "$dir/bad.out" 2>&1
@@ -140,4 +150,4 @@ grep -q "shard 0 failed" "$dir/bad.out" && grep -q "task-0.out" "$dir/bad.out" |
 [ $? -eq 2 ] && grep -q "cannot be sharded" "$dir/x.out" || fail "design accepted: $(cat "$dir/x.out")"
 PATH=/nonexistent "$hovs" -q slurm submit -- "${dataset[@]}" --out "$dir/nopath" > "$dir/nopath.out" 2>&1
 [ $? -eq 2 ] && grep -q "sbatch: not found" "$dir/nopath.out" || fail "no sbatch: $(cat "$dir/nopath.out")"
-echo "PASSED: 8 shards through Slurm merged to the single-process set; failures named"
+echo "PASSED: 8 dataset shards and 4 tolerance shards through Slurm merged to the single-process outputs; failures named"
