@@ -5,6 +5,8 @@
 #include "apps/commands.h"
 #include "calib/mono_calibration.h"
 #include "core/error.h"
+#include "design/study.h"
+#include "results/plot.h"
 #include "scenes/dataset.h"
 #include "scenes/scene_config.h"
 #include "study/tolerance.h"
@@ -76,14 +78,19 @@ Runner SetupMerge(CLI::App* sub, const GlobalOptions* global) {
   sub->add_option("-o,--out", o->out, "merged folder (replaced atomically)")->capture_default_str();
   return [o, global]() {
     std::vector<std::filesystem::path> dirs(o->shards.begin(), o->shards.end());
-    const bool tolerance = study::IsToleranceFolder(dirs.front());
-    if (tolerance)
+    std::string what = "/dataset.json";
+    if (study::IsToleranceFolder(dirs.front())) {
       study::MergeToleranceShards(dirs, o->out);
-    else
+      what = "/tolerance.json";
+    } else if (design::IsDesignShard(dirs.front())) {
+      HOVS_REQUIRE(results::CanRender(), "hovs merge",
+                   "the design report's figures need an X display and DISPLAY is unset; run under `xvfb-run -a`");
+      design::MergeDesignShards(dirs, o->out);
+      what = "/design.json";
+    } else {
       scenes::MergeDatasetShards(dirs, o->out);
-    if (!global->quiet)
-      std::cout << "hovs merge: " << dirs.size() << " shards -> " << o->out
-                << (tolerance ? "/tolerance.json\n" : "/dataset.json\n");
+    }
+    if (!global->quiet) std::cout << "hovs merge: " << dirs.size() << " shards -> " << o->out << what << "\n";
     return 0;
   };
 }

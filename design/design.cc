@@ -324,6 +324,10 @@ std::optional<size_t> SweepResult::BestFeasible() const {
 }
 
 SweepResult Sweep(const DesignProblem& problem, const SweepSpec& spec) {
+  return SweepRows(problem, spec, 0, static_cast<size_t>(spec.nb) * spec.nd);
+}
+
+SweepResult SweepRows(const DesignProblem& problem, const SweepSpec& spec, size_t row_first, size_t row_end) {
   problem.Check("design");
   spec.Check("design.search.grid");
   SweepResult r;
@@ -335,27 +339,28 @@ SweepResult Sweep(const DesignProblem& problem, const SweepSpec& spec) {
   const size_t n = static_cast<size_t>(spec.na) * spec.nb * spec.nd;
   for (auto* v : {&r.upper_deg, &r.lower_deg, &r.field_deg, &r.rim_px, &r.system_length, &r.objective}) v->resize(n);
   r.violated.resize(n);
-  tbb::parallel_for(tbb::blocked_range<size_t>(0, static_cast<size_t>(spec.nb) * spec.nd),
-                    [&](const tbb::blocked_range<size_t>& rows) {
-                      for (size_t row = rows.begin(); row != rows.end(); ++row) {
-                        const int ib = static_cast<int>(row % spec.nb), id = static_cast<int>(row / spec.nb);
-                        for (int ia = 0; ia < spec.na; ++ia) {
-                          const size_t k = r.Index(ia, ib, id);
-                          const Geometry<double> g = ComputeGeometry(r.A(ia), r.B(ib), r.D(id), problem);
-                          r.upper_deg[k] = g.upper / kDeg;
-                          r.lower_deg[k] = g.lower / kDeg;
-                          r.field_deg[k] = (g.upper - g.lower) / kDeg;
-                          r.rim_px[k] = g.rim_px;
-                          r.system_length[k] = 2 * g.c;
-                          r.objective[k] = ObjectiveOf(g, problem.objective);
-                          const std::vector<double> cv = ConstraintVector(g, problem);
-                          uint32_t bits = 0;
-                          for (size_t j = 0; j < cv.size(); ++j)
-                            if (!(cv[j] <= 0)) bits |= 1u << j;
-                          r.violated[k] = bits;
-                        }
-                      }
-                    });
+  HOVS_REQUIRE(row_first <= row_end && row_end <= static_cast<size_t>(spec.nb) * spec.nd, "design sweep", "rows ",
+               row_first, "..", row_end, " outside the grid's ", spec.nb * spec.nd);
+  tbb::parallel_for(tbb::blocked_range<size_t>(row_first, row_end), [&](const tbb::blocked_range<size_t>& rows) {
+    for (size_t row = rows.begin(); row != rows.end(); ++row) {
+      const int ib = static_cast<int>(row % spec.nb), id = static_cast<int>(row / spec.nb);
+      for (int ia = 0; ia < spec.na; ++ia) {
+        const size_t k = r.Index(ia, ib, id);
+        const Geometry<double> g = ComputeGeometry(r.A(ia), r.B(ib), r.D(id), problem);
+        r.upper_deg[k] = g.upper / kDeg;
+        r.lower_deg[k] = g.lower / kDeg;
+        r.field_deg[k] = (g.upper - g.lower) / kDeg;
+        r.rim_px[k] = g.rim_px;
+        r.system_length[k] = 2 * g.c;
+        r.objective[k] = ObjectiveOf(g, problem.objective);
+        const std::vector<double> cv = ConstraintVector(g, problem);
+        uint32_t bits = 0;
+        for (size_t j = 0; j < cv.size(); ++j)
+          if (!(cv[j] <= 0)) bits |= 1u << j;
+        r.violated[k] = bits;
+      }
+    }
+  });
   return r;
 }
 

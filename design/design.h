@@ -140,6 +140,9 @@ struct SweepResult {
 };
 
 SweepResult Sweep(const DesignProblem& problem, const SweepSpec& spec);
+// Rows [row_first, row_end) of the sweep (row ib + nb * id holds the na designs of that b and d), the other rows'
+// values left zero: one shard of the grid (hovs design --shard). Sweep is every row.
+SweepResult SweepRows(const DesignProblem& problem, const SweepSpec& spec, size_t row_first, size_t row_end);
 
 // ---- Optimum -----------------------------------------------------------------------------------------
 struct Optimum {

@@ -200,11 +200,16 @@ Optimum EvaluateDesign(const DesignPoint& p, const DesignProblem& problem, const
 }
 
 DesignStudy RunDesignStudy(const DesignConfig& cfg) {
+  const auto t = Clock::now();
+  SweepResult sweep = Sweep(cfg.problem, cfg.sweep);
+  return RunDesignStudy(cfg, std::move(sweep), Since(t));
+}
+
+DesignStudy RunDesignStudy(const DesignConfig& cfg, SweepResult sweep, double sweep_seconds) {
   DesignStudy st;
+  st.sweep = std::move(sweep);
+  st.seconds["sweep"] = sweep_seconds;
   auto t = Clock::now();
-  st.sweep = Sweep(cfg.problem, cfg.sweep);
-  st.seconds["sweep"] = Since(t);
-  t = Clock::now();
   st.continuous = OptimizeContinuous(cfg.problem, st.sweep);
   st.seconds["continuous_optimum"] = Since(t);
   if (cfg.integer_mm) {

@@ -24,6 +24,17 @@ struct DesignStudy {
 };
 
 DesignStudy RunDesignStudy(const DesignConfig& config);
+// The study on a sweep already made (a merge of sweep shards): optima, the marked design, resolution.
+DesignStudy RunDesignStudy(const DesignConfig& config, SweepResult sweep, double sweep_seconds);
+
+// Shards of a design sweep (hovs design --shard I/N): rows [rows * I / N, rows * (I + 1) / N) of the grid, written
+// to out/design-shard.json (the config, the shard, every value of its rows, exact); MergeDesignShards joins the
+// shards' rows and writes the report one process writes (WriteDesignReport; design.json differs only in its
+// "seconds"). Refuses a family config, and shards of another config or version, naming the shard.
+void WriteDesignShard(const DesignConfig& config, int shard_index, int shard_count, const std::filesystem::path& out,
+                      const std::map<std::string, std::string>& versions);
+bool IsDesignShard(const std::filesystem::path& dir);
+std::string MergeDesignShards(const std::vector<std::filesystem::path>& shards, const std::filesystem::path& out);
 
 // One design evaluated against a problem: metrics, constraints, objective and violation (method says where the
 // design came from).

@@ -12,6 +12,7 @@
 #include "core/error.h"
 #include "core/io.h"
 #include "scenes/dataset.h"
+#include "design/study.h"
 #include "study/tolerance.h"
 
 extern char** environ;
@@ -23,7 +24,7 @@ namespace {
 
 // The commands whose runs can be split into shards and merged (their --shard I/N and hovs merge).
 const std::vector<std::string>& ShardableCommands() {
-  static const std::vector<std::string> names = {"dataset", "tolerance"};
+  static const std::vector<std::string> names = {"dataset", "tolerance", "design"};
   return names;
 }
 
@@ -252,6 +253,8 @@ void MergeShards(const ShardedCommand& command, int shards, const fs::path& job_
   for (int i = 0; i < shards; ++i) dirs.push_back(ShardDir(job_dir, i));
   if (command.name == "tolerance")
     study::MergeToleranceShards(dirs, command.out);
+  else if (command.name == "design")
+    design::MergeDesignShards(dirs, command.out);
   else if (command.name == "dataset")
     scenes::MergeDatasetShards(dirs, command.out);
   else

@@ -4,7 +4,7 @@
 # design and unwrap unit tests (the remap kernels read memory by hand) and a short run of every parser's fuzzer
 # (scripts/fuzz.sh, HOVS_FUZZ_SECONDS each, two at a time).
 # Environment: HOVS_TEST_LABELS (a CTest -L regex) to run a slice; HOVS_SKIP_SANITIZE=1 to skip the sanitizer
-# tree; HOVS_FUZZ_SECONDS (default 45) per fuzzer, 0 to build the fuzzers without running them.
+# tree; HOVS_FUZZ_SECONDS (default 30) per fuzzer, 0 to build the fuzzers without running them.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 jobs=$(nproc 2>/dev/null || echo 2)
@@ -30,7 +30,7 @@ if [ "${HOVS_SKIP_SANITIZE:-0}" != "1" ]; then
   cmake --build build-fuzz --parallel "$jobs" --target hovs_core_tests hovs_design_tests hovs_unwrap_tests hovs_fuzzers
   ASAN_OPTIONS=detect_leaks=1:abort_on_error=1 UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1 \
     ctest --test-dir build-fuzz --output-on-failure --parallel "$jobs" -L unit
-  if [ "${HOVS_FUZZ_SECONDS:-45}" != "0" ]; then
-    HOVS_FUZZ_SECONDS=${HOVS_FUZZ_SECONDS:-45} bash scripts/fuzz.sh
+  if [ "${HOVS_FUZZ_SECONDS:-30}" != "0" ]; then
+    HOVS_FUZZ_SECONDS=${HOVS_FUZZ_SECONDS:-30} bash scripts/fuzz.sh
   fi
 fi

@@ -103,4 +103,49 @@ TEST(DesignCli, AFailedRunLeavesTheEarlierReportIntact) {
   fs::remove_all(dir);
 }
 
+TEST(DesignCli, SweepShardsMergeToTheReportOneProcessWrites) {
+  // The reference config on a 61 x 61 grid, as one process and as 3 shards merged (design.json equal apart from
+  // its timings, sweep.csv and the other tables byte for byte); a shard of another grid refused by name.
+  const fs::path dir = Scratch("shards");
+  fs::create_directories(dir);
+  std::string config = hovs::ReadFile(kReference);
+  const size_t at = config.find("grid: [201, 201]");
+  ASSERT_NE(at, std::string::npos);
+  hovs::WriteFileAtomic(dir / "small.yaml", std::string(config).replace(at, 16, "grid: [61, 61]"));
+  hovs::WriteFileAtomic(dir / "other.yaml", std::string(config).replace(at, 16, "grid: [61, 60]"));
+  const std::string small = (dir / "small.yaml").string();
+  ASSERT_EQ(Hovs("-q design --config " + small + " --out " + (dir / "whole").string()).exit_code, 0);
+  std::string shards;
+  for (int i = 0; i < 3; ++i) {
+    const CliRun r = Hovs("-q design --config " + small + " --shard " + std::to_string(i) + "/3 --out " +
+                          (dir / std::to_string(i)).string());
+    ASSERT_EQ(r.exit_code, 0) << r.output;
+    EXPECT_FALSE(fs::exists(dir / std::to_string(i) / "index.html"));
+    shards += (dir / std::to_string(i)).string() + " ";
+  }
+  const CliRun m = Hovs("-q merge " + shards + "--out " + (dir / "merged").string());
+  ASSERT_EQ(m.exit_code, 0) << m.output;
+  // (summary.txt names its own folder.)
+  for (const char* f : {"sweep.csv", "radial_resolution.csv", "config.yaml"})
+    EXPECT_EQ(hovs::ReadFile(dir / "whole" / f), hovs::ReadFile(dir / "merged" / f)) << f;
+  auto a = nlohmann::json::parse(hovs::ReadFile(dir / "whole" / "design.json"));
+  auto b = nlohmann::json::parse(hovs::ReadFile(dir / "merged" / "design.json"));
+  a.erase("seconds"), b.erase("seconds");
+  EXPECT_EQ(a, b);
+  ASSERT_EQ(
+      Hovs("-q design --config " + (dir / "other.yaml").string() + " --shard 2/3 --out " + (dir / "other").string())
+          .exit_code,
+      0);
+  const CliRun bad = Hovs("merge " + (dir / "0").string() + " " + (dir / "1").string() + " " +
+                          (dir / "other").string() + " --out " + (dir / "bad").string());
+  EXPECT_EQ(bad.exit_code, 2) << bad.output;
+  EXPECT_NE(bad.output.find((dir / "other" / "design-shard.json").string() + ": does not belong"), std::string::npos)
+      << bad.output;
+  EXPECT_FALSE(fs::exists(dir / "bad"));
+  const CliRun family = Hovs("design --config " + std::string(HOVS_SOURCE_DIR) + "/design/turret.yaml --shard 0/2 " +
+                             "--out " + (dir / "family").string());
+  EXPECT_EQ(family.exit_code, 2);
+  EXPECT_NE(family.output.find("cannot be sharded"), std::string::npos) << family.output;
+}
+
 }  // namespace

@@ -146,8 +146,8 @@ rc=$?
 [ $rc -eq 2 ] || fail "a failing task: exit $rc, expected 2: $(cat "$dir/bad.out")"
 grep -q "shard 0 failed" "$dir/bad.out" && grep -q "task-0.out" "$dir/bad.out" || fail "no shard named: $(cat "$dir/bad.out")"
 [ ! -e "$dir/bad" ] || fail "a failed job left its output folder"
-"$hovs" -q slurm submit -- design --config x --out "$dir/x" > "$dir/x.out" 2>&1
-[ $? -eq 2 ] && grep -q "cannot be sharded" "$dir/x.out" || fail "design accepted: $(cat "$dir/x.out")"
+"$hovs" -q slurm submit -- calibrate --dataset x --out "$dir/x" > "$dir/x.out" 2>&1
+[ $? -eq 2 ] && grep -q "cannot be sharded" "$dir/x.out" || fail "calibrate accepted: $(cat "$dir/x.out")"
 PATH=/nonexistent "$hovs" -q slurm submit -- "${dataset[@]}" --out "$dir/nopath" > "$dir/nopath.out" 2>&1
 [ $? -eq 2 ] && grep -q "sbatch: not found" "$dir/nopath.out" || fail "no sbatch: $(cat "$dir/nopath.out")"
 echo "PASSED: 8 dataset shards and 4 tolerance shards through Slurm merged to the single-process outputs; failures named"

@@ -29,7 +29,7 @@ TEST(Slurm, ACommandIsSplitIntoItsArgumentsAndItsOutput) {
   EXPECT_EQ(c.out, fs::path("/data/set"));
   EXPECT_EQ(jobs::ParseShardedCommand({"dataset", "--out=/x/y"}).out, fs::path("/x/y"));
   EXPECT_NE(ErrorOf([] {
-              jobs::ParseShardedCommand({"design", "--out", "d"});
+              jobs::ParseShardedCommand({"calibrate", "--out", "d"});
             }).find("cannot be sharded"),
             std::string::npos);
   EXPECT_NE(ErrorOf([] { jobs::ParseShardedCommand({"dataset", "-n", "3"}); }).find("needs --out"), std::string::npos);
