@@ -20,6 +20,7 @@
 #include "apps/model_files.h"
 #include "apps/unwrap_viewer.h"
 #include "core/error.h"
+#include "core/progress.h"
 #include "core/io.h"
 #include "core/json.h"
 #include "core/large_pages.h"
@@ -134,7 +135,9 @@ nlohmann::json UnwrapFrames(const Options& o, bool quiet, const std::vector<Inpu
   // The views' buffers are reused from frame to frame (Run keeps outputs of the right size): after the first
   // frame the remap time is the kernels' alone, not the first touch of fresh pages.
   std::vector<unwrap::Image8> views;
+  const ProgressLine progress("frame", frames.size(), !quiet && frames.size() > 1);
   for (size_t f = 0; f < frames.size(); ++f) {
+    progress.Step(f + 1, f, frames.size() - f);
     unwrap::PixelFormat fmt;
     const std::vector<uint8_t> bytes = LoadFrame(frames[f], o.format, table, &fmt);
     const int w = table.source_width, h = table.source_height, oc = fmt == unwrap::PixelFormat::kRgb8 ? 3 : 1;
@@ -154,7 +157,7 @@ nlohmann::json UnwrapFrames(const Options& o, bool quiet, const std::vector<Inpu
       (*truth_json)[frames[f].name][name] = {
           {"psnr_db", q.psnr_db}, {"truth", trel}, {"valid_fraction", q.valid_fraction}};
       if (!quiet)
-        std::fprintf(stderr, "\r  %s %s: PSNR %.2f dB against the pinhole truth render\n", frames[f].name.c_str(),
+        std::fprintf(stderr, "  %s %s: PSNR %.2f dB against the pinhole truth render\n", frames[f].name.c_str(),
                      name.c_str(), q.psnr_db);
     }
     frames_json.push_back({{"frame", frames[f].name},
@@ -162,9 +165,7 @@ nlohmann::json UnwrapFrames(const Options& o, bool quiet, const std::vector<Inpu
                            {"views", outs},
                            {"remap_ms", remap_ms->back()},
                            {"pixel_format", unwrap::ToString(fmt)}});
-    if (!quiet) std::fprintf(stderr, "\r  frame %zu / %zu", f + 1, frames.size());
   }
-  if (!quiet) std::fprintf(stderr, "\n");
   return frames_json;
 }
 

@@ -1,5 +1,6 @@
 // A progress line for long commands: items done of the total, the rate in items per minute and the time left at
-// that rate, on stderr (one line per call: logs of cluster jobs keep every step).
+// that rate, on stderr, one line per step (logs of cluster jobs keep every line) but at most one every two
+// seconds, besides the first and the last step (a command over thousands of quick items stays readable).
 #pragma once
 
 #include <chrono>
@@ -16,7 +17,10 @@ class ProgressLine {
   // earlier run are not counted in the rate) and `left` remain, this one included.
   void Step(size_t next, size_t done, size_t left) const {
     if (!enabled_) return;
-    const double s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start_).count();
+    const auto now = std::chrono::steady_clock::now();
+    if (printed_ && left > 1 && std::chrono::duration<double>(now - last_).count() < 2.0) return;
+    printed_ = true, last_ = now;
+    const double s = std::chrono::duration<double>(now - start_).count();
     if (done == 0 || s <= 0) {
       std::fprintf(stderr, "%s %zu/%zu\n", what_.c_str(), next, total_);
       return;
@@ -32,6 +36,8 @@ class ProgressLine {
   size_t total_;
   bool enabled_;
   std::chrono::steady_clock::time_point start_;
+  mutable bool printed_ = false;
+  mutable std::chrono::steady_clock::time_point last_;
 };
 
 }  // namespace hovs

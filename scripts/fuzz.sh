@@ -16,6 +16,8 @@ if [ "${#names[@]}" -eq 0 ]; then names=("${all[@]}"); fi
 
 if [ ! -f build-fuzz/build.ninja ]; then
   cmake -S . -B build-fuzz -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo -DCMAKE_C_COMPILER=clang \
+        -DCMAKE_CXX_FLAGS_RELWITHDEBINFO="-O1 -gline-tables-only -DNDEBUG" \
+        -DCMAKE_C_FLAGS_RELWITHDEBINFO="-O1 -gline-tables-only -DNDEBUG" \
         -DCMAKE_CXX_COMPILER=clang++ -DHOVS_FUZZ=ON -DHOVS_CORE_ONLY=ON -DHOVS_BUILD_BENCHMARKS=OFF
 fi
 cmake --build build-fuzz --parallel "$jobs" --target hovs_fuzzers

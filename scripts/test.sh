@@ -22,7 +22,11 @@ if [ -n "${HOVS_TEST_LABELS:-}" ]; then label_args=(-L "$HOVS_TEST_LABELS"); fi
 ctest --test-dir build --output-on-failure --parallel "$jobs" "${label_args[@]}"
 
 if [ "${HOVS_SKIP_SANITIZE:-0}" != "1" ]; then
+  # -O1 with line tables: enough for the sanitizers' stack traces, and the tree compiles in about 60 % of the time
+  # -O2 -g takes (polynomial_calibration.cc: 43 s against 75 s).
   cmake -S . -B build-fuzz -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo -DCMAKE_C_COMPILER=clang \
+        -DCMAKE_CXX_FLAGS_RELWITHDEBINFO="-O1 -gline-tables-only -DNDEBUG" \
+        -DCMAKE_C_FLAGS_RELWITHDEBINFO="-O1 -gline-tables-only -DNDEBUG" \
         -DCMAKE_CXX_COMPILER=clang++ -DHOVS_FUZZ=ON -DHOVS_CORE_ONLY=ON -DHOVS_BUILD_BENCHMARKS=OFF
   # Not the calibration tests: Debian's Ceres is a static library built without ASan, and Eigen switches to its
   # own aligned allocator under ASan, so Eigen code shared between Ceres and hovs would free with one allocator

@@ -9,6 +9,7 @@
 #include "core/any_model.h"
 #include "core/error.h"
 #include "core/io.h"
+#include "core/progress.h"
 #include "core/statistics.h"
 #include "core/yaml_reader.h"
 #include "depth/stereo.h"
@@ -332,20 +333,27 @@ SampleFigures ToleranceEvaluator::Evaluate(const UnitErrors& left, const UnitErr
   return impl_->Evaluate(left, right);
 }
 
-std::vector<Sample> RunSamples(const ToleranceConfig& config, int64_t count, int shard_index, int shard_count) {
+std::vector<Sample> RunSamples(const ToleranceConfig& config, int64_t count, int shard_index, int shard_count,
+                               bool progress) {
   HOVS_REQUIRE(count >= 1 && count <= 10000000, "--samples", "must be in 1..10000000 (got ", count, ")");
   HOVS_REQUIRE(shard_count >= 1 && shard_count <= count && shard_index >= 0 && shard_index < shard_count, "--shard",
                "needs 0 <= index < shards <= samples");
   const int64_t first = count * shard_index / shard_count, end = count * (shard_index + 1) / shard_count;
   const ToleranceEvaluator evaluator(config);
   std::vector<Sample> samples(static_cast<size_t>(end - first));
-  tbb::parallel_for(int64_t(0), end - first, [&](int64_t k) {
-    Sample& s = samples[static_cast<size_t>(k)];
-    s.index = first + k;
-    s.left = DrawErrors(config, s.index, 0);
-    s.right = DrawErrors(config, s.index, 1);
-    s.figures = evaluator.Evaluate(s.left, s.right);
-  });
+  // In blocks of 4096 samples, each in parallel, with a progress line between blocks.
+  const int64_t n = end - first, block = 4096;
+  const ProgressLine line("sample", static_cast<size_t>(n), progress && n > block);
+  for (int64_t b0 = 0; b0 < n; b0 += block) {
+    line.Step(static_cast<size_t>(b0 + 1), static_cast<size_t>(b0), static_cast<size_t>(n - b0));
+    tbb::parallel_for(b0, std::min(n, b0 + block), [&](int64_t k) {
+      Sample& s = samples[static_cast<size_t>(k)];
+      s.index = first + k;
+      s.left = DrawErrors(config, s.index, 0);
+      s.right = DrawErrors(config, s.index, 1);
+      s.figures = evaluator.Evaluate(s.left, s.right);
+    });
+  }
   return samples;
 }
 

@@ -126,8 +126,10 @@ struct Sample {
   SampleFigures figures;
 };
 
-// Samples [count * shard / shards, count * (shard + 1) / shards), in parallel, in index order.
-std::vector<Sample> RunSamples(const ToleranceConfig& config, int64_t count, int shard_index, int shard_count);
+// Samples [count * shard / shards, count * (shard + 1) / shards), in parallel, in index order; `progress`: a
+// progress line on stderr for long runs.
+std::vector<Sample> RunSamples(const ToleranceConfig& config, int64_t count, int shard_index, int shard_count,
+                               bool progress = false);
 
 // The study's report (tolerance.json's "report"): percentiles and histograms of each figure, the sensitivity of
 // each figure to each parameter alone, and the tolerances that keep each figure under its limit.
@@ -136,7 +138,8 @@ nlohmann::json AnalyseSamples(const ToleranceConfig& config, const std::vector<S
 // Writes out/ (staged): tolerance.json, samples.csv and, for a whole study (not a shard), index.html and
 // figures/ (histograms, where VTK can render). `shard_count` > 1: a shard, for MergeToleranceShards.
 void WriteToleranceStudy(const ToleranceConfig& config, int64_t count, int shard_index, int shard_count,
-                         const std::filesystem::path& out, const std::map<std::string, std::string>& versions);
+                         const std::filesystem::path& out, const std::map<std::string, std::string>& versions,
+                         bool progress = false);
 // Joins shard folders of one study into the folder one process writes; refuses shards of another config, seed,
 // sample count or version, naming the shard.
 void MergeToleranceShards(const std::vector<std::filesystem::path>& shards, const std::filesystem::path& out);

@@ -317,10 +317,10 @@ void WriteWhole(const ToleranceConfig& config, const std::vector<Sample>& sample
 }  // namespace
 
 void WriteToleranceStudy(const ToleranceConfig& config, int64_t count, int shard_index, int shard_count,
-                         const fs::path& out, const std::map<std::string, std::string>& versions) {
+                         const fs::path& out, const std::map<std::string, std::string>& versions, bool progress) {
   const std::vector<fs::path> inputs = {config.source, config.design.source};
   CheckOutputFolder(out, "tolerance", inputs);
-  const std::vector<Sample> samples = RunSamples(config, count, shard_index, shard_count);
+  const std::vector<Sample> samples = RunSamples(config, count, shard_index, shard_count, progress);
   StagedDirectory stage(out, "tolerance", inputs);
   json study = StudyHead(config, count, versions);
   if (shard_count > 1) {
