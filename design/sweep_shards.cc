@@ -4,6 +4,7 @@
 #include "core/error.h"
 #include "core/io.h"
 #include "core/json.h"
+#include "core/shard_set.h"
 #include "design/study.h"
 
 namespace hovs::design {
@@ -63,35 +64,16 @@ std::string MergeDesignShards(const std::vector<fs::path>& shards, const fs::pat
     parts.push_back(ReadJsonFile(file)), inputs.push_back(file);
     HOVS_REQUIRE(parts.back().value("format", "") == "hovs-design-shard", file.string(), "not a design sweep shard");
   }
-  const auto head = [](json j) {
-    j.erase("shard"), j.erase("rows");
-    return j;
-  };
-  const json ref = head(parts[0]);
-  const int count = parts[0]["shard"]["count"].get<int>();
-  std::vector<int> seen(static_cast<size_t>(count), -1);
-  for (size_t k = 0; k < parts.size(); ++k) {
-    const json h = head(parts[k]);
-    if (h != ref) {
-      std::string differ;
-      for (const auto& [key, value] : ref.items())
-        if (!h.contains(key) || h[key] != value) differ += (differ.empty() ? "" : ", ") + key;
-      throw Error(inputs[k].string(), "does not belong with " + inputs[0].string() + ": its " + differ + " differ");
-    }
-    const int index = parts[k]["shard"]["index"].get<int>();
-    HOVS_REQUIRE(parts[k]["shard"]["count"].get<int>() == count && index >= 0 && index < count, inputs[k].string(),
-                 "is shard ", index, " of ", parts[k]["shard"]["count"].get<int>(), ", the first of ", count);
-    HOVS_REQUIRE(seen[static_cast<size_t>(index)] < 0, inputs[k].string(), "is shard ", index, ", given twice");
-    seen[static_cast<size_t>(index)] = static_cast<int>(k);
-  }
-  for (int i = 0; i < count; ++i) HOVS_REQUIRE(seen[static_cast<size_t>(i)] >= 0, "merge", "shard ", i, " is missing");
+  const std::vector<size_t> order = OrderShards(parts, inputs, {"rows"});
+  const json& ref = parts[0];
+  const int count = static_cast<int>(order.size());
   const DesignConfig config =
       ParseDesignConfig(ref["config"]["text"].get<std::string>(), ref["config"]["source"].get<std::string>());
   const size_t rows = Rows(config.sweep), na = static_cast<size_t>(config.sweep.na);
   SweepResult sweep = SweepRows(config.problem, config.sweep, 0, 0);  // the grid, no values yet
   size_t next = 0;
   for (int i = 0; i < count; ++i) {
-    const size_t k = static_cast<size_t>(seen[static_cast<size_t>(i)]);
+    const size_t k = order[static_cast<size_t>(i)];
     const json& sh = parts[k]["shard"];
     const size_t first = sh["row_first"].get<size_t>(), end = sh["row_end"].get<size_t>();
     HOVS_REQUIRE(first == next && end >= first && end <= rows, inputs[k].string(), "holds rows ", first, "..", end,

@@ -12,6 +12,7 @@
 #include "core/format.h"
 #include "core/io.h"
 #include "core/json.h"
+#include "core/shard_set.h"
 #include "design/study.h"
 #include "results/html.h"
 #include "results/plot.h"
@@ -350,28 +351,10 @@ void MergeToleranceShards(const std::vector<fs::path>& shards, const fs::path& o
     HOVS_REQUIRE(j.contains("shard"), file.string(), "is not a shard (written without --shard)");
     heads.push_back(j), inputs.push_back(file);
   }
-  const auto head = [](json j) {
-    j.erase("shard");
-    return j;
-  };
-  const json ref = head(heads[0]);
-  const int count = heads[0]["shard"]["count"].get<int>();
-  std::vector<int> seen(static_cast<size_t>(count), -1);
-  for (size_t k = 0; k < heads.size(); ++k) {
-    const json h = head(heads[k]);
-    if (h != ref) {
-      std::string differ;
-      for (const auto& [key, value] : ref.items())
-        if (!h.contains(key) || h[key] != value) differ += (differ.empty() ? "" : ", ") + key;
-      throw Error(inputs[k].string(), "does not belong with " + inputs[0].string() + ": its " + differ + " differ");
-    }
-    const int index = heads[k]["shard"]["index"].get<int>();
-    HOVS_REQUIRE(heads[k]["shard"]["count"].get<int>() == count && index >= 0 && index < count, inputs[k].string(),
-                 "is shard ", index, " of ", heads[k]["shard"]["count"].get<int>(), ", the first of ", count);
-    HOVS_REQUIRE(seen[static_cast<size_t>(index)] < 0, inputs[k].string(), "is shard ", index, ", given twice");
-    seen[static_cast<size_t>(index)] = static_cast<int>(k);
-  }
-  for (int i = 0; i < count; ++i) HOVS_REQUIRE(seen[static_cast<size_t>(i)] >= 0, "merge", "shard ", i, " is missing");
+  const std::vector<size_t> order = OrderShards(heads, inputs);
+  json ref = heads[0];
+  ref.erase("shard");
+  const int count = static_cast<int>(order.size());
   // The config as the study recorded it (the files may have moved or changed since).
   const json& c = ref["config"];
   const design::DesignConfig design =
@@ -380,7 +363,7 @@ void MergeToleranceShards(const std::vector<fs::path>& shards, const fs::path& o
       ParseToleranceConfig(c["text"].get<std::string>(), c["source"].get<std::string>(), ".", &design);
   std::vector<Sample> samples;
   for (int i = 0; i < count; ++i) {
-    const fs::path dir = shards[static_cast<size_t>(seen[static_cast<size_t>(i)])];
+    const fs::path dir = shards[order[static_cast<size_t>(i)]];
     const auto part = ReadSamplesCsv(dir / "samples.csv", config);
     for (const Sample& s : part) {
       HOVS_REQUIRE(s.index == static_cast<int64_t>(samples.size()), (dir / "samples.csv").string(), "sample ", s.index,

@@ -115,7 +115,7 @@ TEST(Tolerance, ShardsMergeToTheStudyOneProcessWrites) {
   const auto missing =
       test::Hovs("merge " + (dir / "0").string() + " " + (dir / "1").string() + " --out " + (dir / "bad").string());
   EXPECT_EQ(missing.exit_code, 2);
-  EXPECT_NE(missing.output.find("shard 2 is missing"), std::string::npos) << missing.output;
+  EXPECT_NE(missing.output.find("shard 2 of 3 is missing"), std::string::npos) << missing.output;
 }
 
 TEST(Tolerance, BadConfigsAreRefusedNamingTheKey) {
