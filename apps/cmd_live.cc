@@ -13,6 +13,7 @@
 #include <opencv2/imgproc.hpp>
 
 #include "apps/commands.h"
+#include "apps/live_publish.h"
 #include "apps/live_rig.h"
 #include "apps/model_files.h"
 #include "apps/sources.h"
@@ -31,6 +32,7 @@ namespace fs = std::filesystem;
 struct Options {
   SourceOptions source;
   RigLiveCliOptions rig;
+  PublishCliOptions publish;
   std::string model, unit, map, layout = "article", interp = "bilinear", out;
   int frames = 100, write_every = 0;
   double seconds = 0, timeout = 3, scene_distance = 10;
@@ -80,6 +82,7 @@ int RunLiveCommand(const Options& o, const GlobalOptions& global) {
     HOVS_REQUIRE(o.source.cameras.empty() && o.source.replay.empty(), "--rig",
                  "the unit runs in simulation (--simulate MACHINE.yaml)");
     HOVS_REQUIRE(!o.display, "--rig", "--display is not available with a rig yet");
+    HOVS_REQUIRE(!o.publish.publish, "--publish", "not available with --rig yet");
     return RunRigLiveCommand(o.rig, {o.source.simulate, o.out, o.interp, o.frames, o.write_every, Versions()}, global);
   }
   HOVS_REQUIRE(o.rig.switches.empty() && o.rig.start.empty(), "--switch", "needs --rig");
@@ -96,6 +99,7 @@ int RunLiveCommand(const Options& o, const GlobalOptions& global) {
             }()
           : unwrap::LoadRemapTable(o.map);
   const double table_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - tb).count();
+  const std::optional<stream::DdsOptions> dds = o.publish.Resolve();
   OpenedSources src = OpenSources(o.source);
   hw::CameraSource& cam = *src.sources[0];
   // The output folder is staged like a report and committed when the run ends (its frame count, Ctrl-C or
@@ -115,7 +119,24 @@ int RunLiveCommand(const Options& o, const GlobalOptions& global) {
   const InterruptScope interrupt(&stop);  // Ctrl-C ends the run with its figures; a second one ends the process
   std::function<void(const std::vector<unwrap::Image8>&)> display;
   if (o.display) display = [&](const std::vector<unwrap::Image8>& views) { ShowMosaic(views, &stop); };
-  const hw::LiveRun r = hw::RunLive(cam, table, lo, &stop, display);
+  // Published frames: the views are swapped into the publisher (no copy) and an older frame's come back. A
+  // replay has no deadline, so it waits for the publisher instead of dropping frames.
+  const std::unique_ptr<stream::Publisher> publisher = OpenPublisher(o.publish, dds, table);
+  stream::Bundle bundle;
+  hw::LiveSink sink;
+  if (publisher)
+    sink = [&](uint64_t stamp_ns, std::vector<unwrap::Image8>* views) {
+      bundle.stamp_ns = stamp_ns;
+      bundle.images.swap(*views);
+      publisher->Offer(&bundle, lo.replay);
+      bundle.images.swap(*views);
+    };
+  const hw::LiveRun r = hw::RunLive(cam, table, lo, &stop, display, sink);
+  nlohmann::json published;
+  if (publisher) {
+    publisher->Flush(5);
+    published = {{"topics", publisher->Topics()}, {"frames", publisher->Stats().ToJson()}};
+  }
   const auto stats = cam.Stats();
   nlohmann::json j = {{"tool", "hovs live"},
                       {"versions", Versions()},
@@ -130,11 +151,13 @@ int RunLiveCommand(const Options& o, const GlobalOptions& global) {
                       {"seconds", r.seconds},
                       {"fps", r.processed / std::max(r.seconds, 1e-9)},
                       {"stream", stats.ToJson()},
+                      {"dds", published},
                       {"latency",
                        {{"wait_for_frame", Latency(r.wait_ms)},
                         {"remap", Latency(r.remap_ms)},
                         {"write", Latency(r.write_ms)},
                         {"display", Latency(r.display_ms)},
+                        {"publish", Latency(r.sink_ms)},
                         {"frame_to_output", Latency(r.total_ms)}}},
                       {"note",
                        "remap: all views of one frame, TBB threads; wait_for_frame includes the camera's "
@@ -161,6 +184,7 @@ Runner SetupLive(CLI::App* sub, const GlobalOptions* global) {
   auto o = std::make_shared<Options>();
   AddSourceOptions(sub, &o->source);
   AddRigLiveOptions(sub, &o->rig);
+  AddPublishOptions(sub, &o->publish);
   sub->add_option("--model", o->model, "model: scene YAML, dataset.json, calib_results.txt or calibration.json");
   sub->add_option("--unit", o->unit, "unit of a scene or manifest model");
   sub->add_option("--map", o->map, "a mapping file (hovs unwrap --save-map) instead of --model");

@@ -14,7 +14,7 @@ using Clock = std::chrono::steady_clock;
 double Ms(Clock::time_point a, Clock::time_point b) { return std::chrono::duration<double, std::milli>(b - a).count(); }
 
 void Loop(CameraSource& cam, const unwrap::RemapTable& table, const LiveOptions& o, std::atomic<bool>* stop,
-          const std::function<void(const std::vector<unwrap::Image8>&)>& display, LiveRun* r) {
+          const std::function<void(const std::vector<unwrap::Image8>&)>& display, const LiveSink& sink, LiveRun* r) {
   unwrap::Remapper remapper(table);
   std::vector<unwrap::Image8> views;
   const auto t_start = Clock::now();
@@ -30,6 +30,9 @@ void Loop(CameraSource& cam, const unwrap::RemapTable& table, const LiveOptions&
     const auto t0 = Clock::now();
     auto f = cam.Grab(o.timeout);
     const auto t1 = Clock::now();
+    const uint64_t stamp_ns = static_cast<uint64_t>(
+        std::chrono::duration_cast<std::chrono::nanoseconds>(std::chrono::system_clock::now().time_since_epoch())
+            .count());
     if (!f) {
       HOVS_REQUIRE(o.replay || stop->load(), "hovs live", "no frame within ", o.timeout, " s (timeout)");
       break;  // the replay ended
@@ -52,10 +55,13 @@ void Loop(CameraSource& cam, const unwrap::RemapTable& table, const LiveOptions&
     const auto t3 = Clock::now();
     if (display) display(views);
     const auto t4 = Clock::now();
+    if (sink) sink(stamp_ns, &views);
+    const auto t5 = Clock::now();
+    if (sink) r->sink_ms.push_back(Ms(t4, t5));
     r->wait_ms.push_back(Ms(t0, t1)), r->remap_ms.push_back(Ms(t1, t2));
     if (o.write_every > 0) r->write_ms.push_back(Ms(t2, t3));
     if (display) r->display_ms.push_back(Ms(t3, t4));
-    r->total_ms.push_back(Ms(t1, t4));
+    r->total_ms.push_back(Ms(t1, t5));
     ++r->processed;
     last_progress = Clock::now();
   }
@@ -75,11 +81,11 @@ void WriteLiveViews(const std::filesystem::path& dir, const std::string& stem, c
 }
 
 LiveRun RunLive(CameraSource& cam, const unwrap::RemapTable& table, const LiveOptions& options, std::atomic<bool>* stop,
-                const std::function<void(const std::vector<unwrap::Image8>&)>& display) {
+                const std::function<void(const std::vector<unwrap::Image8>&)>& display, const LiveSink& sink) {
   LiveRun r;
   cam.Start();
   try {
-    Loop(cam, table, options, stop, display, &r);
+    Loop(cam, table, options, stop, display, sink, &r);
   } catch (...) {
     cam.Stop();
     throw;

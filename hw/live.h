@@ -34,7 +34,12 @@ struct LiveRun {
   // Per processed frame, ms: waiting for the frame, the remap, writing (when written), the display (with one),
   // and from the frame's arrival to its output.
   std::vector<double> wait_ms, remap_ms, write_ms, display_ms, total_ms;
+  std::vector<double> sink_ms;  // handing the views to the sink (with one)
 };
+
+// Takes each processed frame's views after the display, with the frame's arrival time (ns since the Unix epoch);
+// it may swap *views for buffers of the same sizes (the DDS publisher hands back an older frame's).
+using LiveSink = std::function<void(uint64_t stamp_ns, std::vector<unwrap::Image8>* views)>;
 
 // Writes the views of one frame as dir/<stem>_<view>.png (8 bits).
 void WriteLiveViews(const std::filesystem::path& dir, const std::string& stem, const unwrap::RemapTable& table,
@@ -44,6 +49,7 @@ void WriteLiveViews(const std::filesystem::path& dir, const std::string& stem, c
 // may set it too). Starts and stops the camera; throws hovs::Error naming the source when no complete frame
 // arrives in time or a frame does not match the mapping's size.
 LiveRun RunLive(CameraSource& camera, const unwrap::RemapTable& table, const LiveOptions& options,
-                std::atomic<bool>* stop, const std::function<void(const std::vector<unwrap::Image8>&)>& display = {});
+                std::atomic<bool>* stop, const std::function<void(const std::vector<unwrap::Image8>&)>& display = {},
+                const LiveSink& sink = {});
 
 }  // namespace hovs::hw

@@ -13,3 +13,5 @@ build/tests/bench/hovs_unwrap_bench --benchmark_repetitions=5 --benchmark_report
 mv results/benchmarks/.unwrap.json.tmp results/benchmarks/unwrap.json
 build/tests/bench/hovs_calib_bench --benchmark_out=results/benchmarks/.calib.json.tmp --benchmark_out_format=json
 mv results/benchmarks/.calib.json.tmp results/benchmarks/calib.json
+build/tests/bench/hovs_stream_bench --benchmark_out=results/benchmarks/.stream.json.tmp --benchmark_out_format=json
+mv results/benchmarks/.stream.json.tmp results/benchmarks/stream.json

@@ -15,6 +15,7 @@ PACKAGES=(
   libgtest-dev libgmock-dev libbenchmark-dev
   clang clang-format-14 libfuzzer-14-dev libclang-rt-14-dev
   slurm-wlm munge
+  cyclonedds-dev cyclonedds-tools
   python3-dev pybind11-dev python3-pybind11 python3-pytest python3-numpy python3-opencv python3-open3d
 )
 
