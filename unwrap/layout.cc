@@ -48,7 +48,13 @@ void Layout::Check(const std::string& where) const {
   }
 }
 
-std::vector<std::string> PresetNames() { return {"article", "panorama", "longlat"}; }
+bool Layout::IsRig() const {
+  for (const auto& v : views)
+    if (!v.unit.empty()) return true;
+  return false;
+}
+
+std::vector<std::string> PresetNames() { return {"article", "panorama", "longlat", "binocular"}; }
 
 std::size_t ViewsMemoryBytes(const std::vector<ViewSpec>& views) {
   std::size_t total = 0, largest = 0;
@@ -79,6 +85,17 @@ Layout PresetLayout(const std::string& name) {
       ViewSpec v;
       v.name = names[i];
       v.yaw_deg = 60.0 * i;
+      l.views.push_back(v);
+    }
+  } else if (name == "binocular") {
+    const int yaws[6] = {120, 180, 240, 300, 0, 60};
+    for (int i = 0; i < 6; ++i) {
+      ViewSpec v;
+      v.unit = i < 3 ? "0" : "1";
+      char n[32];
+      std::snprintf(n, sizeof n, "unit%d_view%d", i < 3 ? 0 : 1, yaws[i]);
+      v.name = n;
+      v.yaw_deg = yaws[i];
       l.views.push_back(v);
     }
   } else if (name == "panorama") {
@@ -122,11 +139,13 @@ Layout ParseLayoutUnguarded(const std::string& text, const std::string& source, 
     const YAML::Node& n = views[i];
     const std::string key = "views[" + std::to_string(i) + "]";
     r.OnlyKeys(n, key,
-               {"name", "type", "width", "height", "yaw", "pitch", "roll", "hfov", "elevation_min", "elevation_max",
-                "azimuth_centre", "azimuth_span"});
+               {"name", "unit", "type", "width", "height", "yaw", "pitch", "roll", "hfov", "elevation_min",
+                "elevation_max", "azimuth_centre", "azimuth_span"});
     ViewSpec v;
     YAML::Node t;
     v.name = r.String(r.Require(n, key, "name", &t), key + ".name");
+    if (n["unit"]) v.unit = r.String(n["unit"], key + ".unit");
+    HOVS_REQUIRE(!n["unit"] || !v.unit.empty(), r.Where(n["unit"], key + ".unit"), "an empty unit name");
     const std::string type = n["type"] ? r.String(n["type"], key + ".type") : "perspective";
     if (type == "perspective")
       v.type = ViewProjection::kPerspective;

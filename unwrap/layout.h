@@ -6,11 +6,16 @@
 //     - {name: pano, type: cylindrical, width: 4096, height: 768, elevation_min: -70, elevation_max: -2,
 //        azimuth_centre: 0, azimuth_span: 360}
 //     - {name: sphere, type: longlat, width: 2048, height: 1024, elevation_min: -90, elevation_max: 90}
+//     - {name: right_front, unit: right, yaw: 0}     # a rig's layout: the unit (name or 0-based index) whose frame
+//                                                    # the view takes; angles in that unit's mirror frame
 // Presets:
 //   article     the article's six 1200 x 700 perspective views, yaw 0, 60, ..., 300 degrees, pitch -30, hfov 65
 //               (neighbours overlap by 5 degrees), the layout of its Figs 30-31
 //   panorama    one cylindrical panorama, 3600 x 900, elevation -75 .. -2 degrees, azimuth centred on +x
 //   longlat     one longitude-latitude panorama, 3600 x 1800, the whole sphere
+//   binocular   the article's two-unit case (Fig. 30): 3 + 3 views of 1200 x 700, hfov 65, pitch -30, each unit
+//               looking away from the other (unit 1 on unit 0's +x side, as in scenes/reference_stereo.yaml):
+//               unit 0 at yaw 120, 180, 240 and unit 1 at yaw 300, 0, 60
 // Given a model (ResolveLayout's second argument), the panorama preset takes its elevation range from the
 // model's field instead (FieldOfModel: the elevations its valid pixels see, which leaves out the camera's own
 // reflection where the model has an inner bound), and the article's views keep pitch -30 unless that puts them
@@ -30,6 +35,7 @@ namespace hovs::unwrap {
 
 struct ViewSpec {
   std::string name;
+  std::string unit;  // a rig layout's unit (name or 0-based index); empty: the only (or first) unit
   ViewProjection type = ViewProjection::kPerspective;
   int width = 1200, height = 700;
   double yaw_deg = 0, pitch_deg = -30, roll_deg = 0, hfov_deg = 65;  // perspective
@@ -47,6 +53,7 @@ struct Layout {
   std::string name;
   std::vector<ViewSpec> views;
   void Check(const std::string& where) const;  // at least one view, unique names, every view valid
+  bool IsRig() const;                          // some view names a unit
 };
 
 // An upper bound of the memory a run over these views takes beyond its input, in bytes: per pixel of every view

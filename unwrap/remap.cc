@@ -413,6 +413,36 @@ void Remapper::Run(const ImageView& src, Interpolation interp, std::vector<Image
   });
 }
 
+void RunRemappers(const std::vector<RemapJob>& jobs, Interpolation interp) {
+  struct Row {
+    const RemapJob* job;
+    int view, tile_row;
+  };
+  std::vector<Row> rows;
+  for (const RemapJob& j : jobs) {
+    const RemapTable& t = j.remapper->table_;
+    HOVS_REQUIRE(j.outputs.size() == t.views.size(), "remap", "a job with ", j.outputs.size(), " outputs for ",
+                 t.views.size(), " views");
+    j.remapper->Prepare(j.src);
+    const int OC = j.src.format == PixelFormat::kGray8 ? 1 : 3;
+    for (size_t v = 0; v < t.views.size(); ++v) {
+      Image8& o = *j.outputs[v];
+      const auto& vw = t.views[v].view;
+      if (o.width != vw.width || o.height != vw.height || o.channels != OC) {
+        o.width = vw.width, o.height = vw.height, o.channels = OC;
+        o.data.resize(size_t(o.width) * o.height * OC);
+      }
+      for (int r = 0; r < t.views[v].tiles_y; ++r) rows.push_back({&j, static_cast<int>(v), r});
+    }
+  }
+  tbb::parallel_for(tbb::blocked_range<size_t>(0, rows.size(), 1), [&](const tbb::blocked_range<size_t>& range) {
+    for (size_t k = range.begin(); k < range.end(); ++k) {
+      const Row& r = rows[k];
+      r.job->remapper->RemapRows(r.job->src, interp, r.view, r.tile_row, r.job->outputs[r.view]);
+    }
+  });
+}
+
 void Remapper::RunView(const ImageView& src, Interpolation interp, int view, Image8* out) {
   HOVS_REQUIRE(view >= 0 && view < int(table_.views.size()), "remap", "no view ", view);
   Prepare(src);

@@ -52,6 +52,18 @@ Image8 LoadImage8(const std::filesystem::path& path);
 // cell's R, the mean of its two G (rounded half up), its B. Grey stays grey. Threads over rows (TBB).
 void DownsampleHalf(const ImageView& in, Image8* out);
 
+class Remapper;
+
+// One remapper's share of a multi-frame pass: its frame, and where each of its table's views goes.
+struct RemapJob {
+  Remapper* remapper = nullptr;
+  ImageView src;
+  std::vector<Image8*> outputs;  // one per view of the remapper's table
+};
+// Several remappers, each with its own frame (the units of a rig), in one parallel pass over the tile rows of all
+// their views, so that the threads share the work of every frame. Throws as Remapper::Run.
+void RunRemappers(const std::vector<RemapJob>& jobs, Interpolation interpolation);
+
 class Remapper {
  public:
   explicit Remapper(const RemapTable& table);  // keeps a reference: the table must outlive the remapper
@@ -65,6 +77,7 @@ class Remapper {
   double last_pyramid_ms() const { return pyramid_ms_; }
 
  private:
+  friend void RunRemappers(const std::vector<RemapJob>& jobs, Interpolation interpolation);
   void Prepare(const ImageView& src);
   void RemapRows(const ImageView& src, Interpolation interpolation, int view, int tile_row, Image8* out) const;
 

@@ -379,6 +379,10 @@ RemapTable BuildRemapTable(const AnyModel& model, const Layout& layout, const Re
 
 void SaveRemapTable(const std::filesystem::path& path, const RemapTable& table) {
   CheckOutputFile(path, std::string(kMagic, sizeof kMagic), "a hovs mapping file");
+  WriteFileAtomic(path, SerializeRemapTable(table));
+}
+
+std::string SerializeRemapTable(const RemapTable& table) {
   std::string s(kMagic, sizeof kMagic);
   Put(&s, kFormatVersion);
   Put(&s, static_cast<uint32_t>(table.header.size()));
@@ -394,7 +398,7 @@ void SaveRemapTable(const std::filesystem::path& path, const RemapTable& table) 
     s.append(reinterpret_cast<const char*>(v.dense.data()), v.dense.size() * sizeof(int32_t));
   }
   Put(&s, Fnv1a(s.data(), s.size()));
-  WriteFileAtomic(path, s);
+  return s;
 }
 
 namespace {
