@@ -18,6 +18,7 @@
 
 #include "apps/commands.h"
 #include "apps/model_files.h"
+#include "apps/unwrap_rig.h"
 #include "apps/unwrap_viewer.h"
 #include "core/error.h"
 #include "core/progress.h"
@@ -192,6 +193,13 @@ int RunUnwrap(const Options& o, const GlobalOptions& global) {
                     im.View(im.channels == 1 ? unwrap::PixelFormat::kGray8 : unwrap::PixelFormat::kRgb8), o.layout_out);
     return 0;
   }
+  if (IsRigUnwrap(o.layout, o.map)) {
+    HOVS_REQUIRE(o.truth_scene.empty() && !o.colmap, "--layout " + o.layout,
+                 "--truth-scene and --colmap take one unit's views, not a rig's");
+    return RunRigUnwrap({o.model, o.layout, o.map, o.save_map, o.input, o.out, o.interp, o.format, o.scene_distance,
+                         o.tile, o.fixed_elevation},
+                        global);
+  }
   HOVS_REQUIRE(!o.input.empty() || !o.save_map.empty(), "hovs unwrap", "give --input (and/or --save-map)");
   HOVS_REQUIRE(o.save_map.empty() || o.map.empty(), "--save-map",
                "saves the mapping built from --model, not one "
@@ -266,7 +274,9 @@ Runner SetupUnwrap(CLI::App* sub, const GlobalOptions* global) {
   auto o = std::make_shared<Options>();
   sub->add_option("--model", o->model, "scene YAML or dataset.json (exact rig), calib_results.txt or calibration.json");
   sub->add_option("--unit", o->unit, "unit name in a scene or manifest (default: the first)");
-  sub->add_option("--layout", o->layout, "article | panorama | longlat | a layout YAML")->capture_default_str();
+  sub->add_option("--layout", o->layout,
+                  "article | panorama | longlat | binocular (two units: 3 + 3 views) | a layout YAML")
+      ->capture_default_str();
   sub->add_flag("--fixed-elevation", o->fixed_elevation,
                 "presets keep their fixed elevations (panorama -75..-2, article pitch -30) instead of following the "
                 "model's field");

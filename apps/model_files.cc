@@ -122,6 +122,32 @@ AnyModel LoadModelSpec(const std::string& spec, const std::string& unit, double 
   return LoadCalibratedModel(path, "auto", scene_distance);
 }
 
+std::vector<std::string> ModelUnitNames(const std::string& spec) {
+  const fs::path path(spec);
+  HOVS_REQUIRE(fs::exists(path), "--model " + spec, "file not found");
+  std::vector<std::string> names;
+  if (EndsWith(spec, ".yaml") || EndsWith(spec, ".yml")) {
+    const std::string text = ReadFile(path);
+    if (calib::LooksLikeKalibrCamchain(text)) {
+      const size_t n = calib::ParseKalibrCamchain(text, spec).size();
+      for (size_t k = 0; k < n; ++k) names.push_back("cam" + std::to_string(k));
+    } else if (!calib::LooksLikeOmnidirYaml(text) && !calib::LooksLikeMeiYaml(text)) {
+      for (const auto& u : scenes::LoadSceneConfig(path).description.units) names.push_back(u.name);
+    }
+  } else if (EndsWith(spec, ".json")) {
+    const auto j = ReadJsonFile(path);
+    if (j.is_object() && JsonText(j, "format") == "hovs-dataset") {
+      CheckDatasetManifest(j, path.string());
+      for (const auto& u : j["units"]) names.push_back(u["name"].get<std::string>());
+    }
+  }
+  HOVS_REQUIRE(names.size() >= 2, "--model " + spec,
+               "a rig layout needs a model of several units (a scene YAML, a dataset manifest or a Kalibr camchain); "
+               "this file describes ",
+               names.size() == 1 ? "one unit" : "a single camera");
+  return names;
+}
+
 std::vector<InputFrame> ListInputs(const std::string& input, const std::string& unit) {
   const std::filesystem::path p(input);
   HOVS_REQUIRE(std::filesystem::exists(p), "--input " + input, "not found");

@@ -33,6 +33,10 @@ AnyModel LoadCalibratedModel(const std::filesystem::path& path, const std::strin
 // (LoadCalibratedModel). Throws naming the file.
 AnyModel LoadModelSpec(const std::string& spec, const std::string& unit, double scene_distance, ImageSize size = {});
 
+// Every unit of a multi-unit model file, by name: a scene YAML or a dataset manifest (each unit's exact rig), a
+// Kalibr camchain (cam0, cam1, ...). Throws naming the file when it holds one camera only.
+std::vector<std::string> ModelUnitNames(const std::string& spec);
+
 // The frames an --input names: an image, a folder of images (each frame named after its file; two of one name
 // are refused), or a dataset manifest (every view of `unit`, default the first; frames named frame<id>).
 struct InputFrame {
