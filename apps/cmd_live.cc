@@ -17,6 +17,7 @@
 #include "apps/live_rig.h"
 #include "apps/model_files.h"
 #include "apps/sources.h"
+#include "apps/unwrap_rig.h"
 #include "core/error.h"
 #include "core/interrupt.h"
 #include "core/io.h"
@@ -25,6 +26,7 @@
 #include "unwrap/layout.h"
 #include "unwrap/remap.h"
 #include "unwrap/remap_table.h"
+#include "unwrap/rig_mapping.h"
 
 namespace hovs::apps {
 namespace {
@@ -65,6 +67,58 @@ void ShowMosaic(const std::vector<unwrap::Image8>& views, std::atomic<bool>* sto
   if (key == 'q' || key == 27) stop->store(true);
 }
 
+// What hovs live expands: one unit's table, or a rig mapping of two units; the views' specs in output order.
+struct LiveMapping {
+  std::optional<unwrap::RemapTable> table;
+  std::optional<unwrap::RigMapping> rig;
+  std::vector<unwrap::ViewSpec> specs;
+  explicit LiveMapping(unwrap::RemapTable t) : table(std::move(t)) {
+    for (const auto& v : table->views) specs.push_back(v.spec);
+  }
+  explicit LiveMapping(unwrap::RigMapping m) : rig(std::move(m)) {
+    for (int k = 0; k < rig->ViewCount(); ++k) specs.push_back(rig->View(k).spec);
+  }
+};
+
+unwrap::RemapTable UnitLiveMapping(const Options& o) {
+  if (!o.map.empty()) return unwrap::LoadRemapTable(o.map);
+  const AnyModel model = LoadModelSpec(o.model, o.unit, o.scene_distance);
+  return unwrap::BuildRemapTable(model, unwrap::ResolveLayout(o.layout, o.fixed_elevation ? nullptr : &model),
+                                 unwrap::RemapOptions(), nlohmann::json(Versions()).dump());
+}
+
+unwrap::RigMapping RigLiveMapping(const Options& o) {
+  if (!o.map.empty()) return unwrap::LoadRigMapping(o.map);
+  std::vector<unwrap::RigUnitModel> units;
+  for (const auto& name : ModelUnitNames(o.model))
+    units.push_back({name, LoadModelSpec(o.model, name, o.scene_distance)});
+  const unwrap::Layout layout = unwrap::ResolveLayout(o.layout, o.fixed_elevation ? nullptr : &units[0].model);
+  unwrap::RigMapping m =
+      unwrap::BuildRigMapping(units, layout, unwrap::RemapOptions(), nlohmann::json(Versions()).dump());
+  HOVS_REQUIRE(m.units.size() == 2, "--layout " + o.layout, "hovs live expands pairs: the layout's views must come ",
+               "from two units (they come from ", m.units.size(), ")");
+  return m;
+}
+
+// The two sources in the mapping's unit order, matched by unit name (--units names cameras and replays).
+std::vector<hw::CameraSource*> PairSources(const OpenedSources& src, const std::vector<std::string>& units) {
+  std::string have;
+  for (const auto& u : src.units) have += (have.empty() ? "" : ", ") + u;
+  HOVS_REQUIRE(src.sources.size() == 2, "frame source", "the rig's views need a frame of each unit (", units[0], ", ",
+               units[1], ") but there is one source (", have,
+               "): give two --camera, a --simulate dataset of two units, or --replay with --units ", units[0],
+               " --units ", units[1]);
+  std::vector<hw::CameraSource*> out;
+  for (const auto& u : units) {
+    size_t k = 0;
+    while (k < src.units.size() && src.units[k] != u) ++k;
+    HOVS_REQUIRE(k < src.units.size(), "--units", "no source is named after the rig's unit '", u, "' (the sources are ",
+                 have, ")");
+    out.push_back(src.sources[k].get());
+  }
+  return out;
+}
+
 void CheckOptions(const Options& o) {
   HOVS_REQUIRE(o.model.empty() != o.map.empty(), "hovs live", "give either --model or --map");
   HOVS_REQUIRE(o.frames > 0 || o.seconds > 0 || o.display, "hovs live",
@@ -89,19 +143,14 @@ int RunLiveCommand(const Options& o, const GlobalOptions& global) {
   CheckOptions(o);
   hw::LiveOptions lo;
   lo.interpolation = unwrap::ParseInterpolation(o.interp);
-  const auto tb = std::chrono::steady_clock::now();
-  const unwrap::RemapTable table =
-      o.map.empty()
-          ? [&] {
-              const AnyModel model = LoadModelSpec(o.model, o.unit, o.scene_distance);
-              return unwrap::BuildRemapTable(model, unwrap::ResolveLayout(o.layout, o.fixed_elevation ? nullptr : &model),
-                                             unwrap::RemapOptions(), nlohmann::json(Versions()).dump());
-            }()
-          : unwrap::LoadRemapTable(o.map);
-  const double table_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - tb).count();
   const std::optional<stream::DdsOptions> dds = o.publish.Resolve();
+  // One unit's views (a table), or a rig layout's views of two units (a rig mapping) expanded from frame pairs.
+  const bool pair = IsRigUnwrap(o.layout, o.map);
+  const auto tb = std::chrono::steady_clock::now();
+  const LiveMapping mapping = pair ? LiveMapping(RigLiveMapping(o)) : LiveMapping(UnitLiveMapping(o));
+  const double table_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - tb).count();
   OpenedSources src = OpenSources(o.source);
-  hw::CameraSource& cam = *src.sources[0];
+  const std::vector<hw::CameraSource*> cams = pair ? PairSources(src, mapping.rig->units) : src.Raw();
   // The output folder is staged like a report and committed when the run ends (its frame count, Ctrl-C or
   // q); an error leaves an earlier output as it was.
   std::optional<StagedDirectory> staged;
@@ -121,7 +170,7 @@ int RunLiveCommand(const Options& o, const GlobalOptions& global) {
   if (o.display) display = [&](const std::vector<unwrap::Image8>& views) { ShowMosaic(views, &stop); };
   // Published frames: the views are swapped into the publisher (no copy) and an older frame's come back. A
   // replay has no deadline, so it waits for the publisher instead of dropping frames.
-  const std::unique_ptr<stream::Publisher> publisher = OpenPublisher(o.publish, dds, table);
+  const std::unique_ptr<stream::Publisher> publisher = OpenPublisher(o.publish, dds, mapping.specs);
   stream::Bundle bundle;
   hw::LiveSink sink;
   if (publisher)
@@ -131,18 +180,36 @@ int RunLiveCommand(const Options& o, const GlobalOptions& global) {
       publisher->Offer(&bundle, lo.replay);
       bundle.images.swap(*views);
     };
-  const hw::LiveRun r = hw::RunLive(cam, table, lo, &stop, display, sink);
+  nlohmann::json pairs;
+  hw::LiveRun r;
+  if (pair) {
+    const hw::PairLiveRun pr = hw::RunPairLive(cams, *mapping.rig, lo, &stop, display, sink);
+    r = pr.live;
+    pairs = {{"units", mapping.rig->units},
+             {"unpaired_frames", pr.unpaired},
+             {"dropped_pairs", pr.dropped_pairs},
+             {"skew", Latency(pr.skew_ms)},
+             {"note", "unpaired: frames whose partner never came within the tolerance (2 ms), never expanded alone"}};
+  } else {
+    r = hw::RunLive(*cams[0], *mapping.table, lo, &stop, display, sink);
+  }
   nlohmann::json published;
   if (publisher) {
     publisher->Flush(5);
     published = {{"topics", publisher->Topics()}, {"frames", publisher->Stats().ToJson()}};
   }
-  const auto stats = cam.Stats();
+  nlohmann::json sources = nlohmann::json::array(), streams = nlohmann::json::array();
+  uint64_t underruns = 0;
+  for (auto* c : cams) {
+    sources.push_back(c->Info());
+    streams.push_back(c->Stats().ToJson());
+    underruns += c->Stats().underruns;
+  }
   nlohmann::json j = {{"tool", "hovs live"},
                       {"versions", Versions()},
-                      {"source", cam.Info()},
+                      {"source", pair ? sources : sources[0]},
                       {"pixel_format", o.source.pixel_format},
-                      {"views", table.views.size()},
+                      {"views", mapping.specs.size()},
                       {"interpolation", o.interp},
                       {"mapping_ms", table_ms},
                       {"frames_processed", r.processed},
@@ -150,7 +217,7 @@ int RunLiveCommand(const Options& o, const GlobalOptions& global) {
                       {"frames_written", r.written},
                       {"seconds", r.seconds},
                       {"fps", r.processed / std::max(r.seconds, 1e-9)},
-                      {"stream", stats.ToJson()},
+                      {"stream", pair ? streams : streams[0]},
                       {"dds", published},
                       {"latency",
                        {{"wait_for_frame", Latency(r.wait_ms)},
@@ -160,8 +227,9 @@ int RunLiveCommand(const Options& o, const GlobalOptions& global) {
                         {"publish", Latency(r.sink_ms)},
                         {"frame_to_output", Latency(r.total_ms)}}},
                       {"note",
-                       "remap: all views of one frame, TBB threads; wait_for_frame includes the camera's "
-                       "frame period"}};
+                       "remap: all views of one frame (of a pair: both frames in one pass), TBB threads; "
+                       "wait_for_frame includes the camera's frame period"}};
+  if (pair) j["pairs"] = pairs;
   if (staged) {
     WriteFileAtomic(lo.out_dir / "live.json", j.dump(1) + "\n");
     staged->Commit();
@@ -173,7 +241,7 @@ int RunLiveCommand(const Options& o, const GlobalOptions& global) {
         "hovs live: %d frames in %.1f s (%.1f fps), %d incomplete, %llu stream underruns; median remap "
         "%.1f ms, frame-to-output %.1f ms\n",
         r.processed, r.seconds, r.processed / std::max(r.seconds, 1e-9), r.incomplete,
-        static_cast<unsigned long long>(stats.underruns), Summarise(r.remap_ms).median, Summarise(r.total_ms).median);
+        static_cast<unsigned long long>(underruns), Summarise(r.remap_ms).median, Summarise(r.total_ms).median);
   }
   return 0;
 }
@@ -188,7 +256,8 @@ Runner SetupLive(CLI::App* sub, const GlobalOptions* global) {
   sub->add_option("--model", o->model, "model: scene YAML, dataset.json, calib_results.txt or calibration.json");
   sub->add_option("--unit", o->unit, "unit of a scene or manifest model");
   sub->add_option("--map", o->map, "a mapping file (hovs unwrap --save-map) instead of --model");
-  sub->add_option("--layout", o->layout, "article | panorama | longlat | layout YAML")->capture_default_str();
+  sub->add_option("--layout", o->layout, "article | panorama | longlat | binocular (frame pairs) | layout YAML")
+      ->capture_default_str();
   sub->add_flag("--fixed-elevation", o->fixed_elevation,
                 "presets keep their fixed elevations instead of following the model's field");
   sub->add_option("--interp", o->interp, "bilinear | bicubic | nearest")->capture_default_str();

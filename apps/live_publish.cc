@@ -40,19 +40,17 @@ void AddPublishOptions(CLI::App* sub, PublishCliOptions* o) {
   sub->add_option("--dds-peer", o->peers, "unicast discovery peer (repeatable; turns multicast off), e.g. 127.0.0.1");
   sub->add_option("--topic-prefix", o->prefix, "ROS 2 namespace of the topics")->capture_default_str();
   AddBounded(sub, "--wait-subscribers", &o->wait_subscribers,
-             "wait up to this many seconds for a subscriber on every topic before the first frame", 0, 3600);
+             "wait up to this many seconds for a subscriber on every image topic before the first frame", 0, 3600);
 }
 
 std::unique_ptr<stream::Publisher> OpenPublisher(const PublishCliOptions& o,
                                                  const std::optional<stream::DdsOptions>& dds,
-                                                 const unwrap::RemapTable& table) {
+                                                 const std::vector<unwrap::ViewSpec>& views) {
   if (!dds) return nullptr;
-  std::vector<unwrap::ViewSpec> views;
-  for (const auto& v : table.views) views.push_back(v.spec);
   auto pub = std::make_unique<stream::Publisher>(*dds, stream::TopicsOfViews(views, o.prefix, false));
   if (o.wait_subscribers > 0)
     HOVS_REQUIRE(pub->WaitForSubscribers(1, o.wait_subscribers), "--wait-subscribers",
-                 "no subscriber on every topic within ", o.wait_subscribers, " s");
+                 "no subscriber on every image topic within ", o.wait_subscribers, " s");
   return pub;
 }
 

@@ -9,7 +9,7 @@
 #include <vector>
 
 #include "stream/publisher.h"
-#include "unwrap/remap_table.h"
+#include "unwrap/layout.h"
 
 namespace hovs::apps {
 
@@ -26,10 +26,10 @@ struct PublishCliOptions {
 
 void AddPublishOptions(CLI::App* sub, PublishCliOptions* o);
 
-// The publisher of a mapping's views (nullptr without --publish); waits for subscribers as asked. Throws naming
+// The publisher of the views (nullptr without --publish); waits for subscribers as asked. Throws naming
 // the option Cyclone or the machine refuses.
 std::unique_ptr<stream::Publisher> OpenPublisher(const PublishCliOptions& o,
                                                  const std::optional<stream::DdsOptions>& dds,
-                                                 const unwrap::RemapTable& table);
+                                                 const std::vector<unwrap::ViewSpec>& views);
 
 }  // namespace hovs::apps

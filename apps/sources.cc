@@ -116,7 +116,10 @@ OpenedSources OpenSources(const SourceOptions& o) {
       if (o.units.empty()) r.units.push_back(imaged[k]);
     }
   } else if (!o.replay.empty()) {
-    r.sources.push_back(hw::OpenReplay(o.replay, o.units.empty() ? "" : o.units[0], o.pixel_format, o.loop));
+    // With two --units, a manifest's two units replayed side by side (paired by their timestamps).
+    HOVS_REQUIRE(o.units.size() <= 2, "--units", "at most two units (got ", o.units.size(), ")");
+    for (size_t k = 0; k < std::max<size_t>(1, o.units.size()); ++k)
+      r.sources.push_back(hw::OpenReplay(o.replay, o.units.empty() ? "" : o.units[k], o.pixel_format, o.loop));
   } else {
     HOVS_REQUIRE(o.cameras.size() <= 2, "--camera", "at most two cameras (got ", o.cameras.size(), ")");
     for (const auto& id : o.cameras) r.sources.push_back(hw::OpenAravisCamera(id, s));

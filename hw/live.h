@@ -12,6 +12,7 @@
 #include "hw/camera_source.h"
 #include "unwrap/remap.h"
 #include "unwrap/remap_table.h"
+#include "unwrap/rig_mapping.h"
 
 namespace hovs::hw {
 
@@ -51,5 +52,27 @@ void WriteLiveViews(const std::filesystem::path& dir, const std::string& stem, c
 LiveRun RunLive(CameraSource& camera, const unwrap::RemapTable& table, const LiveOptions& options,
                 std::atomic<bool>* stop, const std::function<void(const std::vector<unwrap::Image8>&)>& display = {},
                 const LiveSink& sink = {});
+
+// Two units in one pipeline: frames of two sources paired by device timestamp (FramePairer, within
+// pair_tolerance_ns), each pair expanded by the rig mapping into all its views in one pass, then written,
+// displayed and handed to the sink as RunLive does. Each source is grabbed on a thread of its own. Frames whose
+// partner never arrives are counted (unpaired), never expanded alone; pairs that arrive while the pipeline is
+// still busy with two waiting ones replace the older (counted as dropped pairs), except in a replay, which has no
+// deadline and waits. Throws naming the unit whose frame does not fit the mapping, or when the pair's pixel
+// formats differ.
+struct PairLiveRun {
+  LiveRun live;
+  uint64_t unpaired = 0;        // frames the pairer gave up on
+  uint64_t dropped_pairs = 0;   // pairs replaced while the pipeline was busy
+  std::vector<double> skew_ms;  // |t0 - t1| of each processed pair (device clocks)
+};
+PairLiveRun RunPairLive(const std::vector<CameraSource*>& cameras, const unwrap::RigMapping& mapping,
+                        const LiveOptions& options, std::atomic<bool>* stop,
+                        const std::function<void(const std::vector<unwrap::Image8>&)>& display = {},
+                        const LiveSink& sink = {}, uint64_t pair_tolerance_ns = 2'000'000);
+
+// Writes the views of one frame of a rig as dir/<stem>_<view>.png (8 bits).
+void WriteRigLiveViews(const std::filesystem::path& dir, const std::string& stem, const unwrap::RigMapping& mapping,
+                       const std::vector<unwrap::Image8>& views);
 
 }  // namespace hovs::hw

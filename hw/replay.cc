@@ -93,6 +93,11 @@ std::unique_ptr<CameraSource> OpenReplay(const fs::path& src, const std::string&
         items.push_back(it);
         if (unit.empty()) break;  // the first unit's view of each frame
       }
+    if (!unit.empty() && items.empty()) {
+      std::string names;
+      for (const auto& u : m["units"]) names += (names.empty() ? "" : ", ") + u["name"].get<std::string>();
+      throw Error(src.string(), "no frames of unit '" + unit + "' (its units: " + names + ")");
+    }
   }
   return std::make_unique<Replay>(std::move(items), src.string(), pixel_format, loop);
 }

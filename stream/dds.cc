@@ -85,6 +85,9 @@ std::string DdsConfigXml(const DdsOptions& o) {
            o.interface + "\"/></Interfaces>";
   if (!o.peers.empty()) xml += "<AllowMulticast>false</AllowMulticast>";
   xml += "</General>";
+  // Frames of several MB arrive as bursts of fragments: a receive buffer as large as the kernel allows (Cyclone
+  // asks for this much and takes less where net.core.rmem_max is lower) keeps retransmissions rare.
+  xml += "<Internal><SocketReceiveBufferSize max=\"32MB\"/></Internal>";
   if (!o.peers.empty()) {
     // Unicast discovery: every participant takes a port index of its own, and the peers are probed at the first
     // indices' ports.

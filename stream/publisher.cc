@@ -19,7 +19,9 @@ dds_qos_t* WriterQos(double max_blocking_s) {
   dds_qos_t* q = dds_create_qos();
   dds_qset_reliability(q, DDS_RELIABILITY_RELIABLE, static_cast<dds_duration_t>(max_blocking_s * 1e9));
   dds_qset_durability(q, DDS_DURABILITY_VOLATILE);
-  dds_qset_history(q, DDS_HISTORY_KEEP_LAST, 4);
+  // Deep enough that a sample whose fragments the reader's socket dropped is still there to resend when its
+  // retransmission request arrives, a few frames later at worst.
+  dds_qset_history(q, DDS_HISTORY_KEEP_LAST, 16);
   return q;
 }
 
@@ -178,9 +180,12 @@ bool Publisher::Flush(double timeout_s) {
 
 bool Publisher::WaitForSubscribers(int count, double timeout_s) {
   const auto end = Clock::now() + std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(timeout_s));
+  std::vector<Writers::Entry*> wanted;  // the images and the cloud; a CameraInfo is optional to its readers
+  for (auto& e : writers_->image) wanted.push_back(&e);
+  if (writers_->cloud.writer) wanted.push_back(&writers_->cloud);
   for (;;) {
     bool all = true;
-    for (auto* e : writers_->All()) {
+    for (auto* e : wanted) {
       dds_publication_matched_status_t st;
       if (dds_get_publication_matched_status(e->writer, &st) != DDS_RETCODE_OK ||
           static_cast<int>(st.current_count) < count)

@@ -89,7 +89,7 @@ class Publisher {
   // With `wait` (replays, recordings: no deadline), waits for the thread to take the waiting bundle instead.
   // Throws when the images do not match the topics (count, sizes of a CameraInfo).
   void Offer(Bundle* bundle, bool wait = false);
-  // True when every writer has at least `count` matched readers (waits up to timeout_s).
+  // True when every image (and cloud) topic has at least `count` matched readers (waits up to timeout_s).
   bool WaitForSubscribers(int count, double timeout_s);
   bool Flush(double timeout_s);  // true when every offered bundle has been written or dropped
   PublishStats Stats() const;
