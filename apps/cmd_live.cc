@@ -13,6 +13,7 @@
 #include <opencv2/imgproc.hpp>
 
 #include "apps/commands.h"
+#include "apps/live_depth.h"
 #include "apps/live_publish.h"
 #include "apps/live_rig.h"
 #include "apps/model_files.h"
@@ -35,6 +36,8 @@ struct Options {
   SourceOptions source;
   RigLiveCliOptions rig;
   PublishCliOptions publish;
+  LiveDepthCliOptions depth;
+  double pair_tolerance_ms = 2;
   std::string model, unit, map, layout = "article", interp = "bilinear", out;
   int frames = 100, write_every = 0;
   double seconds = 0, timeout = 3, scene_distance = 10;
@@ -129,6 +132,45 @@ void CheckOptions(const Options& o) {
                "live expansion takes Mono8 or BayerRG8 frames (Mono16 is for capture)");
 }
 
+// live.json's common part: the sources, the figures and the latencies of every stage.
+nlohmann::json LiveJson(const Options& o, const std::vector<hw::CameraSource*>& cams, size_t views, double table_ms,
+                        const hw::LiveRun& r, const nlohmann::json& published, uint64_t* underruns_out) {
+  const bool pair = cams.size() == 2;
+  nlohmann::json sources = nlohmann::json::array(), streams = nlohmann::json::array();
+  uint64_t underruns = 0;
+  for (auto* c : cams) {
+    sources.push_back(c->Info());
+    streams.push_back(c->Stats().ToJson());
+    underruns += c->Stats().underruns;
+  }
+  nlohmann::json j = {{"tool", "hovs live"},
+                      {"versions", Versions()},
+                      {"source", pair ? sources : sources[0]},
+                      {"pixel_format", o.source.pixel_format},
+                      {"views", views},
+                      {"interpolation", o.interp},
+                      {"mapping_ms", table_ms},
+                      {"frames_processed", r.processed},
+                      {"frames_incomplete", r.incomplete},
+                      {"frames_written", r.written},
+                      {"seconds", r.seconds},
+                      {"fps", r.processed / std::max(r.seconds, 1e-9)},
+                      {"stream", pair ? streams : streams[0]},
+                      {"dds", published},
+                      {"latency",
+                       {{"wait_for_frame", Latency(r.wait_ms)},
+                        {"remap", Latency(r.remap_ms)},
+                        {"write", Latency(r.write_ms)},
+                        {"display", Latency(r.display_ms)},
+                        {"publish", Latency(r.sink_ms)},
+                        {"frame_to_output", Latency(r.total_ms)}}},
+                      {"note",
+                       "remap: all views of one frame (of a pair: both frames in one pass), TBB threads; "
+                       "wait_for_frame includes the camera's frame period"}};
+  *underruns_out = underruns;
+  return j;
+}
+
 int RunLiveCommand(const Options& o, const GlobalOptions& global) {
   if (!o.rig.rig_json.empty()) {
     HOVS_REQUIRE(o.model.empty() && o.map.empty(), "--rig",
@@ -144,13 +186,15 @@ int RunLiveCommand(const Options& o, const GlobalOptions& global) {
   hw::LiveOptions lo;
   lo.interpolation = unwrap::ParseInterpolation(o.interp);
   const std::optional<stream::DdsOptions> dds = o.publish.Resolve();
+  const std::optional<depth::LiveDepthOptions> depth_options = o.depth.Resolve();
   // One unit's views (a table), or a rig layout's views of two units (a rig mapping) expanded from frame pairs.
   const bool pair = IsRigUnwrap(o.layout, o.map);
   const auto tb = std::chrono::steady_clock::now();
   const LiveMapping mapping = pair ? LiveMapping(RigLiveMapping(o)) : LiveMapping(UnitLiveMapping(o));
   const double table_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - tb).count();
   OpenedSources src = OpenSources(o.source);
-  const std::vector<hw::CameraSource*> cams = pair ? PairSources(src, mapping.rig->units) : src.Raw();
+  const std::vector<hw::CameraSource*> cams =
+      pair ? PairSources(src, mapping.rig->units) : std::vector<hw::CameraSource*>{src.sources[0].get()};
   // The output folder is staged like a report and committed when the run ends (its frame count, Ctrl-C or
   // q); an error leaves an earlier output as it was.
   std::optional<StagedDirectory> staged;
@@ -180,17 +224,29 @@ int RunLiveCommand(const Options& o, const GlobalOptions& global) {
       publisher->Offer(&bundle, lo.replay);
       bundle.images.swap(*views);
     };
-  nlohmann::json pairs;
+  nlohmann::json pairs, depth_json;
   hw::LiveRun r;
   if (pair) {
-    const hw::PairLiveRun pr = hw::RunPairLive(cams, *mapping.rig, lo, &stop, display, sink);
+    std::unique_ptr<LiveDepthOutput> depth;
+    if (depth_options) {
+      HOVS_REQUIRE(!o.model.empty(), "--depth", "needs --model (a scene YAML or dataset manifest: the units' poses)");
+      depth = std::make_unique<LiveDepthOutput>(
+          LoadStereoRig(o.model, mapping.rig->units[0], mapping.rig->units[1], o.scene_distance, o.depth.stereo),
+          *depth_options, dds, o.publish.prefix);
+    }
+    const hw::PairLiveRun pr =
+        hw::RunPairLive(cams, *mapping.rig, lo, &stop, display, sink, static_cast<uint64_t>(o.pair_tolerance_ms * 1e6),
+                        depth ? depth->Sink() : hw::PairFramesSink());
     r = pr.live;
+    if (depth) depth_json = depth->Finish(lo.out_dir, r.seconds);
     pairs = {{"units", mapping.rig->units},
              {"unpaired_frames", pr.unpaired},
              {"dropped_pairs", pr.dropped_pairs},
              {"skew", Latency(pr.skew_ms)},
-             {"note", "unpaired: frames whose partner never came within the tolerance (2 ms), never expanded alone"}};
+             {"tolerance_ms", o.pair_tolerance_ms},
+             {"note", "unpaired: frames whose partner never came within the tolerance, never expanded alone"}};
   } else {
+    HOVS_REQUIRE(!depth_options, "--depth", "needs frame pairs: a two-unit layout such as --layout binocular");
     r = hw::RunLive(*cams[0], *mapping.table, lo, &stop, display, sink);
   }
   nlohmann::json published;
@@ -198,38 +254,10 @@ int RunLiveCommand(const Options& o, const GlobalOptions& global) {
     publisher->Flush(5);
     published = {{"topics", publisher->Topics()}, {"frames", publisher->Stats().ToJson()}};
   }
-  nlohmann::json sources = nlohmann::json::array(), streams = nlohmann::json::array();
   uint64_t underruns = 0;
-  for (auto* c : cams) {
-    sources.push_back(c->Info());
-    streams.push_back(c->Stats().ToJson());
-    underruns += c->Stats().underruns;
-  }
-  nlohmann::json j = {{"tool", "hovs live"},
-                      {"versions", Versions()},
-                      {"source", pair ? sources : sources[0]},
-                      {"pixel_format", o.source.pixel_format},
-                      {"views", mapping.specs.size()},
-                      {"interpolation", o.interp},
-                      {"mapping_ms", table_ms},
-                      {"frames_processed", r.processed},
-                      {"frames_incomplete", r.incomplete},
-                      {"frames_written", r.written},
-                      {"seconds", r.seconds},
-                      {"fps", r.processed / std::max(r.seconds, 1e-9)},
-                      {"stream", pair ? streams : streams[0]},
-                      {"dds", published},
-                      {"latency",
-                       {{"wait_for_frame", Latency(r.wait_ms)},
-                        {"remap", Latency(r.remap_ms)},
-                        {"write", Latency(r.write_ms)},
-                        {"display", Latency(r.display_ms)},
-                        {"publish", Latency(r.sink_ms)},
-                        {"frame_to_output", Latency(r.total_ms)}}},
-                      {"note",
-                       "remap: all views of one frame (of a pair: both frames in one pass), TBB threads; "
-                       "wait_for_frame includes the camera's frame period"}};
+  nlohmann::json j = LiveJson(o, cams, mapping.specs.size(), table_ms, r, published, &underruns);
   if (pair) j["pairs"] = pairs;
+  if (!depth_json.is_null()) j["depth"] = depth_json;
   if (staged) {
     WriteFileAtomic(lo.out_dir / "live.json", j.dump(1) + "\n");
     staged->Commit();
@@ -253,6 +281,11 @@ Runner SetupLive(CLI::App* sub, const GlobalOptions* global) {
   AddSourceOptions(sub, &o->source);
   AddRigLiveOptions(sub, &o->rig);
   AddPublishOptions(sub, &o->publish);
+  AddLiveDepthOptions(sub, &o->depth);
+  AddBounded(sub, "--pair-tolerance-ms", &o->pair_tolerance_ms,
+             "frame pairs: the largest difference of the two device timestamps (hardware trigger: 2 ms; free-running "
+             "cameras: half the frame period)",
+             0, 1e4);
   sub->add_option("--model", o->model, "model: scene YAML, dataset.json, calib_results.txt or calibration.json");
   sub->add_option("--unit", o->unit, "unit of a scene or manifest model");
   sub->add_option("--map", o->map, "a mapping file (hovs unwrap --save-map) instead of --model");

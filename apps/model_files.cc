@@ -148,6 +148,40 @@ std::vector<std::string> ModelUnitNames(const std::string& spec) {
   return names;
 }
 
+depth::StereoRig LoadStereoRig(const std::string& spec, const std::string& left, const std::string& right,
+                               double scene_distance, const std::string& stereo_json) {
+  const fs::path path(spec);
+  std::vector<raytrace::CatadioptricUnit> units;
+  if (EndsWith(spec, ".yaml") || EndsWith(spec, ".yml")) {
+    units = scenes::LoadSceneConfig(path).description.units;
+  } else {
+    const auto j = ReadJsonFile(path);
+    HOVS_REQUIRE(j.is_object() && JsonText(j, "format") == "hovs-dataset", "--model " + spec,
+                 "depth needs the units' poses: a scene YAML or a dataset manifest");
+    CheckDatasetManifest(j, path.string());
+    for (const auto& u : j["units"]) units.push_back(scenes::UnitFromJson(u, spec + " (units)"));
+  }
+  const auto find = [&](const std::string& name) -> const raytrace::CatadioptricUnit& {
+    for (const auto& u : units)
+      if (u.name == name) return u;
+    throw Error("--model " + spec, "no unit '" + name + "'");
+  };
+  const auto& l = find(left);
+  const auto& r = find(right);
+  depth::StereoRig rig{AnyModel::Exact(l.rig, scene_distance, spec + " (unit " + left + ")"),
+                       AnyModel::Exact(r.rig, scene_distance, spec + " (unit " + right + ")"),
+                       r.world_from_mirror.Inverse() * l.world_from_mirror};
+  if (!stereo_json.empty()) {
+    const auto sj = ReadJsonFile(stereo_json);
+    HOVS_REQUIRE(sj.is_object() && sj.contains("right_from_left"), stereo_json,
+                 "not a hovs stereo-calibrate result (no right_from_left)");
+    rig.right_from_left = scenes::PoseFromJson(sj["right_from_left"], stereo_json + " (right_from_left)");
+  }
+  HOVS_REQUIRE(rig.Baseline() > 1e-3, "--model " + spec, "units ", left, " and ", right,
+               " are less than 1 mm apart: no baseline for depth");
+  return rig;
+}
+
 std::vector<InputFrame> ListInputs(const std::string& input, const std::string& unit) {
   const std::filesystem::path p(input);
   HOVS_REQUIRE(std::filesystem::exists(p), "--input " + input, "not found");

@@ -8,7 +8,8 @@
 #include <vector>
 
 #include "core/any_model.h"
-#include "core/manifest.h"  // LoadDatasetManifest, used with the models by every command
+#include "core/manifest.h"
+#include "depth/stereo.h"  // LoadDatasetManifest, used with the models by every command
 #include "unwrap/remap.h"
 
 namespace hovs::apps {
@@ -36,6 +37,12 @@ AnyModel LoadModelSpec(const std::string& spec, const std::string& unit, double 
 // Every unit of a multi-unit model file, by name: a scene YAML or a dataset manifest (each unit's exact rig), a
 // Kalibr camchain (cam0, cam1, ...). Throws naming the file when it holds one camera only.
 std::vector<std::string> ModelUnitNames(const std::string& spec);
+
+// The stereo rig of two units of a scene YAML or a dataset manifest: their exact models and the relative pose
+// their world poses give, or the calibrated one of `stereo_json` (hovs stereo-calibrate's stereo.json). Throws
+// naming the file or unit.
+depth::StereoRig LoadStereoRig(const std::string& spec, const std::string& left, const std::string& right,
+                               double scene_distance, const std::string& stereo_json);
 
 // The frames an --input names: an image, a folder of images (each frame named after its file; two of one name
 // are refused), or a dataset manifest (every view of `unit`, default the first; frames named frame<id>).

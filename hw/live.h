@@ -60,6 +60,9 @@ LiveRun RunLive(CameraSource& camera, const unwrap::RemapTable& table, const Liv
 // still busy with two waiting ones replace the older (counted as dropped pairs), except in a replay, which has no
 // deadline and waits. Throws naming the unit whose frame does not fit the mapping, or when the pair's pixel
 // formats differ.
+// Takes each processed pair's raw frames after the views' sink; it may swap their data out (the depth thread does).
+using PairFramesSink = std::function<void(uint64_t stamp_ns, Frame* left, Frame* right)>;
+
 struct PairLiveRun {
   LiveRun live;
   uint64_t unpaired = 0;        // frames the pairer gave up on
@@ -69,7 +72,8 @@ struct PairLiveRun {
 PairLiveRun RunPairLive(const std::vector<CameraSource*>& cameras, const unwrap::RigMapping& mapping,
                         const LiveOptions& options, std::atomic<bool>* stop,
                         const std::function<void(const std::vector<unwrap::Image8>&)>& display = {},
-                        const LiveSink& sink = {}, uint64_t pair_tolerance_ns = 2'000'000);
+                        const LiveSink& sink = {}, uint64_t pair_tolerance_ns = 2'000'000,
+                        const PairFramesSink& frames_sink = {});
 
 // Writes the views of one frame of a rig as dir/<stem>_<view>.png (8 bits).
 void WriteRigLiveViews(const std::filesystem::path& dir, const std::string& stem, const unwrap::RigMapping& mapping,

@@ -90,7 +90,7 @@ void WriteRigLiveViews(const std::filesystem::path& dir, const std::string& stem
 
 PairLiveRun RunPairLive(const std::vector<CameraSource*>& cams, const unwrap::RigMapping& mapping, const LiveOptions& o,
                         std::atomic<bool>* stop, const std::function<void(const std::vector<unwrap::Image8>&)>& display,
-                        const LiveSink& sink, uint64_t pair_tolerance_ns) {
+                        const LiveSink& sink, uint64_t pair_tolerance_ns, const PairFramesSink& frames_sink) {
   HOVS_REQUIRE(cams.size() == 2 && mapping.units.size() == 2, o.source_name,
                "a pair needs two sources and a mapping of ", "two units (got ", cams.size(), " sources, ",
                mapping.units.size(), " units)");
@@ -171,6 +171,7 @@ PairLiveRun RunPairLive(const std::vector<CameraSource*>& cams, const unwrap::Ri
       r.total_ms.push_back(Ms(t1, t5));
       const uint64_t a = f[0]->device_ns, b = f[1]->device_ns;
       run.skew_ms.push_back((a > b ? a - b : b - a) * 1e-6);
+      if (frames_sink) frames_sink(stamp_ns, &p.first, &p.second);
       ++r.processed;
       last_progress = Clock::now();
     }

@@ -72,7 +72,7 @@ std::optional<CameraInfo> CameraInfoOfView(const unwrap::ViewSpec& spec) {
 PublisherTopics TopicsOfViews(const std::vector<unwrap::ViewSpec>& views, const std::string& prefix, bool cloud) {
   PublisherTopics t;
   t.prefix = prefix, t.cloud = cloud;
-  for (const auto& v : views) t.images.push_back({v.name, CameraInfoOfView(v)});
+  for (const auto& v : views) t.images.push_back({v.name, CameraInfoOfView(v), ""});
   return t;
 }
 
@@ -105,6 +105,7 @@ Publisher::Publisher(const DdsOptions& options, const PublisherTopics& topics)
   try {
     std::vector<std::string> seen;
     for (const auto& im : topics_.images) {
+      HOVS_REQUIRE(im.encoding.empty() || im.encoding == "32FC1", im.name, "unknown encoding '", im.encoding, "'");
       const std::string base = RosTopic(topics_.prefix, {im.name});
       for (const auto& s : seen)
         HOVS_REQUIRE(s != base, "DDS publisher", "two views map to the topic ", base, " (view names differ only in ",
@@ -149,8 +150,12 @@ void Publisher::Offer(Bundle* bundle, bool wait) {
   for (size_t k = 0; k < bundle->images.size(); ++k) {
     const auto& info = topics_.images[k].info;
     const auto& im = bundle->images[k];
-    HOVS_REQUIRE(im.channels == 1 || im.channels == 3, topics_.images[k].name, "images are mono8 or rgb8, not ",
-                 im.channels, " channels");
+    const std::string& enc = topics_.images[k].encoding;
+    HOVS_REQUIRE(enc.empty() ? (im.channels == 1 || im.channels == 3) : (enc == "32FC1" && im.channels == 4),
+                 topics_.images[k].name, "an image of ", im.channels, " bytes per pixel for encoding ",
+                 enc.empty() ? "mono8 or rgb8" : enc);
+    HOVS_REQUIRE(im.data.size() == size_t(im.width) * im.height * im.channels, topics_.images[k].name, "an image of ",
+                 im.width, " x ", im.height, " x ", im.channels, " holds ", im.data.size(), " bytes");
     HOVS_REQUIRE(!info || (info->width == im.width && info->height == im.height), topics_.images[k].name, "image ",
                  im.width, " x ", im.height, " but its camera is ", info->width, " x ", info->height);
   }
@@ -243,7 +248,8 @@ void Publisher::Write(const Bundle& b) {
     std::memset(&m, 0, sizeof m);
     FillHeader(&m.header, b.stamp_ns, e.frame_id);
     m.height = static_cast<uint32_t>(im.height), m.width = static_cast<uint32_t>(im.width);
-    m.encoding = const_cast<char*>(im.channels == 3 ? "rgb8" : "mono8");
+    const std::string& enc = topics_.images[k].encoding;
+    m.encoding = const_cast<char*>(!enc.empty() ? enc.c_str() : im.channels == 3 ? "rgb8" : "mono8");
     m.is_bigendian = 0;
     m.step = static_cast<uint32_t>(im.width * im.channels);
     Borrow(&m.data, im.data.data(), im.data.size());

@@ -5,7 +5,7 @@
 // counted, never time in the pipeline.
 //
 // Topics (ROS 2 names; DDS names with the rt/ prefix), for a prefix P and each image topic's name N:
-//   /P/N/image_raw     sensor_msgs/Image, rgb8 or mono8
+//   /P/N/image_raw     sensor_msgs/Image, rgb8 or mono8 (or 32FC1 for a range image)
 //   /P/N/camera_info   sensor_msgs/CameraInfo, for pinhole (perspective) views: K, R = I, P = [K | 0], no
 //                      distortion, sent with every image and the same stamp
 //   /P/points          sensor_msgs/PointCloud2: x, y, z float32 in metres (+ rgb packed in a float32, as PCL)
@@ -57,6 +57,9 @@ struct PublisherTopics {
   struct Image {
     std::string name;
     std::optional<CameraInfo> info;
+    // Empty: mono8 or rgb8 by the image's channels. "32FC1": a float image (a range image in metres, NaN where
+    // unknown), whose Image8 carries 4 bytes per pixel (channels = 4).
+    std::string encoding;
   };
   std::vector<Image> images;
   bool cloud = false;

@@ -3,6 +3,8 @@
 // received; and the errors of pairs and rigs that do not fit.
 #include <gtest/gtest.h>
 
+#include <cmath>
+#include <cstring>
 #include <future>
 #include <map>
 #include <nlohmann/json.hpp>
@@ -35,10 +37,13 @@ TEST(PairLiveCli, TwoSimulatedUnitsExpandTogetherAndReachASubscriber) {
        {"unit0_view120", "unit0_view180", "unit0_view240", "unit1_view300", "unit1_view0", "unit1_view60"})
     subs[v] = std::make_unique<stream::Subscriber>(o, std::string("/hovs/") + v + "/image_raw",
                                                    stream::MessageType::kImage, 256);
+  stream::Subscriber points(o, "/hovs/points", stream::MessageType::kPointCloud2, 64);
+  stream::Subscriber range(o, "/hovs/depth/image_raw", stream::MessageType::kImage, 64);
   auto run = std::async(std::launch::async, [&] {
     return Hovs("-q live --simulate " + manifest + " --model " + manifest +
-                " --layout binocular --frames 30 --frame-rate 10 --write-every 10 --publish --domain 61 "
-                "--dds-interface lo --dds-peer 127.0.0.1 --wait-subscribers 20 -o " +
+                " --layout binocular --frames 30 --frame-rate 10 --pair-tolerance-ms 50 --write-every 10 --publish "
+                "--domain 61 --dds-interface lo --dds-peer 127.0.0.1 --wait-subscribers 20 --depth --depth-size "
+                "512x128 --depth-disparities 64 -o " +
                 (dir / "live").string());
   });
   std::map<std::string, std::vector<std::vector<uint8_t>>> got;
@@ -58,7 +63,7 @@ TEST(PairLiveCli, TwoSimulatedUnitsExpandTogetherAndReachASubscriber) {
   EXPECT_EQ(j["frames_processed"], 30);
   EXPECT_EQ(j["views"], 6);
   EXPECT_EQ(j["pairs"]["units"], nlohmann::json({"left", "right"}));
-  EXPECT_LE(j["pairs"]["skew"]["max_ms"].get<double>(), 2.0);
+  EXPECT_LE(j["pairs"]["skew"]["max_ms"].get<double>(), 50.0);  // the tolerance asked for
   EXPECT_EQ(j["source"].size(), 2u);
   EXPECT_EQ(j["dds"]["frames"]["published"].get<int>() + j["dds"]["frames"]["dropped"].get<int>() +
                 j["dds"]["frames"]["incomplete"].get<int>(),
@@ -75,6 +80,44 @@ TEST(PairLiveCli, TwoSimulatedUnitsExpandTogetherAndReachASubscriber) {
   }
   for (const char* f : {"frame000000_unit0_view120.png", "frame000020_unit1_view60.png"})
     EXPECT_TRUE(fs::exists(dir / "live" / f)) << f;
+
+  // Depth ran beside the expansion: its results were published and the last cloud written.
+  const auto& d = j["depth"];
+  ASSERT_TRUE(d.is_object()) << j.dump(1);
+  EXPECT_GE(d["depth_computed"].get<int>(), 1);
+  EXPECT_EQ(d["depth_computed"].get<int>() + d["pairs_skipped"].get<int>(), 30);
+  EXPECT_NEAR(d["baseline_m"].get<double>(), 0.641, 0.002);
+  EXPECT_TRUE(fs::exists(dir / "live/points.ply"));
+  const int depth_published = d["dds"]["frames"]["published"];
+  EXPECT_GE(depth_published, 1);
+  std::vector<std::vector<uint8_t>> clouds, ranges;
+  for (int k = 0; k < 100 && int(clouds.size()) < depth_published; ++k)
+    if (auto m = points.Take(0.1)) clouds.push_back(*m);
+  while (auto m = range.Take(0.5)) ranges.push_back(*m);
+  EXPECT_EQ(int(clouds.size()), depth_published);
+  EXPECT_EQ(int(ranges.size()), depth_published);
+  ASSERT_FALSE(clouds.empty());
+  const test::RosPointCloud2 pc = test::DecodePointCloud2(clouds.back());
+  EXPECT_EQ(pc.header.frame_id, "hovs_points");
+  ASSERT_EQ(pc.fields.size(), 4u);
+  EXPECT_EQ(pc.point_step, 16u);
+  ASSERT_GT(pc.width, 1000u);
+  // The scene is a textured floor 1.3 m below the units: points lie below them at plausible ranges.
+  int below = 0;
+  for (uint32_t i = 0; i < pc.width; ++i) {
+    float xyz[3];
+    std::memcpy(xyz, &pc.data[16 * i], 12);
+    const double dist = std::sqrt(xyz[0] * xyz[0] + xyz[1] * xyz[1] + xyz[2] * xyz[2]);
+    below += xyz[2] < -0.5 && dist > 1.0 && dist < 40.0;
+  }
+  EXPECT_GT(below, static_cast<int>(0.9 * pc.width)) << below << " of " << pc.width;
+  ASSERT_FALSE(ranges.empty());
+  const test::RosImage ri = test::DecodeImage(ranges.back());
+  EXPECT_EQ(ri.encoding, "32FC1");
+  EXPECT_EQ(ri.width, 512u);
+  EXPECT_EQ(ri.height, 128u);
+  EXPECT_EQ(ri.step, 512u * 4);
+  EXPECT_EQ(ri.data.size(), 512u * 128 * 4);
 }
 
 TEST(PairLiveCli, PairsAndRigsThatDoNotFitAreRefusedByName) {
@@ -98,6 +141,11 @@ TEST(PairLiveCli, PairsAndRigsThatDoNotFitAreRefusedByName) {
   // Sources named after units the rig does not have.
   expect_error("--replay " + manifest + " --units left --units middle --model " + manifest + " --layout binocular",
                "middle");
+  // Depth without pairs, and a depth size that is not WxH.
+  expect_error("--replay " + manifest + " --model " + manifest + " --layout article --depth", "frame pairs");
+  expect_error("--replay " + manifest + " --units left --units right --model " + manifest +
+                   " --layout binocular --depth --depth-size 100",
+               "--depth-size");
   // A pair whose right frame is smaller than its unit's mapping.
   auto m = nlohmann::json::parse(ReadFile(manifest));
   int w = 0, h = 0, c = 0;

@@ -80,8 +80,8 @@ PublisherTopics TestTopics() {
   PublisherTopics t;
   unwrap::ViewSpec front;
   front.name = "front", front.width = 64, front.height = 48, front.hfov_deg = 60;
-  t.images.push_back({"front", CameraInfoOfView(front)});
-  t.images.push_back({"pano", std::nullopt});
+  t.images.push_back({"front", CameraInfoOfView(front), ""});
+  t.images.push_back({"pano", std::nullopt, ""});
   t.cloud = true;
   return t;
 }
