@@ -226,7 +226,8 @@ std::string DenseBandsTable(const DenseDepthEvaluation& e) {
 void SubsampledCloud(const Rectification& rect, const DenseDepth& d, const unwrap::Image8& left, int max_points,
                      std::vector<ColouredPoint>* points, std::vector<float>* sigmas) {
   const size_t nvalid = std::count(d.valid.begin(), d.valid.end(), 1);
-  const size_t step = std::max<size_t>(1, nvalid / std::max(1, max_points));
+  const size_t cap = static_cast<size_t>(std::max(1, max_points));
+  const size_t step = std::max<size_t>(1, (nvalid + cap - 1) / cap);  // rounded up: at most max_points points
   size_t seen = 0;
   for (int v = 0; v < d.height; ++v)
     for (int u = 0; u < d.width; ++u) {
