@@ -92,9 +92,7 @@ unwrap::RemapTable UnitLiveMapping(const Options& o) {
 
 unwrap::RigMapping RigLiveMapping(const Options& o) {
   if (!o.map.empty()) return unwrap::LoadRigMapping(o.map);
-  std::vector<unwrap::RigUnitModel> units;
-  for (const auto& name : ModelUnitNames(o.model))
-    units.push_back({name, LoadModelSpec(o.model, name, o.scene_distance)});
+  const std::vector<unwrap::RigUnitModel> units = LoadRigUnits(o.model, o.scene_distance);
   const unwrap::Layout layout = unwrap::ResolveLayout(o.layout, o.fixed_elevation ? nullptr : &units[0].model);
   unwrap::RigMapping m =
       unwrap::BuildRigMapping(units, layout, unwrap::RemapOptions(), nlohmann::json(Versions()).dump());

@@ -148,6 +148,24 @@ std::vector<std::string> ModelUnitNames(const std::string& spec) {
   return names;
 }
 
+std::vector<unwrap::RigUnitModel> LoadRigUnits(const std::string& spec, double scene_distance) {
+  std::vector<unwrap::RigUnitModel> out;
+  for (const auto& name : ModelUnitNames(spec))
+    out.push_back({name, LoadModelSpec(spec, name, scene_distance), Rigid3d(), false});
+  std::vector<raytrace::CatadioptricUnit> units;
+  if (EndsWith(spec, ".json")) {
+    const auto m = ReadJsonFile(spec);  // kept: a range-for over a temporary's member would dangle
+    for (const auto& u : m["units"]) units.push_back(scenes::UnitFromJson(u, spec + " (units)"));
+  } else if (!calib::LooksLikeKalibrCamchain(ReadFile(spec))) {
+    units = scenes::LoadSceneConfig(spec).description.units;
+  }
+  for (auto& r : out)
+    for (const auto& u : units)
+      if (u.name == r.name)
+        r.unit_from_rig = u.world_from_mirror.Inverse() * units[0].world_from_mirror, r.has_pose = true;
+  return out;
+}
+
 depth::StereoRig LoadStereoRig(const std::string& spec, const std::string& left, const std::string& right,
                                double scene_distance, const std::string& stereo_json) {
   const fs::path path(spec);

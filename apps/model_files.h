@@ -11,6 +11,7 @@
 #include "core/manifest.h"
 #include "depth/stereo.h"  // LoadDatasetManifest, used with the models by every command
 #include "unwrap/remap.h"
+#include "unwrap/rig_mapping.h"
 
 namespace hovs::apps {
 
@@ -37,6 +38,10 @@ AnyModel LoadModelSpec(const std::string& spec, const std::string& unit, double 
 // Every unit of a multi-unit model file, by name: a scene YAML or a dataset manifest (each unit's exact rig), a
 // Kalibr camchain (cam0, cam1, ...). Throws naming the file when it holds one camera only.
 std::vector<std::string> ModelUnitNames(const std::string& spec);
+
+// Every unit of a multi-unit model file as a rig unit: name, model and pose in the rig (unit 0's mirror frame),
+// from a scene YAML or dataset manifest (their units' world poses); a Kalibr camchain's cameras have no pose here.
+std::vector<unwrap::RigUnitModel> LoadRigUnits(const std::string& spec, double scene_distance);
 
 // The stereo rig of two units of a scene YAML or a dataset manifest: their exact models and the relative pose
 // their world poses give, or the calibrated one of `stereo_json` (hovs stereo-calibrate's stereo.json). Throws

@@ -87,9 +87,7 @@ unwrap::RigMapping BuildMapping(const RigUnwrapOptions& o, std::string* source) 
     *source = "loaded " + o.map;
     return unwrap::LoadRigMapping(o.map);
   }
-  std::vector<unwrap::RigUnitModel> units;
-  for (const auto& name : ModelUnitNames(o.model))
-    units.push_back({name, LoadModelSpec(o.model, name, o.scene_distance)});
+  const std::vector<unwrap::RigUnitModel> units = LoadRigUnits(o.model, o.scene_distance);
   const unwrap::Layout layout = unwrap::ResolveLayout(o.layout, o.fixed_elevation ? nullptr : &units[0].model);
   unwrap::CheckViewsMemory("--layout " + o.layout, layout.views, AvailableMemoryBytes());
   unwrap::RemapOptions ro;
@@ -166,7 +164,7 @@ int RunRigUnwrap(const RigUnwrapOptions& o, const GlobalOptions& global) {
   nlohmann::json views_json = nlohmann::json::array();
   for (int k = 0; k < mapping.ViewCount(); ++k) {
     nlohmann::json v = unwrap::ViewJson(mapping.View(k));
-    v["unit"] = mapping.units[mapping.UnitOf(k)];
+    v["unit"] = mapping.UnitName(k);
     views_json.push_back(v);
   }
   const double median_ms = Median(remap_ms);

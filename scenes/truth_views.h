@@ -18,4 +18,11 @@ std::vector<std::optional<std::vector<uint8_t>>> RenderTruthViews(const SceneCon
                                                                   const std::vector<VirtualView<double>>& views,
                                                                   int samples, const std::string& where);
 
+// A panorama's reference image (RGB8 of the view's size): a ring of eight pinhole renders at the unit's viewpoint
+// (the scene without the units' hardware), 60 degrees wide and at the panorama's angular resolution, resampled
+// bilinearly into its pixels. `view` is a cylindrical or longitude-latitude panorama in the unit's mirror frame
+// spanning at most 120 degrees of elevation. Throws naming `where` otherwise.
+std::vector<uint8_t> RenderTruthPanorama(const SceneConfig& cfg, const std::string& unit,
+                                         const VirtualView<double>& view, int samples, const std::string& where);
+
 }  // namespace hovs::scenes

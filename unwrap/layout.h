@@ -8,6 +8,8 @@
 //     - {name: sphere, type: longlat, width: 2048, height: 1024, elevation_min: -90, elevation_max: 90}
 //     - {name: right_front, unit: right, yaw: 0}     # a rig's layout: the unit (name or 0-based index) whose frame
 //                                                    # the view takes; angles in that unit's mirror frame
+//     - {name: rig, unit: all, type: cylindrical}    # a panorama of the whole rig, in unit 0's frame: both units
+//                                                    # blended (unwrap/rig_mapping.h)
 // Presets:
 //   article     the article's six 1200 x 700 perspective views, yaw 0, 60, ..., 300 degrees, pitch -30, hfov 65
 //               (neighbours overlap by 5 degrees), the layout of its Figs 30-31

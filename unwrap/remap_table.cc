@@ -382,6 +382,8 @@ void SaveRemapTable(const std::filesystem::path& path, const RemapTable& table) 
   WriteFileAtomic(path, SerializeRemapTable(table));
 }
 
+uint64_t MappingChecksum(const char* data, size_t size) { return Fnv1a(data, size); }
+
 std::string SerializeRemapTable(const RemapTable& table) {
   std::string s(kMagic, sizeof kMagic);
   Put(&s, kFormatVersion);

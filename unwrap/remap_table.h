@@ -153,6 +153,7 @@ RemapTable BuildRemapTable(const AnyModel& model, const Layout& layout, const Re
 
 void SaveRemapTable(const std::filesystem::path& path, const RemapTable& table);  // atomic
 std::string SerializeRemapTable(const RemapTable& table);  // the file's bytes (ParseRemapTable reads them)
+uint64_t MappingChecksum(const char* data, size_t size);   // the mapping files' checksum (FNV-1a, 64 bits)
 // Verified (magic, version, checksum) and checked field by field against its header, so that a damaged or edited
 // file, even one given a valid checksum again, cannot make the remap read outside the frame. Throws hovs::Error.
 RemapTable LoadRemapTable(const std::filesystem::path& path);

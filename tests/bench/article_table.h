@@ -25,9 +25,10 @@ inline const unwrap::RemapTable& PanoramaTable() {
 
 // The binocular preset (the article's 3 + 3 views) over two reference units.
 inline const unwrap::RigMapping& BinocularMapping() {
-  static const unwrap::RigMapping mapping =
-      unwrap::BuildRigMapping({{"left", AnyModel::Exact(AlignedRig())}, {"right", AnyModel::Exact(AlignedRig())}},
-                              unwrap::PresetLayout("binocular"), {});
+  static const unwrap::RigMapping mapping = unwrap::BuildRigMapping(
+      {{"left", AnyModel::Exact(AlignedRig()), Rigid3d(), true},
+       {"right", AnyModel::Exact(AlignedRig()), Rigid3d(Eigen::Quaterniond::Identity(), Vec3d(-0.64, 0, 0)), true}},
+      unwrap::PresetLayout("binocular"), {});
   return mapping;
 }
 

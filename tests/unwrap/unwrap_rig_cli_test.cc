@@ -78,12 +78,16 @@ TEST(UnwrapRigCli, TwoUnitsExpandTogetherAsEachAloneAndUnpairedFramesAreCounted)
   fs::copy_file(dir / "set/images/right_0000.png", dir / "pairs/right/a.png");
   std::ofstream(dir / "mixed.yaml") << "views:\n  - {name: back, unit: left, yaw: 180, width: 300, height: 200}\n"
                                        "  - {name: pano, unit: right, type: cylindrical, width: 720, height: 120, "
-                                       "elevation_min: -60, elevation_max: -5}\n";
+                                       "elevation_min: -60, elevation_max: -5}\n"
+                                       "  - {name: rig, unit: all, type: cylindrical, width: 720, height: 80, "
+                                       "elevation_min: -45, elevation_max: -8}\n";
   const auto mixed = Hovs("--quiet unwrap --model " + manifest + " --layout " + (dir / "mixed.yaml").string() +
                           " --input " + (dir / "pairs").string() + " -o " + (dir / "mixed").string());
   ASSERT_EQ(mixed.exit_code, 0) << mixed.output;
   EXPECT_TRUE(fs::exists(dir / "mixed/a/back.png"));
   EXPECT_TRUE(fs::exists(dir / "mixed/a/pano.png"));
+  EXPECT_TRUE(fs::exists(dir / "mixed/a/rig.png"));  // both units blended, their poses from the manifest
+  EXPECT_EQ(nlohmann::json::parse(ReadFile(dir / "mixed/views.json"))["views"][2]["unit"], "all");
 
   // Bad input: one error naming it, exit 2, no output.
   const auto expect_error = [&](const std::string& args, const std::string& needle) {
