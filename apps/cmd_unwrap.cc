@@ -94,29 +94,6 @@ unwrap::RemapTable Mapping(const Options& o, const std::vector<InputFrame>& fram
   return unwrap::BuildRemapTable(model, layout, ro, nlohmann::json(Versions()).dump());
 }
 
-// One frame as 8-bit pixels in the format --format names (auto: grey or RGB as stored).
-std::vector<uint8_t> LoadFrame(const InputFrame& frame, const std::string& format, const unwrap::RemapTable& table,
-                               unwrap::PixelFormat* fmt) {
-  int w = 0, h = 0, c = 0;
-  const io::PixelBuffer px = io::ReadImage(frame.image, &w, &h, &c);
-  if (format == "auto") {
-    HOVS_REQUIRE(c == 1 || c == 3 || c == 4, frame.image.string(), "unsupported channel count ", c);
-    *fmt = c == 1 ? unwrap::PixelFormat::kGray8 : unwrap::PixelFormat::kRgb8;
-  } else {
-    *fmt = unwrap::ParsePixelFormat(format);
-    HOVS_REQUIRE((*fmt == unwrap::PixelFormat::kRgb8) == (c >= 3), frame.image.string(), "has ", c,
-                 " channels, which is not ", format);
-  }
-  HOVS_REQUIRE(w == table.source_width && h == table.source_height, frame.image.string(), "the image is ", w, " x ", h,
-               " but the model is for ", table.source_width, " x ", table.source_height);
-  const int oc = *fmt == unwrap::PixelFormat::kRgb8 ? 3 : 1;
-  std::vector<uint8_t> bytes(size_t(w) * h * oc);
-  for (size_t k = 0; k < size_t(w) * h; ++k)
-    for (int ch = 0; ch < oc; ++ch)
-      bytes[k * oc + ch] = uint8_t(std::lround(std::clamp(px[k * c + ch], 0.f, 1.f) * 255));
-  return bytes;
-}
-
 void WriteRgb8(const fs::path& path, int width, int height, int channels, const std::vector<uint8_t>& data) {
   std::vector<float> fl(data.size());
   for (size_t k = 0; k < fl.size(); ++k) fl[k] = data[k] / 255.f;
@@ -140,7 +117,8 @@ nlohmann::json UnwrapFrames(const Options& o, bool quiet, const std::vector<Inpu
   for (size_t f = 0; f < frames.size(); ++f) {
     progress.Step(f + 1, f, frames.size() - f);
     unwrap::PixelFormat fmt;
-    const std::vector<uint8_t> bytes = LoadFrame(frames[f], o.format, table, &fmt);
+    const std::vector<uint8_t> bytes =
+        LoadFrameBytes(frames[f].image, o.format, table.source_width, table.source_height, &fmt);
     const int w = table.source_width, h = table.source_height, oc = fmt == unwrap::PixelFormat::kRgb8 ? 3 : 1;
     const auto a = std::chrono::steady_clock::now();
     remapper.Run({bytes.data(), w, h, size_t(w) * oc, fmt}, interp, &views);

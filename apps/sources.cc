@@ -129,4 +129,22 @@ OpenedSources OpenSources(const SourceOptions& o) {
   return r;
 }
 
+std::vector<hw::CameraSource*> PairSources(const OpenedSources& src, const std::vector<std::string>& units) {
+  std::string have;
+  for (const auto& u : src.units) have += (have.empty() ? "" : ", ") + u;
+  HOVS_REQUIRE(src.sources.size() == 2, "frame source", "the rig's views need a frame of each unit (", units[0], ", ",
+               units[1], ") but there is one source (", have,
+               "): give two --camera, a --simulate dataset of two units, or --replay with --units ", units[0],
+               " --units ", units[1]);
+  std::vector<hw::CameraSource*> out;
+  for (const auto& u : units) {
+    size_t k = 0;
+    while (k < src.units.size() && src.units[k] != u) ++k;
+    HOVS_REQUIRE(k < src.units.size(), "--units", "no source is named after the rig's unit '", u, "' (the sources are ",
+                 have, ")");
+    out.push_back(src.sources[k].get());
+  }
+  return out;
+}
+
 }  // namespace hovs::apps

@@ -34,4 +34,8 @@ void AddSourceOptions(CLI::App* sub, SourceOptions* o);
 // Throws hovs::Error naming the option or the camera.
 OpenedSources OpenSources(const SourceOptions& o);
 
+// The two sources of a frame pair in the rig's unit order, matched by unit name (--units names cameras and
+// replays; a simulation's units are the dataset's). Throws naming what is missing.
+std::vector<hw::CameraSource*> PairSources(const OpenedSources& src, const std::vector<std::string>& units);
+
 }  // namespace hovs::apps

@@ -1,6 +1,8 @@
 #include "apps/unwrap_rig.h"
 
+#include <algorithm>
 #include <chrono>
+#include <cmath>
 #include <cstdio>
 #include <map>
 #include <nlohmann/json.hpp>
@@ -63,25 +65,6 @@ std::vector<RigFrame> ListRigFrames(const std::string& input, const std::vector<
   return out;
 }
 
-std::vector<uint8_t> LoadUnitFrame(const fs::path& image, const std::string& format, const unwrap::RemapTable& table,
-                                   unwrap::PixelFormat* fmt) {
-  int w = 0, h = 0, c = 0;
-  const io::PixelBuffer px = io::ReadImage(image, &w, &h, &c);
-  HOVS_REQUIRE(c == 1 || c == 3 || c == 4, image.string(), "unsupported channel count ", c);
-  *fmt = format == "auto" ? (c == 1 ? unwrap::PixelFormat::kGray8 : unwrap::PixelFormat::kRgb8)
-                          : unwrap::ParsePixelFormat(format);
-  HOVS_REQUIRE((*fmt == unwrap::PixelFormat::kRgb8) == (c >= 3), image.string(), "has ", c, " channels, which is not ",
-               unwrap::ToString(*fmt));
-  HOVS_REQUIRE(w == table.source_width && h == table.source_height, image.string(), "the image is ", w, " x ", h,
-               " but its unit's model is for ", table.source_width, " x ", table.source_height);
-  const int oc = *fmt == unwrap::PixelFormat::kRgb8 ? 3 : 1;
-  std::vector<uint8_t> bytes(size_t(w) * h * oc);
-  for (size_t k = 0; k < size_t(w) * h; ++k)
-    for (int ch = 0; ch < oc; ++ch)
-      bytes[k * oc + ch] = uint8_t(std::lround(std::clamp(px[k * c + ch], 0.f, 1.f) * 255));
-  return bytes;
-}
-
 unwrap::RigMapping BuildMapping(const RigUnwrapOptions& o, std::string* source) {
   if (!o.map.empty()) {
     *source = "loaded " + o.map;
@@ -97,6 +80,28 @@ unwrap::RigMapping BuildMapping(const RigUnwrapOptions& o, std::string* source) 
 }
 
 }  // namespace
+
+std::vector<uint8_t> LoadFrameBytes(const std::filesystem::path& image, const std::string& format, int width,
+                                    int height, unwrap::PixelFormat* fmt) {
+  int w = 0, h = 0, c = 0;
+  const io::PixelBuffer px = io::ReadImage(image, &w, &h, &c);
+  if (format == "auto") {
+    HOVS_REQUIRE(c == 1 || c == 3 || c == 4, image.string(), "unsupported channel count ", c);
+    *fmt = c == 1 ? unwrap::PixelFormat::kGray8 : unwrap::PixelFormat::kRgb8;
+  } else {
+    *fmt = unwrap::ParsePixelFormat(format);
+    HOVS_REQUIRE((*fmt == unwrap::PixelFormat::kRgb8) == (c >= 3), image.string(), "has ", c,
+                 " channels, which is not ", format);
+  }
+  HOVS_REQUIRE(w == width && h == height, image.string(), "the image is ", w, " x ", h, " but the model is for ", width,
+               " x ", height);
+  const int oc = *fmt == unwrap::PixelFormat::kRgb8 ? 3 : 1;
+  std::vector<uint8_t> bytes(size_t(w) * h * oc);
+  for (size_t k = 0; k < size_t(w) * h; ++k)
+    for (int ch = 0; ch < oc; ++ch)
+      bytes[k * oc + ch] = uint8_t(std::lround(std::clamp(px[k * c + ch], 0.f, 1.f) * 255));
+  return bytes;
+}
 
 bool IsRigUnwrap(const std::string& layout, const std::string& map) {
   if (!map.empty()) return fs::exists(map) && unwrap::IsRigMappingFile(map);
@@ -140,7 +145,8 @@ int RunRigUnwrap(const RigUnwrapOptions& o, const GlobalOptions& global) {
     std::vector<unwrap::ImageView> srcs;
     for (size_t u = 0; u < mapping.units.size(); ++u) {
       unwrap::PixelFormat fmt;
-      bytes[u] = LoadUnitFrame(frames[f].images[u], o.format, mapping.tables[u], &fmt);
+      bytes[u] = LoadFrameBytes(frames[f].images[u], o.format, mapping.tables[u].source_width,
+                                mapping.tables[u].source_height, &fmt);
       const int w = mapping.tables[u].source_width, h = mapping.tables[u].source_height;
       srcs.push_back({bytes[u].data(), w, h, bytes[u].size() / h, fmt});
     }

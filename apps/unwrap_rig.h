@@ -2,9 +2,13 @@
 // frame's images of every unit expanded together into the layout's views.
 #pragma once
 
+#include <cstdint>
+#include <filesystem>
 #include <string>
+#include <vector>
 
 #include "apps/commands.h"
+#include "unwrap/remap.h"
 
 namespace hovs::apps {
 
@@ -14,6 +18,11 @@ struct RigUnwrapOptions {
   int tile = 0;
   bool fixed_elevation = false;
 };
+
+// An input frame as 8-bit pixels in the format `format` names (auto: grey or RGB as stored; bayer_rggb: a mosaic),
+// checked against the size its model maps (width x height). Throws naming the image.
+std::vector<uint8_t> LoadFrameBytes(const std::filesystem::path& image, const std::string& format, int width,
+                                    int height, unwrap::PixelFormat* fmt);
 
 // True when the layout (a preset or a YAML file) names units, or the --map file is a rig mapping.
 bool IsRigUnwrap(const std::string& layout, const std::string& map);
