@@ -70,14 +70,20 @@ void Loop(CameraSource& cam, const unwrap::RemapTable& table, const LiveOptions&
 
 }  // namespace
 
-void WriteLiveViews(const std::filesystem::path& dir, const std::string& stem, const unwrap::RemapTable& table,
-                    const std::vector<unwrap::Image8>& views) {
+void WriteNamedViews(const std::filesystem::path& dir, const std::string& stem, const std::vector<std::string>& names,
+                     const std::vector<unwrap::Image8>& views) {
   for (size_t v = 0; v < views.size(); ++v) {
     std::vector<float> fl(views[v].data.size());
     for (size_t k = 0; k < fl.size(); ++k) fl[k] = views[v].data[k] / 255.f;
-    io::WriteImage(dir / (stem + "_" + table.views[v].spec.name + ".png"), views[v].width, views[v].height,
-                   views[v].channels, fl, 8);
+    io::WriteImage(dir / (stem + "_" + names[v] + ".png"), views[v].width, views[v].height, views[v].channels, fl, 8);
   }
+}
+
+void WriteLiveViews(const std::filesystem::path& dir, const std::string& stem, const unwrap::RemapTable& table,
+                    const std::vector<unwrap::Image8>& views) {
+  std::vector<std::string> names;
+  for (const auto& v : table.views) names.push_back(v.spec.name);
+  WriteNamedViews(dir, stem, names, views);
 }
 
 LiveRun RunLive(CameraSource& cam, const unwrap::RemapTable& table, const LiveOptions& options, std::atomic<bool>* stop,

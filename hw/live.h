@@ -42,6 +42,10 @@ struct LiveRun {
 // it may swap *views for buffers of the same sizes (the DDS publisher hands back an older frame's).
 using LiveSink = std::function<void(uint64_t stamp_ns, std::vector<unwrap::Image8>* views)>;
 
+// Writes views as dir/<stem>_<names[v]>.png (8 bits); the two writers below name them from their mapping.
+void WriteNamedViews(const std::filesystem::path& dir, const std::string& stem, const std::vector<std::string>& names,
+                     const std::vector<unwrap::Image8>& views);
+
 // Writes the views of one frame as dir/<stem>_<view>.png (8 bits).
 void WriteLiveViews(const std::filesystem::path& dir, const std::string& stem, const unwrap::RemapTable& table,
                     const std::vector<unwrap::Image8>& views);

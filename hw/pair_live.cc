@@ -9,7 +9,6 @@
 
 #include "core/error.h"
 #include "hw/live.h"
-#include "io/image_io.h"
 
 namespace hovs::hw {
 namespace {
@@ -80,12 +79,9 @@ unwrap::PixelFormat FormatOf(const Frame& f, unwrap::PixelFormat configured) {
 
 void WriteRigLiveViews(const std::filesystem::path& dir, const std::string& stem, const unwrap::RigMapping& mapping,
                        const std::vector<unwrap::Image8>& views) {
-  for (size_t v = 0; v < views.size(); ++v) {
-    std::vector<float> fl(views[v].data.size());
-    for (size_t k = 0; k < fl.size(); ++k) fl[k] = views[v].data[k] / 255.f;
-    io::WriteImage(dir / (stem + "_" + mapping.View(static_cast<int>(v)).spec.name + ".png"), views[v].width,
-                   views[v].height, views[v].channels, fl, 8);
-  }
+  std::vector<std::string> names;
+  for (int k = 0; k < mapping.ViewCount(); ++k) names.push_back(mapping.View(k).spec.name);
+  WriteNamedViews(dir, stem, names, views);
 }
 
 PairLiveRun RunPairLive(const std::vector<CameraSource*>& cams, const unwrap::RigMapping& mapping, const LiveOptions& o,
