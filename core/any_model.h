@@ -106,6 +106,26 @@ class AnyModel {
     return false;
   }
 
+  // ImgFromMirror of `count` bearings (row-major count x 3 in, count x 2 out). The polynomial model projects
+  // them in blocks (PolynomialModel::ImgFromCamBatch); the others one by one.
+  void ImgFromMirrorBatch(const double* bearings, std::size_t count, double* uv, bool* ok) const {
+    if (kind_ != Kind::kPolynomial) {
+      for (std::size_t i = 0; i < count; ++i) {
+        Vec2d q(0, 0);
+        ok[i] = ImgFromMirror(Vec3d(bearings[3 * i], bearings[3 * i + 1], bearings[3 * i + 2]), &q);
+        uv[2 * i] = q(0), uv[2 * i + 1] = q(1);
+      }
+      return;
+    }
+    poly_.ImgFromCamBatch(bearings, count, uv, ok);
+    for (std::size_t i = 0; i < count; ++i) {
+      if (!ok[i]) continue;
+      const Vec2d q(uv[2 * i], uv[2 * i + 1]);
+      const double rho = poly_.SensorFromImg(q).norm();
+      ok[i] = rho >= poly_.rho_min && rho <= poly_.rho_max && InImage(q);
+    }
+  }
+
   // Pixel of a point X (mirror frame, metres) by the model's formula without its validity domain (exact:
   // CatadioptricCamera::Unbounded, the sheet continued past the rim, no camera occlusion; polynomial: any rho;
   // unified: no annulus; no image bounds): false only where the formula has no value (a direction that misses

@@ -22,6 +22,7 @@
 #include <algorithm>
 #include <cmath>
 #include <string>
+#include <type_traits>
 #include <vector>
 
 #include "core/error.h"
@@ -85,6 +86,11 @@ struct PolynomialModel {
       return true;
     }
     double rho = rho_hint >= 0 ? rho_hint : EstimateRho(std::atan2(zd, nd));
+    if constexpr (std::is_same_v<T, double>) {
+      if (!RhoByNewton(nd, zd, &rho)) return false;
+      *uv = ImgFromSensor(Vec2<T>(yd / nd * rho, xd / nd * rho));
+      return true;
+    }
     const auto h = [&](const auto& r) { return F(r) * nd - zd * r; };
     NewtonOptions options;
     options.residual_tolerance = 1e-13 * (std::abs(ScalarPart(poly[0])) * nd + 1e-300);
@@ -96,6 +102,76 @@ struct PolynomialModel {
     const T rho_t = LiftNewton1<T>(h_t, rho, dh);
     *uv = ImgFromSensor(Vec2<T>(X(1) / n * rho_t, X(0) / n * rho_t));
     return true;
+  }
+
+  // ImgFromCam of `count` points at once (T = double; X and uv row-major, count x 3 and count x 2; ok[i] as
+  // ImgFromCam returns). The same start and Newton iteration, run on blocks of points with the points innermost,
+  // so that the Chebyshev and Horner passes vectorise and the points' dependency chains overlap instead of one
+  // point's latency following the other's. A point the block cannot settle (on the axis, not finite, a failed or
+  // unconverged iteration, no Chebyshev inverse) takes ImgFromCam itself. Agrees with ImgFromCam to rounding.
+  void ImgFromCamBatch(const double* X, std::size_t count, double* uv, bool* ok) const {
+    static_assert(std::is_same_v<T, double>, "ImgFromCamBatch works on a double model");
+    constexpr int kLanes = 16;
+    const bool chebyshev = !inv_cheb.empty() && inv_theta_hi > inv_theta_lo;
+    const int degree = Degree(), terms = static_cast<int>(inv_cheb.size());
+    const double mid = 0.5 * (inv_theta_lo + inv_theta_hi), inv_half = 2.0 / (inv_theta_hi - inv_theta_lo);
+    const double tolerance_scale = 1e-13 * std::abs(poly[0]), max_step = std::max(1.0, 0.1 * rho_max);
+    alignas(64) double nd[kLanes], zd[kLanes], r[kLanes], t[kLanes], b1[kLanes], b2[kLanes], active[kLanes];
+    bool slow[kLanes];
+    for (std::size_t base = 0; base < count; base += kLanes) {
+      const int m = static_cast<int>(std::min<std::size_t>(kLanes, count - base));
+      const double* x = X + 3 * base;
+      for (int l = 0; l < kLanes; ++l) {
+        const int k = l < m ? l : 0;  // padding lanes repeat the first point and are never written
+        const double xd = x[3 * k], yd = x[3 * k + 1];
+        nd[l] = std::sqrt(xd * xd + yd * yd), zd[l] = x[3 * k + 2];
+        slow[l] = !chebyshev || !(nd[l] > 0) || !std::isfinite(nd[l]) || !std::isfinite(zd[l]);
+        t[l] = slow[l] ? 0.0 : (std::atan2(zd[l], nd[l]) - mid) * inv_half;
+        b1[l] = 0, b2[l] = 0, active[l] = l < m && !slow[l] ? 1.0 : 0.0;
+      }
+      if (chebyshev) {  // Clenshaw, as InverseRho
+        for (int k = terms - 1; k >= 1; --k)
+          for (int l = 0; l < kLanes; ++l) {
+            const double b0 = 2 * t[l] * b1[l] - b2[l] + inv_cheb[k];
+            b2[l] = b1[l], b1[l] = b0;
+          }
+        for (int l = 0; l < kLanes; ++l) {
+          r[l] = t[l] * b1[l] - b2[l] + inv_cheb[0];
+          if (!(r[l] >= 0) || !std::isfinite(r[l])) slow[l] = true, active[l] = 0, r[l] = 0;
+        }
+      }
+      // Newton as RhoByNewton; a lane stops moving (active 0) once its residual or its step is at rounding.
+      for (int it = 0; it < 50; ++it) {
+        double any = 0;
+        for (int l = 0; l < kLanes; ++l) {
+          double f = 0, df = 0;
+          for (int i = degree; i >= 0; --i) df = df * r[l] + f, f = f * r[l] + poly[i];
+          const double h = f * nd[l] - zd[l] * r[l], dh = df * nd[l] - zd[l];
+          const double step = std::clamp(-h / dh, -max_step, max_step);
+          const bool bad = !(std::abs(h) < HUGE_VAL) || !(std::abs(dh) > 0 && std::abs(dh) < HUGE_VAL);
+          const bool done = std::abs(h) <= tolerance_scale * nd[l] + 1e-313 ||
+                            std::abs(step) <= 1e-15 * (std::abs(r[l] + step) + 1.0);
+          r[l] += bad ? 0.0 : active[l] * step;
+          slow[l] = slow[l] || (active[l] != 0 && bad);
+          active[l] = bad || done ? 0.0 : active[l];
+          any += active[l];
+        }
+        if (any == 0) break;
+      }
+      for (int l = 0; l < m; ++l) {
+        double* q = uv + 2 * (base + l);
+        const double* p = x + 3 * l;
+        if (slow[l] || active[l] != 0) {
+          Vec2<T> pixel;
+          ok[base + l] = ImgFromCam(Vec3<T>(p[0], p[1], p[2]), &pixel);
+          q[0] = pixel(0), q[1] = pixel(1);
+          continue;
+        }
+        ok[base + l] = r[l] >= 0;
+        const Vec2<T> pixel = ImgFromSensor(Vec2<T>(p[1] / nd[l] * r[l], p[0] / nd[l] * r[l]));
+        q[0] = pixel(0), q[1] = pixel(1);
+      }
+    }
   }
 
   // OCamCalib's world2cam: the fitted inverse only (no refinement; within inv_error_px of ImgFromCam).
@@ -279,6 +355,31 @@ struct PolynomialModel {
     S rho = S(0);
     for (int i = static_cast<int>(inv_poly.size()) - 1; i >= 0; --i) rho = rho * theta + S(inv_poly[i]);
     return rho;
+  }
+
+  // ImgFromCam's Newton iteration on h(rho) = f(rho) |(x, y)| - z rho for T = double: the same tolerances and
+  // damping as SolveNewton1 followed by LiftNewton1's polishing step, with f and f' from one Horner pass instead
+  // of jets. Projection of many points (the Python module, mapping tables) spends its time here.
+  bool RhoByNewton(double nd, double zd, double* rho) const {
+    const double tolerance = 1e-13 * (std::abs(ScalarPart(poly[0])) * nd + 1e-300);
+    const double max_step = std::max(1.0, 0.1 * rho_max);
+    double r = *rho, h = 0;
+    for (int it = 0; it < 50; ++it) {
+      double f = 0, df = 0;
+      for (int i = Degree(); i >= 0; --i) df = df * r + f, f = f * r + ScalarPart(poly[i]);
+      h = f * nd - zd * r;
+      const double dh = df * nd - zd;
+      if (!std::isfinite(h) || !std::isfinite(dh) || dh == 0.0) return false;
+      double step = -h / dh;
+      if (std::abs(step) > max_step) step = std::copysign(max_step, step);
+      r += step;
+      // Converged: the residual is at rounding or the step is; the step just taken is the polish.
+      if (std::abs(h) <= tolerance || std::abs(step) <= 1e-15 * (std::abs(r) + 1.0)) {
+        *rho = r;
+        return r >= 0;
+      }
+    }
+    return false;
   }
 
   // Starting rho for Newton: the fitted inverse if there is one, else a bracketed search over the annulus.

@@ -27,6 +27,14 @@ void ParallelRows(py::ssize_t n, const Body& body) {
   });
 }
 
+// The same with body(begin, end) on each block.
+template <class Body>
+void ParallelBlocks(py::ssize_t n, const Body& body) {
+  py::gil_scoped_release release;
+  tbb::parallel_for(tbb::blocked_range<py::ssize_t>(0, n, 16384),
+                    [&](const tbb::blocked_range<py::ssize_t>& r) { body(r.begin(), r.end()); });
+}
+
 py::tuple Project(const Camera& c, const py::handle& points, bool bounded) {
   const Rows in = AsRows(points, 3, "points");
   py::array_t<double> uv = NewRows(in.n, 2, in.single, /*fill=*/false);
@@ -35,14 +43,24 @@ py::tuple Project(const Camera& c, const py::handle& points, bool bounded) {
   double* out = uv.mutable_data();
   bool* ok = valid.mutable_data();
   const AnyModel& model = c.model;
-  ParallelRows(in.n, [&](py::ssize_t i) {
+  const auto finish = [&](py::ssize_t i) {  // a point that is not finite or at the origin has no pixel
     const Vec3d X(p[3 * i], p[3 * i + 1], p[3 * i + 2]);
-    Vec2d q;
-    const bool good = X.allFinite() && X.squaredNorm() > 0 &&
-                      (bounded ? model.ImgFromMirror(X, &q) : model.ImgFromPointUnbounded(X, &q));
-    if (!good) q.setConstant(std::numeric_limits<double>::quiet_NaN());
-    out[2 * i] = q(0), out[2 * i + 1] = q(1), ok[i] = good;
-  });
+    if (!(X.allFinite() && X.squaredNorm() > 0)) ok[i] = false;
+    if (!ok[i]) out[2 * i] = out[2 * i + 1] = std::numeric_limits<double>::quiet_NaN();
+  };
+  if (bounded) {  // in blocks: the polynomial model projects a block's points together
+    ParallelBlocks(in.n, [&](py::ssize_t begin, py::ssize_t end) {
+      model.ImgFromMirrorBatch(p + 3 * begin, static_cast<std::size_t>(end - begin), out + 2 * begin, ok + begin);
+      for (py::ssize_t i = begin; i != end; ++i) finish(i);
+    });
+  } else {
+    ParallelRows(in.n, [&](py::ssize_t i) {
+      Vec2d q(0, 0);
+      ok[i] = model.ImgFromPointUnbounded(Vec3d(p[3 * i], p[3 * i + 1], p[3 * i + 2]), &q);
+      out[2 * i] = q(0), out[2 * i + 1] = q(1);
+      finish(i);
+    });
+  }
   return py::make_tuple(uv, valid);
 }
 

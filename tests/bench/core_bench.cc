@@ -1,5 +1,6 @@
 // Per-point cost of the core projections (single-viewpoint closed form, law-of-reflection solve,
 // back-projection, polynomial world2cam) and of the renderer's batched mirror reflection.
+#include <memory>
 #include <benchmark/benchmark.h>
 
 #include "core/hyperboloid.h"
@@ -58,6 +59,21 @@ void BM_PolynomialWorldToCamExact(benchmark::State& state) {
   state.SetItemsProcessed(state.iterations());
 }
 BENCHMARK(BM_PolynomialWorldToCamExact);
+
+// The same points through ImgFromCamBatch, 4096 at a time (as hovs.Camera.project and mapping tables call it).
+void BM_PolynomialWorldToCamBatch(benchmark::State& state) {
+  const auto poly = hovs::PolynomialFromCatadioptric(hovs::test::AlignedRig(), 4);
+  std::vector<double> X;
+  for (const Vec3d& p : hovs::test::WorldPoints(4096, 1)) X.insert(X.end(), {p(0), p(1), p(2)});
+  std::vector<double> uv(2 * 4096);
+  std::unique_ptr<bool[]> ok(new bool[4096]);
+  for (auto _ : state) {
+    poly.ImgFromCamBatch(X.data(), 4096, uv.data(), ok.get());
+    benchmark::DoNotOptimize(uv.data());
+  }
+  state.SetItemsProcessed(state.iterations() * 4096);
+}
+BENCHMARK(BM_PolynomialWorldToCamBatch);
 
 // MirrorReflector::ReflectBatch on 256 unit camera rays of the reference rig, as the renderer calls it per chunk of
 // samples: a 16 x 16 pixel patch at the image centre's side within the mirror's image disc (argument 0: every ray

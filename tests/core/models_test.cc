@@ -3,6 +3,8 @@
 #include <gtest/gtest.h>
 
 #include <functional>
+#include <limits>
+#include <memory>
 
 #include "core/any_model.h"
 #include "core/model_fit.h"
@@ -218,6 +220,47 @@ TEST(Polynomial, InverseOfAWideFieldModelIsStableAndNeverFatal) {
   EXPECT_NEAR(folding.rho_min, 18, 1e-9);
   check(&folding, 1.0);
   EXPECT_FALSE(folding.SetAnnulusWithin(20, 320, 2, 14)) << "folds inside the data";
+}
+
+// ImgFromCamBatch (blocks of points, lanes innermost) gives ImgFromCam's pixel and status for every point: the
+// reference unit's model with an affine sensor, a model whose inverse is only good to pixels (Newton from a far
+// start), one without any inverse (every point takes the scalar path), and points on the axis, at the origin,
+// not finite or behind the camera, in a count that is not a multiple of the block.
+TEST(Polynomial, BatchProjectionIsTheScalarOne) {
+  const auto compare = [](const PolynomialModel<double>& m, const std::vector<Vec3d>& points, const char* name) {
+    std::vector<double> X, uv(2 * points.size(), -1.0);
+    for (const Vec3d& p : points) X.insert(X.end(), {p(0), p(1), p(2)});
+    std::unique_ptr<bool[]> ok(new bool[points.size()]);
+    m.ImgFromCamBatch(X.data(), points.size(), uv.data(), ok.get());
+    int agreed = 0, valid = 0;
+    for (size_t i = 0; i < points.size(); ++i) {
+      Vec2d q;
+      const bool scalar = m.ImgFromCam(points[i], &q);
+      ASSERT_EQ(ok[i], scalar) << name << " point " << i << ": " << points[i].transpose();
+      if (!scalar) continue;
+      ++valid;
+      EXPECT_LT((Vec2d(uv[2 * i], uv[2 * i + 1]) - q).norm(), 1e-9) << name << " point " << i;
+      agreed += (Vec2d(uv[2 * i], uv[2 * i + 1]) - q).norm() < 1e-9;
+    }
+    EXPECT_GT(valid, static_cast<int>(points.size()) / 2) << name;
+    RecordProperty(std::string(name) + "_agreed", agreed);
+  };
+  const auto rig = test::AlignedRig();
+  PolynomialModel<double> poly = PolynomialFromCatadioptric(rig, 5);
+  poly.c = 1.0004, poly.d = -0.0003, poly.e = 0.0002;
+  poly.FitInverse(0.01);
+  std::vector<Vec3d> points = test::WorldPoints(1000, 7);
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  points.insert(points.begin() + 5, {Vec3d(0, 0, -1), Vec3d(0, 0, 1), Vec3d(0, 0, 0), Vec3d(nan, 0, 1),
+                                     Vec3d(1, HUGE_VAL, 0), Vec3d(1e-300, 0, -1), Vec3d(0.3, -0.2, 1e6)});
+  points.resize(1003);
+  compare(poly, points, "reference");
+  PolynomialModel<double> coarse = poly;  // a 3-term inverse: a start several pixels off
+  coarse.inv_cheb.resize(3);
+  compare(coarse, points, "coarse_inverse");
+  PolynomialModel<double> none = poly;
+  none.inv_cheb.clear();
+  compare(none, points, "no_chebyshev");
 }
 
 TEST(Polynomial, CheckAndInverseRejectBadModels) {
