@@ -102,4 +102,80 @@ PolynomialModel<double> LoadOcamCalibResults(const std::filesystem::path& path) 
   return ParseOcamCalibResults(ReadFile(path), path.string());
 }
 
+namespace {
+// OCamCalib's camera frame swaps hovs' first two axes (polynomial.h): rows first, then columns.
+Eigen::Matrix3d OcamFromMirror() {
+  Eigen::Matrix3d p;
+  p << 0, 1, 0, 1, 0, 0, 0, 0, 1;
+  return p;
+}
+}  // namespace
+
+std::string FormatOcamExtrinsics(const OcamExtrinsics& poses) {
+  HOVS_REQUIRE(poses.images.size() == poses.mirror_from_board.size(), "OCamCalib extrinsics",
+               "one image name per pose");
+  std::string out =
+      "#extrinsic parameters (calib_data.RRfin in MATLAB), one 3 x 3 matrix [r1 r2 t] per image:\n"
+      "#[X; Y; Z] = RRfin * [x; y; 1], board point (x, y) in millimetres, (X, Y, Z) in the frame of cam2world's\n"
+      "#rays (X along the rows, Y along the columns, Z = f(rho)) of calib_results.txt\n";
+  char buf[96];
+  for (size_t i = 0; i < poses.images.size(); ++i) {
+    const Rigid3d& pose = poses.mirror_from_board[i];
+    const Eigen::Matrix3d r = OcamFromMirror() * pose.rotation.toRotationMatrix();
+    const Eigen::Vector3d t = OcamFromMirror() * pose.translation * 1000.0;
+    out += "\n#image " + std::to_string(i + 1) + ": " + poses.images[i] + "\n";
+    for (int row = 0; row < 3; ++row)
+      std::snprintf(buf, sizeof buf, "%.17g %.17g %.17g\n", r(row, 0), r(row, 1), t(row)), out += buf;
+  }
+  return out;
+}
+
+OcamExtrinsics ParseOcamExtrinsics(const std::string& text, const std::string& source) {
+  OcamExtrinsics out;
+  std::istringstream in(text);
+  std::string line, name;
+  int lineno = 0;
+  std::vector<double> m;
+  const std::string header = "#image ";
+  while (std::getline(in, line)) {
+    ++lineno;
+    while (!line.empty() && (line.back() == '\r' || line.back() == ' ' || line.back() == '\t')) line.pop_back();
+    const std::string where = source + ":" + std::to_string(lineno);
+    if (line.rfind(header, 0) == 0) {
+      HOVS_REQUIRE(m.empty(), where, "the previous image's matrix has ", m.size() / 3, " of its 3 rows");
+      const size_t colon = line.find(": ");
+      HOVS_REQUIRE(colon != std::string::npos, where, "expected '#image N: NAME'");
+      name = line.substr(colon + 2);
+      continue;
+    }
+    if (line.empty() || line[0] == '#') continue;
+    HOVS_REQUIRE(!name.empty(), where, "a matrix row before any '#image N: NAME' line");
+    std::istringstream ls(line);
+    std::vector<double> row;
+    double x;
+    while (ls >> x) row.push_back(x);
+    HOVS_REQUIRE(
+        ls.eof() && row.size() == 3 && std::all_of(row.begin(), row.end(), [](double y) { return std::isfinite(y); }),
+        where, "expected a row of 3 finite numbers of RRfin");
+    m.insert(m.end(), row.begin(), row.end());
+    if (m.size() < 9) continue;
+    Eigen::Matrix3d r;
+    Eigen::Vector3d t;
+    for (int k = 0; k < 3; ++k) r(k, 0) = m[3 * k], r(k, 1) = m[3 * k + 1], t(k) = m[3 * k + 2];
+    const Eigen::Matrix3d back = OcamFromMirror();  // its own inverse
+    Eigen::Matrix3d rot;
+    rot.col(0) = back * r.col(0), rot.col(1) = back * r.col(1);
+    HOVS_REQUIRE(std::abs(rot.col(0).norm() - 1) < 1e-6 && std::abs(rot.col(1).norm() - 1) < 1e-6 &&
+                     std::abs(rot.col(0).dot(rot.col(1))) < 1e-6,
+                 where, "r1 and r2 of ", name, " are not orthonormal");
+    rot.col(2) = rot.col(0).cross(rot.col(1));
+    out.images.push_back(name);
+    out.mirror_from_board.emplace_back(Eigen::Quaterniond(rot).normalized(), back * t / 1000.0);
+    m.clear(), name.clear();
+  }
+  HOVS_REQUIRE(m.empty(), source, "the last image's matrix has ", m.size() / 3, " of its 3 rows");
+  HOVS_REQUIRE(!out.images.empty(), source, "no '#image N: NAME' matrix: not an OCamCalib extrinsics file");
+  return out;
+}
+
 }  // namespace hovs::calib

@@ -6,8 +6,10 @@
 
 #include <filesystem>
 #include <string>
+#include <vector>
 
 #include "core/polynomial.h"
+#include "core/rigid.h"
 
 namespace hovs::calib {
 
@@ -18,5 +20,18 @@ std::string FormatOcamCalibResults(const PolynomialModel<double>& model);
 // rho_max half the image diagonal.
 PolynomialModel<double> ParseOcamCalibResults(const std::string& text, const std::string& source);
 PolynomialModel<double> LoadOcamCalibResults(const std::filesystem::path& path);
+
+// The board poses in the layout of OCamCalib's extrinsics (calib_data.RRfin in MATLAB): per image a 3 x 3 matrix
+// [r1 r2 t] with [X; Y; Z] = RRfin [x; y; 1] for a board point (x, y) in millimetres and (X, Y, Z) in the frame of
+// cam2world's rays (X along the rows, Y along the columns, Z = f(rho)), headed by the image's name. Written at
+// full precision (%.17g): ParseOcamExtrinsics gives hovs' poses (mirror_from_board, metres) back exactly.
+struct OcamExtrinsics {
+  std::vector<std::string> images;
+  std::vector<Rigid3d> mirror_from_board;
+};
+std::string FormatOcamExtrinsics(const OcamExtrinsics& poses);
+// Throws hovs::Error naming the file and line for a matrix that is not 3 x 3 numbers or whose r1, r2 are not
+// orthonormal.
+OcamExtrinsics ParseOcamExtrinsics(const std::string& text, const std::string& source);
 
 }  // namespace hovs::calib

@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <random>
+#include <sstream>
 
 #include "calib/ocam_io.h"
 #include "calib/omnidir_reference.h"
@@ -157,6 +158,44 @@ TEST(PhysicalCalibration, RecoversTheTiltOfAMisalignedRig) {
   EXPECT_LT((pr.offset - offset).norm(), 3e-5) << "m";
   EXPECT_LT((pr.tilt - tilt).norm() / kDeg, 0.05);
   EXPECT_NEAR(pr.rim_rms, 0.2, 0.05) << "rim residuals at their noise level";
+}
+
+// The board poses in OCamCalib's RRfin layout: a board point in millimetres through RRfin lands, in cam2world's
+// frame (rows, columns, f), on the ray of the pixel hovs reprojects it to; the file gives the poses back exactly;
+// a malformed matrix is refused with its line.
+TEST(OcamIo, ExtrinsicsInOCamCalibsRRfinLayout) {
+  const auto obs = LoadCornerCsv(std::string(HOVS_SHARED_DIR) + "/data/vmr/reference_corners.csv");
+  const PolynomialCalibration cal = CalibratePolynomial(obs, 1024, 768, {});
+  OcamExtrinsics poses;
+  for (size_t i = 0; i < obs.size(); ++i)
+    poses.images.push_back(obs[i].image), poses.mirror_from_board.push_back(cal.cam_from_board[i]);
+  const std::string text = FormatOcamExtrinsics(poses);
+  EXPECT_NE(text.find("#image 1: VMRImage0.jpg\n"), std::string::npos);
+  const OcamExtrinsics back = ParseOcamExtrinsics(text, "calib_extrinsics.txt");
+  ASSERT_EQ(back.images, poses.images);
+  double worst_px = 0;
+  for (size_t i = 0; i < obs.size(); ++i) {
+    EXPECT_LT(back.mirror_from_board[i].rotation.angularDistance(poses.mirror_from_board[i].rotation), 1e-12);
+    EXPECT_LT((back.mirror_from_board[i].translation - poses.mirror_from_board[i].translation).norm(), 1e-12);
+    // RRfin read the way an OCamCalib user reads it, from the text.
+    std::istringstream in(text.substr(text.find("#image " + std::to_string(i + 1) + ":")));
+    std::string header;
+    std::getline(in, header);
+    Eigen::Matrix3d rr;
+    for (int k = 0; k < 9; ++k) in >> rr(k / 3, k % 3);
+    for (const Vec3d& b : obs[i].board_points) {
+      const Vec3d ocam = rr * Vec3d(b.x() * 1000, b.y() * 1000, 1);
+      Vec2d from_rrfin, from_pose;
+      ASSERT_TRUE(cal.model.ImgFromCam(Vec3d(ocam.y(), ocam.x(), ocam.z()), &from_rrfin));  // rows, columns swapped
+      ASSERT_TRUE(cal.model.ImgFromCam(cal.cam_from_board[i] * b, &from_pose));
+      worst_px = std::max(worst_px, (from_rrfin - from_pose).norm());
+    }
+  }
+  EXPECT_LT(worst_px, 1e-9);
+  EXPECT_THROW(ParseOcamExtrinsics("#image 1: a.jpg\n1 0 5\n0 1 6\n", "cut.txt"), Error);
+  EXPECT_THROW(ParseOcamExtrinsics("#image 1: a.jpg\n2 0 5\n0 1 6\n0 0 7\n", "scaled.txt"), Error);
+  EXPECT_THROW(ParseOcamExtrinsics("1 0 5\n", "nameless.txt"), Error);
+  EXPECT_THROW(ParseOcamExtrinsics("#nothing\n", "empty.txt"), Error);
 }
 
 TEST(OcamIo, CalibResultsRoundTripInOCamCalibsLayout) {
