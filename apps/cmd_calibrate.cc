@@ -30,7 +30,7 @@ struct Options {
   uint64_t seed = 1;
   bool omnidir = false;
   int cross_validate = 0;
-  bool board_flex = false, board_flex_per_image = false;
+  bool board_flex = false, board_flex_per_image = false, decentering = false;
   double uncertainty_range = 0;
   int suggest = 0;
 };
@@ -76,6 +76,7 @@ int RunCalibrate(const Options& o, const GlobalOptions& global) {
   mo.suggest = o.suggest;
   mo.polynomial.board_flex = o.board_flex || o.board_flex_per_image;
   mo.polynomial.board_flex_per_image = o.board_flex_per_image;
+  mo.polynomial.estimate_decentering = o.decentering;
   std::optional<raytrace::CatadioptricUnit> design;
   if (o.physical) {
     if (!o.nominal.empty()) {
@@ -156,6 +157,9 @@ Runner SetupCalibrate(CLI::App* sub, const GlobalOptions* global) {
                 "polynomial and unified solves");
   sub->add_flag("--board-flex-per-image", o->board_flex_per_image,
                 "the board's flex estimated for each image (a board that bends differently each time it is held)");
+  sub->add_flag("--decentering", o->decentering,
+                "also estimate the polynomial model's decentering p1, p2 (a lens or camera off the mirror's axis; "
+                "hovs' extension: no calib_results.txt is written)");
   AddBounded(sub, "--cross-validate", &o->cross_validate,
              "K-fold cross-validation (image i in fold i mod K; K = the image count: leave one out): held-out "
              "error and the map of the folds' model differences (0: off)",

@@ -41,6 +41,10 @@ PolynomialModel<double> LoadPolynomialModelFile(const std::filesystem::path& pat
   }
   const std::vector<double> rho = JsonNumbers(p, "rho_range", 2, 2, where);
   m.rho_min = rho[0], m.rho_max = rho[1];
+  if (p.contains("decentering")) {
+    const std::vector<double> pp = JsonNumbers(p, "decentering", 2, 2, where);
+    m.p1 = pp[0], m.p2 = pp[1];
+  }
   m.Check(path.string());
   return m;
 }

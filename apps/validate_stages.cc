@@ -227,6 +227,8 @@ void RealImages(Validation& v, const std::string& real) {
   if (!real.empty() && p.real && fs::is_directory(real)) {
     v.Stage("real images: detect + calibrate + panorama",
             {{"calibrate", "--images", real, "--board", "7x6x0.03", "--compare-omnidir", "--out", v.Out("real/calib")},
+             {"calibrate", "--images", real, "--board", "7x6x0.03", "--decentering", "--board-flex", "--cross-validate",
+              "10", "--out", v.Out("real/calib-decentred")},
              {"unwrap", "--model", v.Out("real/calib/calibration.json"), "--layout", "panorama", "--input",
               (fs::path(real) / "VMRImage0.jpg").string(), "--out", v.Out("real/panorama")}},
             [&]() {
@@ -247,6 +249,16 @@ void RealImages(Validation& v, const std::string& real) {
                       "issue 4", false);
               v.Check("real: calibration RMS, unified model", Num(c, {"unified", "rms_px"}), "max", 0.30, "px",
                       "issue 4", false);
+              // The camera's decentering and the board's flex estimated (calib/README.md), with the held-out
+              // error of leave-one-image-out.
+              const json d = ReadJson(out / "real" / "calib-decentred" / "calibration.json");
+              const json& poly = d["polynomial"];
+              const json p12 = poly.contains("decentering") ? poly["decentering"] : json::array({nullptr, nullptr});
+              v.Figure("real_decentred", {{"polynomial_rms_px", Num(d, {"polynomial", "rms_px"})},
+                                          {"held_out_rms_px", Num(d, {"cross_validation", "held_out_rms_px"})},
+                                          {"decentering_p1_p2", p12}});
+              v.Check("real: calibration RMS, polynomial + decentering, board flex", Num(d, {"polynomial", "rms_px"}),
+                      "max", 0.28, "px", "issue 46", false);
             });
   } else if (p.real) {
     v.Skip("real images", "no folder '" + real + "'");

@@ -177,12 +177,16 @@ void ErrorMapFigure(const std::vector<BoardObservation>& obs, const PolynomialCa
 void WriteMonoCalibrationReport(const std::filesystem::path& folder, const CalibrationInput& in,
                                 const MonoCalibration& r, const nlohmann::json& record) {
   WriteFileAtomic(folder / "calibration.json", record.dump(2) + "\n");
-  WriteFileAtomic(folder / "calib_results.txt", FormatOcamCalibResults(r.polynomial.model));
-  OcamExtrinsics extrinsics;
-  for (size_t i = 0; i < r.polynomial.cam_from_board.size() && i < in.observations.size(); ++i)
-    extrinsics.images.push_back(in.observations[i].image),
-        extrinsics.mirror_from_board.push_back(r.polynomial.cam_from_board[i]);
-  WriteFileAtomic(folder / "calib_extrinsics.txt", FormatOcamExtrinsics(extrinsics));
+  // OCamCalib's files hold its own model only: a model with decentering is in calibration.json alone.
+  const bool ocam = !r.polynomial.model.HasDecentering();
+  if (ocam) {
+    WriteFileAtomic(folder / "calib_results.txt", FormatOcamCalibResults(r.polynomial.model));
+    OcamExtrinsics extrinsics;
+    for (size_t i = 0; i < r.polynomial.cam_from_board.size() && i < in.observations.size(); ++i)
+      extrinsics.images.push_back(in.observations[i].image),
+          extrinsics.mirror_from_board.push_back(r.polynomial.cam_from_board[i]);
+    WriteFileAtomic(folder / "calib_extrinsics.txt", FormatOcamExtrinsics(extrinsics));
+  }
   OmnidirFile of;
   of.model = r.unified.model, of.rms_px = r.unified.rms, of.stddev = r.unified.stddev;
   of.cam_from_board = r.unified.cam_from_board;
@@ -269,8 +273,10 @@ void WriteMonoCalibrationReport(const std::filesystem::path& folder, const Calib
   page.Heading("Files");
   page.Link("Every figure above, the solver reports and the standard deviations: ", "calibration.json",
             "calibration.json", ".");
-  page.Link("The polynomial model in OCamCalib's format: ", "calib_results.txt", "calib_results.txt", ".");
-  page.Link("Its board poses in OCamCalib's RRfin layout: ", "calib_extrinsics.txt", "calib_extrinsics.txt", ".");
+  if (ocam) {
+    page.Link("The polynomial model in OCamCalib's format: ", "calib_results.txt", "calib_results.txt", ".");
+    page.Link("Its board poses in OCamCalib's RRfin layout: ", "calib_extrinsics.txt", "calib_extrinsics.txt", ".");
+  }
   page.Link("The unified model in OpenCV omnidir's format: ", "unified.yaml", "unified.yaml", ".");
   WriteFileAtomic(folder / "index.html", page.Render());
 }

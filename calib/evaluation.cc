@@ -20,7 +20,7 @@ RayAccuracy CompareWithTruth(const CatadioptricCamera<double>& truth, const Poly
   for (int v = 0; v < height; v += step)
     for (int u = 0; u < width; u += step) {
       const Vec2d uv(u, v);
-      const double rho = model.SensorFromImg(uv).norm();
+      const double rho = model.RhoOfImg(uv);
       if (!truth.SeesMirror(uv) || rho < model.rho_min || rho > model.rho_max) continue;
       Vec3d M, d, b;
       if (!truth.RayFromImg(uv, &M, &d) || !model.CamFromImg(uv, &b)) continue;

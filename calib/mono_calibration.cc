@@ -92,6 +92,7 @@ nlohmann::json PolynomialJson(const PolynomialCalibration& r, const std::vector<
                    {"rms_px", r.per_image_rms[i]},
                    {"mean_px", r.per_image_mean[i]},
                    {"above_5px", r.per_image_mean[i] > 5.0}});
+  if (m.HasDecentering()) j["decentering"] = {m.p1, m.p2};  // hovs' extension (core/polynomial.h)
   j["per_image"] = per;
   j["board_poses"] = BoardPosesJson(r.cam_from_board, obs);
   j["board_poses_frame"] = "mirror_from_board: hovs' mirror frame from the board's (x, y on the board, metres)";
@@ -401,6 +402,9 @@ std::string MonoCalibrationSummary(const CalibrationInput& in, const MonoCalibra
       s += " " + ol.image + "#" + std::to_string(ol.corner) + " (" + FormatNumber("%.2f", ol.residual_px) + ")";
     s += "\n";
   }
+  if (p.model.HasDecentering())
+    s += "  decentering: p1 " + FormatNumber("%.3g", p.model.p1) + ", p2 " + FormatNumber("%.3g", p.model.p2) +
+         " (hovs' extension of the model: in calibration.json only; OCamCalib's calib_results.txt cannot hold it)\n";
   if (p.board_flex)
     s += std::string(p.image_warps.empty() ? "  board flex: " : "  board flex (mean of the images'): ") +
          FormatNumber("%.3f", 1e3 * p.board_warp[0]) + " mm along x, " + FormatNumber("%.3f", 1e3 * p.board_warp[1]) +

@@ -18,6 +18,9 @@ const std::string kRingText = "fitted over the calibrated ring, image radii ";
 std::string FormatOcamCalibResults(const PolynomialModel<double>& m) {
   m.Check("OCamCalib export");
   HOVS_REQUIRE(!m.inv_poly.empty(), "OCamCalib export", "the model has no inverse polynomial");
+  HOVS_REQUIRE(!m.HasDecentering(), "OCamCalib export",
+               "the model has decentering terms (p1, p2), which OCamCalib's calib_results.txt cannot hold: use "
+               "calibration.json, or calibrate without --decentering");
   std::string out;
   char buf[64];
   out +=

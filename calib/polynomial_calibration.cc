@@ -34,9 +34,10 @@ struct ReprojectionError {
 
   template <class T>
   bool operator()(const T* centre, const T* aff, const T* poly, const T* aa, const T* t, const T* warp,
-                  T* residual) const {
+                  const T* decentering, T* residual) const {
     PolynomialModel<T> m;
     m.cx = centre[0], m.cy = centre[1];
+    m.p1 = decentering[0], m.p2 = decentering[1];
     if (affine) {
       m.c = T((*affine)[0]), m.d = T((*affine)[1]), m.e = T((*affine)[2]);
     } else {
@@ -57,10 +58,11 @@ struct ReprojectionError {
     return true;
   }
 
-  // For ceres::DynamicAutoDiffCostFunction: blocks centre, affine, poly (N values), angle-axis, t, board warp.
+  // For ceres::DynamicAutoDiffCostFunction: blocks centre, affine, poly (N values), angle-axis, t, board warp,
+  // decentering.
   template <class T>
   bool operator()(T const* const* p, T* residual) const {
-    return (*this)(p[0], p[1], p[2], p[3], p[4], p[5], residual);
+    return (*this)(p[0], p[1], p[2], p[3], p[4], p[5], p[6], residual);
   }
 
   Vec3d P;
@@ -223,6 +225,7 @@ PolynomialCalibration CalibratePolynomial(const std::vector<BoardObservation>& o
   // Parameter blocks.
   double centre[2] = {centre0.x(), centre0.y()};
   double affine[3] = {1, 0, 0};
+  double decentering[2] = {0, 0};
   std::vector<double> poly(N);
   for (int k = 0; k < N; ++k) poly[k] = lin(k);
   std::vector<std::array<double, 6>> pose_params(obs.size());
@@ -254,7 +257,7 @@ PolynomialCalibration CalibratePolynomial(const std::vector<BoardObservation>& o
         const double hint = (obs[i].pixels[j] - Vec2d(centre[0], centre[1])).norm();
         ReprojectionError e(obs[i].board_points[j], obs[i].pixels[j], N, scale, hint, nullptr, extent);
         double res[2] = {1e6, 1e6};
-        e(centre, affine, poly.data(), pose_params[i].data(), pose_params[i].data() + 3, warp_of(i), res);
+        e(centre, affine, poly.data(), pose_params[i].data(), pose_params[i].data() + 3, warp_of(i), decentering, res);
         const double d2 = res[0] * res[0] + res[1] * res[1];
         for (auto& o : out.outliers)
           if (o.image_index == static_cast<int>(i) && o.corner == static_cast<int>(j))
@@ -296,12 +299,14 @@ PolynomialCalibration CalibratePolynomial(const std::vector<BoardObservation>& o
         auto* cost = new ceres::DynamicAutoDiffCostFunction<ReprojectionError, 8>(
             new ReprojectionError(obs[i].board_points[j], obs[i].pixels[j], N, scale, hint,
                                   opt.estimate_affine ? nullptr : &kIdentityAffine, extent));
-        for (int size : {2, 3, N, 3, 3, 2}) cost->AddParameterBlock(size);
+        for (int size : {2, 3, N, 3, 3, 2, 2}) cost->AddParameterBlock(size);
         cost->SetNumResiduals(2);
-        problem->AddResidualBlock(cost, MakeLoss(opt.loss, opt.loss_scale), centre, affine, poly.data(),
-                                  pose_params[i].data(), pose_params[i].data() + 3, warp_of(i));
+        problem->AddResidualBlock(
+            cost, MakeLoss(opt.loss, opt.loss_scale),
+            {centre, affine, poly.data(), pose_params[i].data(), pose_params[i].data() + 3, warp_of(i), decentering});
       }
     if (!opt.estimate_affine) problem->SetParameterBlockConstant(affine);
+    if (!opt.estimate_decentering) problem->SetParameterBlockConstant(decentering);
     if (!opt.board_flex)
       for (auto& w : warps)
         if (problem->HasParameterBlock(w.data())) problem->SetParameterBlockConstant(w.data());
@@ -320,7 +325,7 @@ PolynomialCalibration CalibratePolynomial(const std::vector<BoardObservation>& o
     ReprojectionError e(obs[i].board_points[j], obs[i].pixels[j], N, scale, hint,
                         opt.estimate_affine ? nullptr : &kIdentityAffine, extent);
     double res[2] = {1e6, 1e6};
-    e(centre, affine, poly.data(), pose_params[i].data(), pose_params[i].data() + 3, warp_of(i), res);
+    e(centre, affine, poly.data(), pose_params[i].data(), pose_params[i].data() + 3, warp_of(i), decentering, res);
     return std::hypot(res[0], res[1]);
   };
   std::vector<std::vector<double>> first_residual(obs.size());
@@ -364,13 +369,14 @@ PolynomialCalibration CalibratePolynomial(const std::vector<BoardObservation>& o
   PolynomialModel<double>& m = out.model;
   m.width = width, m.height = height;
   m.cx = centre[0], m.cy = centre[1], m.c = affine[0], m.d = affine[1], m.e = affine[2];
+  m.p1 = decentering[0], m.p2 = decentering[1];
   m.poly.assign(N + 1, 0.0);
   m.poly[0] = poly[0];
   for (int k = 2; k <= N; ++k) m.poly[k] = poly[k - 1] / std::pow(scale, k);
   double rho_min = HUGE_VAL, rho_max = 0;
   for (const auto& o : obs)
     for (const auto& p : o.pixels) {
-      const double rho = m.SensorFromImg(p).norm();
+      const double rho = m.RhoOfImg(p);
       rho_min = std::min(rho_min, rho), rho_max = std::max(rho_max, rho);
     }
   // The valid annulus: the observed radii, widened by 10 % inwards and 5 % outwards where the fitted theta(rho)
@@ -390,6 +396,7 @@ PolynomialCalibration CalibratePolynomial(const std::vector<BoardObservation>& o
   // With the affine terms free, a rotation about the optical axis is a gauge freedom (poses turn, d and e
   // absorb it): the covariance is the pseudo-inverse with that one null direction removed.
   std::vector<std::pair<double*, int>> blocks = {{centre, 2}, {affine, 3}, {poly.data(), N}};
+  if (opt.estimate_decentering) blocks.push_back({decentering, 2});  // intrinsics: ..., aN, p1, p2
   for (auto& p : pose_params) blocks.push_back({p.data(), 3}), blocks.push_back({p.data() + 3, 3});
   const bool shared_flex = opt.board_flex && !per_image;
   if (shared_flex) blocks.push_back({warps[0].data(), 2});
@@ -403,7 +410,8 @@ PolynomialCalibration CalibratePolynomial(const std::vector<BoardObservation>& o
     if (opt.estimate_affine) out.stddev["c"] = sd(2), out.stddev["d"] = sd(3), out.stddev["e"] = sd(4);
     out.stddev["a0"] = sd(5);
     for (int k = 2; k <= N; ++k) out.stddev["a" + std::to_string(k)] = sd(4 + k);
-    const int P = 5 + N + 6 * static_cast<int>(obs.size());
+    if (opt.estimate_decentering) out.stddev["p1"] = sd(5 + N), out.stddev["p2"] = sd(6 + N);
+    const int P = 5 + N + (opt.estimate_decentering ? 2 : 0) + 6 * static_cast<int>(obs.size());
     if (shared_flex) out.stddev["board_flex_x_mm"] = 1e3 * sd(P), out.stddev["board_flex_y_mm"] = 1e3 * sd(P + 1);
     out.covariance.covariance = C.topLeftCorner(P, P);
     out.covariance.cam_from_board = out.cam_from_board;

@@ -41,6 +41,9 @@ struct PolynomialCalibrationOptions {
   // Estimate the board's flex (calib/board_warp.h: two parabolas shared by every image) in the joint solve.
   bool board_flex = false;
   bool board_flex_per_image = false;  // with board_flex: one warp per image instead of one for all
+  // Estimate the decentering p1, p2 (core/polynomial.h; hovs' extension: OCamCalib's calib_results.txt cannot
+  // hold it, so a model with it is not written in that format).
+  bool estimate_decentering = false;
   void Check(const std::string& where) const;
 };
 

@@ -25,6 +25,7 @@ PolynomialModel<T> PolynomialOf(const PolynomialModel<double>& m, const T* v) {
   out.poly.assign(m.poly.size(), T(0));
   out.poly[0] = v[5];
   for (size_t k = 2; k < m.poly.size(); ++k) out.poly[k] = v[4 + k];
+  if (m.HasDecentering()) out.p1 = v[3 + m.poly.size()], out.p2 = v[4 + m.poly.size()];
   out.inv_cheb = m.inv_cheb, out.inv_poly = m.inv_poly;
   out.inv_theta_lo = m.inv_theta_lo, out.inv_theta_hi = m.inv_theta_hi;
   out.rho_min = m.rho_min, out.rho_max = m.rho_max;
@@ -61,6 +62,7 @@ double WorstSigma(const Eigen::Matrix2d& c) {
 ParametricModel::ParametricModel(const PolynomialModel<double>& m) : model_(m) {
   values_ = {m.cx, m.cy, m.c, m.d, m.e, m.poly.at(0)};
   for (size_t k = 2; k < m.poly.size(); ++k) values_.push_back(m.poly[k]);
+  if (m.HasDecentering()) values_.push_back(m.p1), values_.push_back(m.p2);  // estimated: part of the covariance
   HOVS_REQUIRE(size() <= kMaxIntrinsics, "projection uncertainty", "polynomial degree ", m.Degree(), " is too high");
 }
 
@@ -87,7 +89,7 @@ bool ParametricModel::ImgFromCamJacobians(const Vec3d& p, Vec2d* uv, Eigen::Matr
                                           Eigen::Matrix<double, 2, 3>* d_point) const {
   if (!ImgFromCam(p, uv)) return false;
   double hint = -1;
-  if (const auto* poly = std::get_if<PolynomialModel<double>>(&model_)) hint = poly->SensorFromImg(*uv).norm();
+  if (const auto* poly = std::get_if<PolynomialModel<double>>(&model_)) hint = poly->RhoOfImg(*uv);
   const int K = size();
   std::vector<IntrinsicsJet> vj(K);
   for (int k = 0; k < K; ++k) vj[k] = IntrinsicsJet(values_[k], k);

@@ -96,7 +96,7 @@ class AnyModel {
       }
       case Kind::kPolynomial: {
         if (!poly_.ImgFromCam(bearing, uv)) return false;
-        const double rho = poly_.SensorFromImg(*uv).norm();
+        const double rho = poly_.RhoOfImg(*uv);
         return rho >= poly_.rho_min && rho <= poly_.rho_max && InImage(*uv);
       }
       case Kind::kUnified:
@@ -121,7 +121,7 @@ class AnyModel {
     for (std::size_t i = 0; i < count; ++i) {
       if (!ok[i]) continue;
       const Vec2d q(uv[2 * i], uv[2 * i + 1]);
-      const double rho = poly_.SensorFromImg(q).norm();
+      const double rho = poly_.RhoOfImg(q);
       ok[i] = rho >= poly_.rho_min && rho <= poly_.rho_max && InImage(q);
     }
   }
@@ -155,7 +155,7 @@ class AnyModel {
         return true;
       }
       case Kind::kPolynomial: {
-        const double rho = poly_.SensorFromImg(uv).norm();
+        const double rho = poly_.RhoOfImg(uv);
         if (rho < poly_.rho_min || rho > poly_.rho_max) return false;
         return poly_.CamFromImg(uv, bearing);
       }

@@ -14,17 +14,26 @@
 // inv_error_px, 0.01 px or better where a degree up to 40 reaches it); ImgFromCam refines rho with Newton on
 // f(rho) |(x, y)| - z rho = 0 and is exact to rounding whatever g's accuracy.
 //
-// Parameters, in order: cx, cy, c, d, e, a0, a1 (held at 0), a2, ..., aN.
+// Decentering (hovs' extension, zero in OCamCalib's files): the sensor point p = (p_r, p_c) that the polynomial
+// maps is displaced before the affine map by Brown-Conrady's tangential terms on (x, y) = (p_c, p_r) / |a0|
+// (OpenCV's p1, p2 in the image's column and row directions):
+//   x_d = x + 2 p1 x y + p2 (r^2 + 2 x^2),  y_d = y + p1 (r^2 + 2 y^2) + 2 p2 x y
+// A lens or a camera not quite on the mirror's axis decentres the image this way; the unified model's radtan
+// holds the same terms. rho is always the radius of the undecentred point (RhoOfImg).
+//
+// Parameters, in order: cx, cy, c, d, e, a0, a1 (held at 0), a2, ..., aN[, p1, p2].
 // Valid domain: rho_min <= rho <= rho_max, where theta(rho) = atan2(f(rho), rho) is monotonic.
 #pragma once
 
 #include <Eigen/Dense>
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <string>
 #include <type_traits>
 #include <vector>
 
+#include "core/distortion.h"
 #include "core/error.h"
 #include "core/model_check.h"
 #include "core/newton.h"
@@ -37,6 +46,7 @@ struct PolynomialModel {
   int width = 0, height = 0;
   T cx = T(0), cy = T(0);          // centre: column, row (pixels)
   T c = T(1), d = T(0), e = T(0);  // affine
+  T p1 = T(0), p2 = T(0);          // decentering (zero: OCamCalib's model)
   std::vector<T> poly;             // a0, a1 (= 0), a2, ..., aN
   std::vector<double> inv_poly;    // OCamCalib's invpol: rho = sum inv_poly[i] theta^i
   std::vector<double> inv_cheb;    // rho = sum inv_cheb[i] T_i(t), t = theta mapped from [inv_theta_lo, hi] to [-1, 1]
@@ -65,9 +75,42 @@ struct PolynomialModel {
     return Vec2<T>(col, row);
   }
 
+  // Jets always take the decentering path, so that derivatives with respect to p1 and p2 exist at zero too.
+  bool HasDecentering() const {
+    if constexpr (std::is_same_v<T, double>) return p1 != 0 || p2 != 0;
+    return true;
+  }
+
+  // The displaced sensor point of p (Decenter) and its inverse (Recenter: Newton; false where it fails).
+  Vec2<T> Decenter(const Vec2<T>& p) const {
+    if (!HasDecentering()) return p;
+    const T s = ScalarPart(poly[0]) < 0 ? T(-poly[0]) : T(poly[0]);
+    const Vec2<T> moved = Decentering().Distort(Vec2<T>(p(1) / s, p(0) / s));
+    return Vec2<T>(moved(1) * s, moved(0) * s);
+  }
+  bool Recenter(const Vec2<T>& q, Vec2<T>* p) const {
+    if (!HasDecentering()) {
+      *p = q;
+      return true;
+    }
+    const T s = ScalarPart(poly[0]) < 0 ? T(-poly[0]) : T(poly[0]);
+    Vec2<T> m;
+    if (!Decentering().Undistort(Vec2<T>(q(1) / s, q(0) / s), &m)) return false;
+    *p = Vec2<T>(m(1) * s, m(0) * s);
+    return true;
+  }
+  // rho of pixel uv (NaN where the decentering cannot be undone).
+  T RhoOfImg(const Vec2<T>& uv) const {
+    using std::sqrt;
+    Vec2<T> p;
+    if (!Recenter(SensorFromImg(uv), &p)) return T(std::numeric_limits<double>::quiet_NaN());
+    return sqrt(p.squaredNorm());
+  }
+
   bool CamFromImg(const Vec2<T>& uv, Vec3<T>* bearing) const {
     using std::sqrt;
-    const Vec2<T> p = SensorFromImg(uv);
+    Vec2<T> p;
+    if (!Recenter(SensorFromImg(uv), &p)) return false;
     const T r2 = p.squaredNorm();
     const T rho = ScalarPart(r2) > 0 ? sqrt(r2) : T(0);
     *bearing = Normalized<T>(Vec3<T>(p(1), p(0), F(rho)));
@@ -82,13 +125,13 @@ struct PolynomialModel {
     const double nd = std::sqrt(xd * xd + yd * yd);  // not hypot (slower; bearings are far from overflow)
     if (nd == 0) {
       if (!(zd * ScalarPart(poly[0]) > 0)) return false;
-      *uv = ImgFromSensor(Vec2<T>(T(0), T(0)));
+      *uv = ImgFromSensor(Decenter(Vec2<T>(T(0), T(0))));
       return true;
     }
     double rho = rho_hint >= 0 ? rho_hint : EstimateRho(std::atan2(zd, nd));
     if constexpr (std::is_same_v<T, double>) {
       if (!RhoByNewton(nd, zd, &rho)) return false;
-      *uv = ImgFromSensor(Vec2<T>(yd / nd * rho, xd / nd * rho));
+      *uv = ImgFromSensor(Decenter(Vec2<T>(yd / nd * rho, xd / nd * rho)));
       return true;
     }
     const auto h = [&](const auto& r) { return F(r) * nd - zd * r; };
@@ -100,7 +143,7 @@ struct PolynomialModel {
     const T n = sqrt(X(0) * X(0) + X(1) * X(1));
     const auto h_t = [&](const T& r) { return F(r) * n - X(2) * r; };
     const T rho_t = LiftNewton1<T>(h_t, rho, dh);
-    *uv = ImgFromSensor(Vec2<T>(X(1) / n * rho_t, X(0) / n * rho_t));
+    *uv = ImgFromSensor(Decenter(Vec2<T>(X(1) / n * rho_t, X(0) / n * rho_t)));
     return true;
   }
 
@@ -168,7 +211,7 @@ struct PolynomialModel {
           continue;
         }
         ok[base + l] = r[l] >= 0;
-        const Vec2<T> pixel = ImgFromSensor(Vec2<T>(p[1] / nd[l] * r[l], p[0] / nd[l] * r[l]));
+        const Vec2<T> pixel = ImgFromSensor(Decenter(Vec2<T>(p[1] / nd[l] * r[l], p[0] / nd[l] * r[l])));
         q[0] = pixel(0), q[1] = pixel(1);
       }
     }
@@ -180,11 +223,11 @@ struct PolynomialModel {
     using std::sqrt;
     const T n = sqrt(X(0) * X(0) + X(1) * X(1));
     if (ScalarPart(n) == 0) {
-      *uv = ImgFromSensor(Vec2<T>(T(0), T(0)));
+      *uv = ImgFromSensor(Decenter(Vec2<T>(T(0), T(0))));
       return true;
     }
     const T rho = InverseRho(atan2(X(2), n));
-    *uv = ImgFromSensor(Vec2<T>(X(1) / n * rho, X(0) / n * rho));
+    *uv = ImgFromSensor(Decenter(Vec2<T>(X(1) / n * rho, X(0) / n * rho)));
     return true;
   }
 
@@ -305,6 +348,9 @@ struct PolynomialModel {
       HOVS_REQUIRE(std::isfinite(ScalarPart(v)) && std::abs(ScalarPart(v)) <= 10, where,
                    "the affine terms c, d, e must be finite and within +-10 (c is about 1; got ", ScalarPart(v), ")");
     HOVS_REQUIRE(std::abs(ScalarPart(c - d * e)) >= 0.1, where, "the affine matrix is (nearly) singular");
+    for (const T& v : {p1, p2})
+      HOVS_REQUIRE(std::isfinite(ScalarPart(v)) && std::abs(ScalarPart(v)) <= 0.1, where,
+                   "the decentering terms p1, p2 must be finite and within +-0.1 (got ", ScalarPart(v), ")");
     CheckImageAndCentre(width, height, ScalarPart(cx), ScalarPart(cy), where);
     HOVS_REQUIRE(inv_poly.size() <= 64, where, "the inverse polynomial has ", inv_poly.size(),
                  " coefficients (at most 64)");
@@ -330,6 +376,7 @@ struct PolynomialModel {
     m.width = width, m.height = height;
     m.cx = ConvertScalar<U>(cx), m.cy = ConvertScalar<U>(cy);
     m.c = ConvertScalar<U>(c), m.d = ConvertScalar<U>(d), m.e = ConvertScalar<U>(e);
+    m.p1 = ConvertScalar<U>(p1), m.p2 = ConvertScalar<U>(p2);
     for (const auto& a : poly) m.poly.push_back(ConvertScalar<U>(a));
     m.inv_poly = inv_poly, m.inv_cheb = inv_cheb;
     m.inv_theta_lo = inv_theta_lo, m.inv_theta_hi = inv_theta_hi;
@@ -355,6 +402,12 @@ struct PolynomialModel {
     S rho = S(0);
     for (int i = static_cast<int>(inv_poly.size()) - 1; i >= 0; --i) rho = rho * theta + S(inv_poly[i]);
     return rho;
+  }
+
+  RadTanDistortion<T> Decentering() const {
+    RadTanDistortion<T> tangential;
+    tangential.p1 = p1, tangential.p2 = p2;
+    return tangential;
   }
 
   // ImgFromCam's Newton iteration on h(rho) = f(rho) |(x, y)| - z rho for T = double: the same tolerances and

@@ -132,7 +132,8 @@ py::dict Parameters(const Camera& c) {
     case AnyModel::Kind::kPolynomial: {
       const auto& p = m.polynomial();
       d["cx"] = p.cx, d["cy"] = p.cy, d["c"] = p.c, d["d"] = p.d, d["e"] = p.e;
-      d["poly"] = p.poly, d["inv_poly"] = p.inv_poly, d["rho_min"] = p.rho_min, d["rho_max"] = p.rho_max;
+      d["poly"] = p.poly, d["p1"] = p.p1, d["p2"] = p.p2, d["inv_poly"] = p.inv_poly, d["rho_min"] = p.rho_min,
+      d["rho_max"] = p.rho_max;
       d["inverse_error_px"] = p.inv_error_px;
       break;
     }

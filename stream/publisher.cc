@@ -183,11 +183,14 @@ bool Publisher::Flush(double timeout_s) {
   return cv_.wait_for(lock, std::chrono::duration<double>(timeout_s), [&] { return !pending_ && !writing_; });
 }
 
-bool Publisher::WaitForSubscribers(int count, double timeout_s) {
+bool Publisher::WaitForSubscribers(int count, double timeout_s, bool camera_info) {
   const auto end = Clock::now() + std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(timeout_s));
-  std::vector<Writers::Entry*> wanted;  // the images and the cloud; a CameraInfo is optional to its readers
+  std::vector<Writers::Entry*> wanted;  // the images and the cloud; a CameraInfo only when asked
   for (auto& e : writers_->image) wanted.push_back(&e);
   if (writers_->cloud.writer) wanted.push_back(&writers_->cloud);
+  if (camera_info)
+    for (auto& e : writers_->info)
+      if (e.writer) wanted.push_back(&e);
   for (;;) {
     bool all = true;
     for (auto* e : wanted) {

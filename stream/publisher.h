@@ -92,8 +92,9 @@ class Publisher {
   // With `wait` (replays, recordings: no deadline), waits for the thread to take the waiting bundle instead.
   // Throws when the images do not match the topics (count, sizes of a CameraInfo).
   void Offer(Bundle* bundle, bool wait = false);
-  // True when every image (and cloud) topic has at least `count` matched readers (waits up to timeout_s).
-  bool WaitForSubscribers(int count, double timeout_s);
+  // True when every image (and cloud) topic has at least `count` matched readers (waits up to timeout_s); with
+  // camera_info, every CameraInfo topic as well (a reader that must see every CameraInfo, as a test).
+  bool WaitForSubscribers(int count, double timeout_s, bool camera_info = false);
   bool Flush(double timeout_s);  // true when every offered bundle has been written or dropped
   PublishStats Stats() const;
   // Each topic as "ROS name (type)", in creation order.

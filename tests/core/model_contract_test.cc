@@ -50,7 +50,7 @@ struct PolynomialCase {
     return model.CamFromImg(uv, d);
   }
   bool InDomain(const Vec2d& uv) const {
-    const double rho = model.SensorFromImg(uv).norm();
+    const double rho = model.RhoOfImg(uv);
     return rho >= model.rho_min && rho <= model.rho_max && uv.x() >= 0 && uv.y() >= 0 && uv.x() < model.width &&
            uv.y() < model.height;
   }

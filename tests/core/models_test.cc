@@ -2,6 +2,7 @@
 // polynomial fitted to the exact model.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <functional>
 #include <limits>
 #include <memory>
@@ -155,7 +156,7 @@ TEST(Polynomial, ExactAndFastWorldToCamRoundTrips) {
   const double fit_err = poly.FitInverse(0.01);
   EXPECT_LT(fit_err, 0.01);
   const auto in_annulus = [&](const Vec2d& uv) {
-    const double rho = poly.SensorFromImg(uv).norm();
+    const double rho = poly.RhoOfImg(uv);
     return rho >= poly.rho_min && rho <= poly.rho_max;
   };
   int n = 0;
@@ -261,6 +262,44 @@ TEST(Polynomial, BatchProjectionIsTheScalarOne) {
   PolynomialModel<double> none = poly;
   none.inv_cheb.clear();
   compare(none, points, "no_chebyshev");
+  PolynomialModel<double> decentred = poly;
+  decentred.p1 = 4e-4, decentred.p2 = -6e-4;
+  compare(decentred, points, "decentred");
+}
+
+// The decentering extension: CamFromImg and ImgFromCam invert each other to rounding, the image moves by the
+// Brown-Conrady displacement (a few pixels at the rim for p ~ 5e-4), and the model's check bounds p1, p2.
+TEST(Polynomial, DecenteringRoundTripsAndMovesTheImageAsBrownConrady) {
+  const auto rig = test::AlignedRig();
+  PolynomialModel<double> plain = PolynomialFromCatadioptric(rig, 5);
+  PolynomialModel<double> m = plain;
+  m.p1 = 5e-4, m.p2 = -3e-4;
+  EXPECT_NO_THROW(m.Check());
+  double worst = 0, largest_shift = 0;
+  int n = 0;
+  for (const Vec3d& X : test::WorldPoints(2000, 9)) {
+    Vec2d uv, uv_plain;
+    if (!plain.ImgFromCam(X, &uv_plain)) continue;
+    ASSERT_TRUE(m.ImgFromCam(X, &uv));
+    const double rho = m.RhoOfImg(uv);
+    if (rho < m.rho_min || rho > m.rho_max) continue;
+    Vec3d b;
+    ASSERT_TRUE(m.CamFromImg(uv, &b));
+    worst = std::max(worst, std::atan2(b.cross(X.normalized()).norm(), b.dot(X.normalized())));
+    // The shift is Brown-Conrady's on (p_c, p_r) / |a0| (columns first), scaled back.
+    const double s = -m.poly[0];
+    const double x = (uv_plain.x() - m.cx) / s, y = (uv_plain.y() - m.cy) / s, r2 = x * x + y * y;
+    const Vec2d expect(s * (2 * m.p1 * x * y + m.p2 * (r2 + 2 * x * x)),
+                       s * (m.p1 * (r2 + 2 * y * y) + 2 * m.p2 * x * y));
+    EXPECT_LT((uv - uv_plain - expect).norm(), 1e-6) << X.transpose();
+    largest_shift = std::max(largest_shift, (uv - uv_plain).norm());
+    ++n;
+  }
+  EXPECT_GT(n, 1000);
+  EXPECT_LT(worst, 1e-12) << "rad";
+  EXPECT_GT(largest_shift, 1.0) << "px";
+  m.p2 = 0.2;
+  EXPECT_THROW(m.Check(), Error);
 }
 
 TEST(Polynomial, CheckAndInverseRejectBadModels) {

@@ -107,7 +107,7 @@ Bundle TestBundle(int k) {
 int PublishHundred(int domain) {
   try {
     Publisher pub(Loopback(domain), TestTopics());
-    if (!pub.WaitForSubscribers(1, 30)) return 3;
+    if (!pub.WaitForSubscribers(1, 30, /*camera_info=*/true)) return 3;  // every topic's reader, under load too
     for (int k = 0; k < 100; ++k) {
       Bundle b = TestBundle(k);
       pub.Offer(&b, true);
