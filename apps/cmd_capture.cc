@@ -46,8 +46,8 @@ Runner SetupCapture(CLI::App* sub, const GlobalOptions* global) {
                  "the output folder exists and is not empty (captures are never mixed or replaced)");
     HOVS_REQUIRE(std::isfinite(o->pair_ms) && o->pair_ms > 0 && o->pair_ms <= 10000, "--pair-tolerance-ms",
                  "must be in (0, 10000] ms (got ", o->pair_ms, ")");
-    // Ctrl-C (or SIGTERM) from here on ends the capture with a valid manifest (even before the first frame); a
-    // second one ends the process.
+    // Ctrl-C (or SIGTERM) from here on ends the capture with a valid manifest (one that ends before its first
+    // frame leaves nothing, hw/capture.h); a second one ends the process.
     std::atomic<bool> stop{false};
     const InterruptScope interrupt(&stop);
     OpenedSources src = OpenSources(o->source);

@@ -20,7 +20,7 @@ AnyModel LoadCompared(const std::string& spec, const std::string& kind, const st
   HOVS_REQUIRE(kind == "auto" || kind == "physical" || kind == "polynomial" || kind == "unified", option,
                "expected auto, physical, polynomial or unified (got '", kind, "')");
   if (kind == "auto") return LoadModelSpec(spec, unit, 10.0);
-  HOVS_REQUIRE(std::filesystem::exists(spec), spec, "file not found");
+  RequireFile(spec, "model file");
   return LoadCalibratedModel(spec, kind);
 }
 

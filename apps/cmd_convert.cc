@@ -45,11 +45,12 @@ Runner SetupConvert(CLI::App* sub, const GlobalOptions* global) {
     const bool unified_file = o->to == "kalibr" || o->to == "mei" || o->to == "omnidir";
     HOVS_REQUIRE(unified_file || o->to == "ds" || o->to == "eucm" || o->to == "kb" || o->to == "basalt", "--to",
                  "expected kalibr, mei, omnidir, ds, eucm, kb or basalt (got '", o->to, "')");
+    if (o->to == "mei") calib::CheckMeiCameraName(o->name, "--camera-name");
     ImageSize size;
     if (!o->size.empty()) ParseImageSize(o->size, "--image-size", &size.width, &size.height);
     HOVS_REQUIRE(o->kind == "auto" || o->kind == "physical" || o->kind == "polynomial" || o->kind == "unified",
                  "--kind", "expected auto, physical, polynomial or unified (got '", o->kind, "')");
-    HOVS_REQUIRE(std::filesystem::exists(o->model), o->model, "file not found");
+    RequireFile(o->model, "model file");
     const AnyModel source = o->kind == "auto" ? LoadModelSpec(o->model, o->unit, 10.0, size)
                                               : LoadCalibratedModel(o->model, o->kind, 10.0, size);
     CheckOutputFolder(o->out, "convert", {o->model});

@@ -27,8 +27,8 @@ Runner SetupExport(CLI::App* sub, const GlobalOptions* global) {
     HOVS_REQUIRE(o->to == "equirect", "--to", "expected equirect (got '", o->to, "')");
     depth::EquirectOptions options;
     options.width = o->width;
+    options.progress = !global->quiet;
     options.Check("--width");
-    HOVS_REQUIRE(std::filesystem::exists(o->dataset), o->dataset, "file not found");
     StagedDirectory stage(o->out, "export", {o->dataset});
     const depth::EquirectExport e =
         depth::ExportEquirect(o->dataset, options, stage.staging(), nlohmann::json(Versions()));

@@ -39,7 +39,7 @@ Runner SetupPosition(CLI::App* sub, const GlobalOptions* global) {
     CatadioptricCamera<double> design;
     std::string unit_name;
     const fs::path spec(o->scene);
-    HOVS_REQUIRE(fs::exists(spec), "--design " + o->scene, "file not found");
+    RequireFile(spec, "design file");
     if (spec.extension() == ".json") {
       const auto m = LoadDatasetManifest(spec);
       const auto& units = m.at("units");

@@ -80,7 +80,7 @@ Runner SetupMerge(CLI::App* sub, const GlobalOptions* global) {
     std::vector<std::filesystem::path> dirs(o->shards.begin(), o->shards.end());
     std::string what = "/dataset.json";
     if (study::IsToleranceFolder(dirs.front())) {
-      study::MergeToleranceShards(dirs, o->out);
+      for (const auto& w : study::MergeToleranceShards(dirs, o->out)) std::cerr << "hovs merge: warning: " << w << "\n";
       what = "/tolerance.json";
     } else if (design::IsDesignShard(dirs.front())) {
       HOVS_REQUIRE(results::CanRender(), "hovs merge",

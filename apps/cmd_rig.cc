@@ -123,7 +123,7 @@ int RunSwitch(const SwitchOptions* s, const GlobalOptions* global) {
   if (folder && r.align.converged) {
     const auto it = folder->mirrors.find(spec.mirrors[to].id);
     HOVS_REQUIRE(it != folder->mirrors.end(), s->rig_json, "has no entry for mirror '", spec.mirrors[to].id, "'");
-    const AnyModel model = LoadCalibratedModel(it->second.calibration);
+    const AnyModel model = AnyModel::Polynomial(it->second.model, it->second.calibration.string());
     const unwrap::RemapTable table = unwrap::LoadRemapTable(it->second.map);
     j["loaded"] = {{"calibration", it->second.calibration.string()},
                    {"model", model.KindName()},

@@ -48,18 +48,17 @@ int RunSubmit(const SubmitOptions& o, const GlobalOptions& global) {
   const jobs::ShardedCommand command = jobs::ParseShardedCommand(o.command);
   const fs::path job_dir =
       fs::absolute(o.job_dir.empty() ? command.out.string() + ".slurm" : o.job_dir).lexically_normal();
-  CheckOutputFolder(job_dir, "slurm submit", {});
   CheckOutputFolder(command.out, "merge", {});
-  // A job folder of an earlier submission is reused: its shards and logs are its own (the marker says so).
-  fs::remove_all(job_dir / "shards");
-  fs::remove_all(job_dir / "logs");
-  fs::create_directories(job_dir / "shards");
-  fs::create_directories(job_dir / "logs");
-  WriteOutputMarker(job_dir, "slurm submit");
-  const fs::path script = job_dir / "job.sbatch";
-  WriteFileAtomic(script, jobs::SbatchScript(command, o.slurm, SelfBinary(), job_dir));
-  fs::permissions(script, fs::perms::owner_exec, fs::perm_options::add);
-  const std::string id = jobs::SubmitScript(script);
+  // The job folder is built aside and submitted held: only once Slurm has taken the job does the folder replace
+  // an earlier submission's (whose shards stay untouched by a refused one), and the tasks are released when their
+  // folders are in place. A refused submission leaves nothing behind.
+  StagedDirectory stage(job_dir, "slurm submit");
+  fs::create_directories(stage.staging() / "shards");
+  fs::create_directories(stage.staging() / "logs");
+  const fs::path script = job_dir / "job.sbatch", staged_script = stage.staging() / "job.sbatch";
+  WriteFileAtomic(staged_script, jobs::SbatchScript(command, o.slurm, SelfBinary(), job_dir));
+  fs::permissions(staged_script, fs::perms::owner_exec, fs::perm_options::add);
+  const std::string id = jobs::SubmitScript(staged_script, /*hold=*/true);
   nlohmann::json record = {{"tool", "hovs slurm submit"},
                            {"versions", Versions()},
                            {"job_id", id},
@@ -74,7 +73,14 @@ int RunSubmit(const SubmitOptions& o, const GlobalOptions& global) {
                              {"mem", o.slurm.mem},
                              {"cpus", o.slurm.cpus},
                              {"array_throttle", o.slurm.array_throttle}}}};
-  WriteFileAtomic(job_dir / "submission.json", record.dump(1) + "\n");
+  try {
+    WriteFileAtomic(stage.staging() / "submission.json", record.dump(1) + "\n");
+    stage.Commit();
+  } catch (...) {
+    jobs::CancelJob(id);
+    throw;
+  }
+  jobs::ReleaseJob(id);
   if (!global.quiet)
     std::printf("hovs slurm submit: job %s, %d shards of hovs %s (%s)\n", id.c_str(), o.slurm.shards,
                 command.name.c_str(), script.c_str());

@@ -37,7 +37,9 @@ Runner SetupTolerance(CLI::App* sub, const GlobalOptions* global) {
     ParseShard(o->shard, &shard, &shards);
     HOVS_REQUIRE(shards <= o->samples, "--shard", "more shards (", shards, ") than samples (", o->samples, ")");
     const auto start = std::chrono::steady_clock::now();
-    study::WriteToleranceStudy(config, o->samples, shard, shards, o->out, Versions(), !global->quiet);
+    const auto warnings =
+        study::WriteToleranceStudy(config, o->samples, shard, shards, o->out, Versions(), !global->quiet);
+    for (const auto& w : warnings) std::cerr << "hovs tolerance: warning: " << w << "\n";
     const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     if (global->json) {
       std::cout << ReadFile(std::filesystem::path(o->out) / "tolerance.json");

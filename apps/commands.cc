@@ -10,6 +10,7 @@
 #include "calib/checkerboard_detector.h"
 #include "core/error.h"
 #include "core/io.h"
+#include "core/shard_set.h"
 #include "core/version.h"
 #include "design/study.h"
 #include "hw/camera_source.h"
@@ -92,10 +93,7 @@ void ParseShard(const std::string& text, int* index, int* count) {
   const char* n = std::getenv("SLURM_ARRAY_TASK_COUNT");
   if (spec.empty() && id && n) spec = std::string(id) + "/" + n, where = "SLURM_ARRAY_TASK_ID/SLURM_ARRAY_TASK_COUNT";
   if (spec.empty()) return;
-  int end = -1;
-  HOVS_REQUIRE(std::sscanf(spec.c_str(), "%d/%d%n", index, count, &end) == 2 && end == static_cast<int>(spec.size()),
-               where, "expected I/N (shard I from 0 of N), got '", spec, "'");
-  HOVS_REQUIRE(*count >= 1 && *index >= 0 && *index < *count, where, "needs 0 <= I < N (got ", spec, ")");
+  ParseShardSpec(spec, where, index, count);
 }
 
 const std::vector<Command>& Commands() {
@@ -123,6 +121,10 @@ const std::vector<Command>& Commands() {
        "Tolerance study of a design: Monte-Carlo over manufacturing and assembly errors, sensitivities, the "
        "tolerances a limit needs",
        SetupTolerance},
+      {"edge-check",
+       "The blur prediction against the renderer: slanted edges rendered through the thin lens, their MTF50 "
+       "against the exact spot's",
+       SetupEdgeCheck},
       {"slurm", "A sharded command as a Slurm array job: submit (and wait, merge), status", SetupSlurm},
       {"convert",
        "A camera model into other tools' files: Kalibr camchain, MEI YAML, OpenCV omnidir YAML; refits to double "

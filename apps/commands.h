@@ -90,5 +90,6 @@ Runner SetupMerge(CLI::App* sub, const GlobalOptions* global);
 Runner SetupExport(CLI::App* sub, const GlobalOptions* global);
 Runner SetupRig(CLI::App* sub, const GlobalOptions* global);
 Runner SetupTolerance(CLI::App* sub, const GlobalOptions* global);
+Runner SetupEdgeCheck(CLI::App* sub, const GlobalOptions* global);
 
 }  // namespace hovs::apps

@@ -28,7 +28,7 @@ std::optional<stream::DdsOptions> PublishCliOptions::Resolve() const {
   }
   d.interface = interface, d.peers = peers;
   d.Check("--domain");
-  HOVS_REQUIRE(!prefix.empty(), "--topic-prefix", "must not be empty");
+  stream::CheckRosNamespace(prefix, "--topic-prefix");
   return d;
 }
 

@@ -2,10 +2,12 @@
 
 #include <algorithm>
 #include <cmath>
+#include <fstream>
 #include <map>
 #include <nlohmann/json.hpp>
 
 #include "calib/camera_formats.h"
+#include "calib/model_io.h"
 #include "calib/ocam_io.h"
 #include "calib/omnidir_io.h"
 #include "core/error.h"
@@ -18,39 +20,54 @@
 
 namespace hovs::apps {
 
-PolynomialModel<double> LoadPolynomialModelFile(const std::filesystem::path& path) {
-  if (path.extension() == ".txt") return calib::LoadOcamCalibResults(path);
-  const auto j = ReadJsonFile(path);
-  HOVS_REQUIRE(j.contains("polynomial"), path.string(),
-               "not calib_results.txt or a hovs calibration.json (no 'polynomial' model)");
-  const auto& p = j["polynomial"];
-  PolynomialModel<double> m;
-  const std::string where = path.string() + " (polynomial)";
-  m.width = static_cast<int>(JsonInteger(p, "width", 1, 65535, where));
-  m.height = static_cast<int>(JsonInteger(p, "height", 1, 65535, where));
-  m.cx = JsonNumber(p, "cx", where), m.cy = JsonNumber(p, "cy", where);
-  m.c = JsonNumber(p, "c", where), m.d = JsonNumber(p, "d", where), m.e = JsonNumber(p, "e", where);
-  m.poly = JsonNumbers(p, "poly", 2, 21, where);
-  m.inv_poly = JsonNumbers(p, "inv_poly", 0, 64, where);
-  if (p.contains("inverse")) {
-    const auto& inv = p["inverse"];
-    m.inv_cheb = JsonNumbers(inv, "chebyshev", 1, 64, where + ".inverse");
-    const std::vector<double> range = JsonNumbers(inv, "theta_range", 2, 2, where + ".inverse");
-    m.inv_theta_lo = range[0], m.inv_theta_hi = range[1];
-    m.inv_error_px = JsonNumber(inv, "max_error_px", where + ".inverse");
+namespace {
+bool EndsWith(const std::string& s, const std::string& e) {
+  return s.size() >= e.size() && s.compare(s.size() - e.size(), e.size(), e) == 0;
+}
+namespace fs = std::filesystem;
+
+constexpr const char* kModelKinds =
+    "a scene YAML, dataset.json, calib_results.txt, an OpenCV omnidir or MEI YAML, a Kalibr camchain or a hovs "
+    "calibration.json";
+
+// A model file must be one of kModelKinds: an image or other binary given by mistake is named as such instead of
+// failing as "not valid JSON at line 1".
+void RequireModelText(const fs::path& path, const std::string& where) {
+  HOVS_REQUIRE(!fs::is_directory(path), where, "is a folder; give the model file itself (", kModelKinds, ")");
+  std::string head(16, '\0');
+  {
+    std::ifstream in(path, std::ios::binary);
+    in.read(head.data(), static_cast<std::streamsize>(head.size()));
+    head.resize(static_cast<size_t>(std::max<std::streamsize>(0, in.gcount())));
   }
-  const std::vector<double> rho = JsonNumbers(p, "rho_range", 2, 2, where);
-  m.rho_min = rho[0], m.rho_max = rho[1];
-  if (p.contains("decentering")) {
-    const std::vector<double> pp = JsonNumbers(p, "decentering", 2, 2, where);
-    m.p1 = pp[0], m.p2 = pp[1];
-  }
-  m.Check(path.string());
+  const bool png = head.rfind("\x89PNG", 0) == 0, jpeg = head.rfind("\xFF\xD8\xFF", 0) == 0;
+  const bool tiff = head.rfind("II*", 0) == 0 || head.rfind("MM\0*", 0) == 0, exr = head.rfind("v/1\x01", 0) == 0;
+  HOVS_REQUIRE(!(png || jpeg || tiff || exr), where, "is an image, not a camera model (expected ", kModelKinds, ")");
+  HOVS_REQUIRE(head.find('\0') == std::string::npos, where, "is a binary file, not a camera model (expected ",
+               kModelKinds, ")");
+}
+
+// The image size a user gave (--image-size) must be the model's own where it has one.
+AnyModel WithSize(AnyModel m, ImageSize size, const std::string& where) {
+  if (size.width > 0 && size.height > 0)
+    HOVS_REQUIRE(m.width() == size.width && m.height() == size.height, where, "is for ", m.width(), " x ", m.height(),
+                 " images, not ", size.width, " x ", size.height, " (--image-size)");
   return m;
 }
+AnyModel LoadModelSpecAnySize(const std::string& spec, const std::string& unit, double scene_distance, ImageSize size);
+AnyModel LoadCalibratedModelAnySize(const std::filesystem::path& path, const std::string& prefer, double scene_distance,
+                                    ImageSize size);
+}  // namespace
 
 AnyModel LoadCalibratedModel(const std::filesystem::path& path, const std::string& prefer, double scene_distance,
                              ImageSize size) {
+  return WithSize(LoadCalibratedModelAnySize(path, prefer, scene_distance, size), size, path.string());
+}
+
+namespace {
+AnyModel LoadCalibratedModelAnySize(const std::filesystem::path& path, const std::string& prefer, double scene_distance,
+                                    ImageSize size) {
+  RequireModelText(path, path.string());
   HOVS_REQUIRE(prefer == "auto" || prefer == "physical" || prefer == "polynomial" || prefer == "unified",
                "--model-kind", "expected auto, physical, polynomial or unified (got '", prefer, "')");
   if (path.extension() == ".yaml" || path.extension() == ".yml" || path.extension() == ".xml") {
@@ -65,8 +82,9 @@ AnyModel LoadCalibratedModel(const std::filesystem::path& path, const std::strin
     const auto j = ReadJsonFile(path);
     HOVS_REQUIRE(j.contains("unified") && j["unified"].contains("opencv_yaml"), path.string(),
                  "has no unified model (a calibration.json of hovs calibrate, or its unified.yaml)");
-    return LoadCalibratedModel(path.parent_path() / j["unified"]["opencv_yaml"].get<std::string>(), "unified",
-                               scene_distance, size);
+    return LoadCalibratedModel(ContainedPath(path.parent_path(), JsonString(j["unified"], "opencv_yaml", path.string()),
+                                             path.string() + " (unified.opencv_yaml)"),
+                               "unified", scene_distance, size);
   }
   if (path.extension() != ".txt" && prefer != "polynomial") {
     const auto j = ReadJsonFile(path);
@@ -75,22 +93,22 @@ AnyModel LoadCalibratedModel(const std::filesystem::path& path, const std::strin
                              scene_distance, path.string() + " (physical.unit)");
     HOVS_REQUIRE(prefer != "physical", path.string(), "has no physical model (calibrate with --physical)");
   }
-  return AnyModel::Polynomial(LoadPolynomialModelFile(path), path.string());
+  return AnyModel::Polynomial(calib::LoadPolynomialModelFile(path), path.string());
 }
-
-namespace {
-bool EndsWith(const std::string& s, const std::string& e) {
-  return s.size() >= e.size() && s.compare(s.size() - e.size(), e.size(), e) == 0;
-}
-namespace fs = std::filesystem;
 }  // namespace
 
 // The model named on the command line; `unit` selects a unit of a scene or manifest.
 AnyModel LoadModelSpec(const std::string& spec, const std::string& unit, double scene_distance, ImageSize size) {
+  return WithSize(LoadModelSpecAnySize(spec, unit, scene_distance, size), size, spec);
+}
+
+namespace {
+AnyModel LoadModelSpecAnySize(const std::string& spec, const std::string& unit, double scene_distance, ImageSize size) {
   HOVS_REQUIRE(std::isfinite(scene_distance) && scene_distance > 0 && scene_distance <= 1e6, "--scene-distance",
                "must be in (0, 1e6] m (got ", scene_distance, ")");
   const fs::path path(spec);
-  HOVS_REQUIRE(fs::exists(path), "--model " + spec, "file not found");
+  RequireFile(path, "a model file");
+  RequireModelText(path, spec);
   const auto pick = [&](size_t n, const auto& name_of) {
     if (unit.empty()) return size_t(0);
     for (size_t i = 0; i < n; ++i)
@@ -113,7 +131,7 @@ AnyModel LoadModelSpec(const std::string& spec, const std::string& unit, double 
     return AnyModel::Exact(units[i].rig, scene_distance, spec + " (unit " + units[i].name + ")");
   }
   if (EndsWith(spec, ".xml")) return LoadCalibratedModel(path, "unified", scene_distance, size);
-  if (EndsWith(spec, ".txt")) return AnyModel::Polynomial(LoadPolynomialModelFile(path), spec);
+  if (EndsWith(spec, ".txt")) return AnyModel::Polynomial(calib::LoadPolynomialModelFile(path), spec);
   const auto j = ReadJsonFile(path);
   if (j.is_object() && JsonText(j, "format") == "hovs-dataset") {
     CheckDatasetManifest(j, path.string());  // units are objects with string names from here on
@@ -125,10 +143,11 @@ AnyModel LoadModelSpec(const std::string& spec, const std::string& unit, double 
   }
   return LoadCalibratedModel(path, "auto", scene_distance);
 }
+}  // namespace
 
 std::vector<std::string> ModelUnitNames(const std::string& spec) {
   const fs::path path(spec);
-  HOVS_REQUIRE(fs::exists(path), "--model " + spec, "file not found");
+  RequireFile(path, "a model file");
   std::vector<std::string> names;
   if (EndsWith(spec, ".yaml") || EndsWith(spec, ".yml")) {
     const std::string text = ReadFile(path);

@@ -7,6 +7,7 @@
 #include <string>
 #include <vector>
 
+#include "calib/model_io.h"  // LoadPolynomialModelFile
 #include "core/any_model.h"
 #include "core/manifest.h"
 #include "depth/stereo.h"  // LoadDatasetManifest, used with the models by every command
@@ -14,9 +15,6 @@
 #include "unwrap/rig_mapping.h"
 
 namespace hovs::apps {
-
-// OCamCalib's calib_results.txt (by extension .txt) or the polynomial model of a hovs calibration.json.
-PolynomialModel<double> LoadPolynomialModelFile(const std::filesystem::path& path);
 
 // The image size a model file may lack (OpenCV's omni_calibration sample writes none); 0 x 0: none given.
 struct ImageSize {

@@ -5,6 +5,7 @@
 #include "apps/commands.h"
 #include "apps/model_files.h"
 #include "core/error.h"
+#include "hw/fake_gige.h"
 
 namespace hovs::apps {
 namespace {
@@ -49,7 +50,8 @@ void AddSourceOptions(CLI::App* sub, SourceOptions* o) {
   sub->add_option("--simulate", o->simulate,
                   "serve a rendered dataset through Aravis' GigE Vision simulator (127.0.0.1, and 127.0.0.2 for a "
                   "second unit) and take the frames over the protocol");
-  AddBounded(sub, "--simulate-loss", &o->loss, "simulator: GVSP packets dropped on purpose (0.01 = 1 %)", 0, 0.99);
+  AddBounded(sub, "--simulate-loss", &o->loss, "simulator: GVSP packets dropped on purpose (0.01 = 1 %)", 0,
+             hw::kMaxLostPacketRatio);
   sub->add_option("--units", o->units, "unit names, one per camera (default: unit0, unit1; --simulate: the dataset's)");
   sub->add_option("--pixel-format", o->pixel_format, "Mono8 | BayerRG8 | Mono16")->capture_default_str();
   sub->add_option("--exposure-us", o->exposure, "exposure time, microseconds (default: the camera's)")

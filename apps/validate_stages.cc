@@ -30,6 +30,19 @@ void DesignAndRenders(Validation& v, uint64_t seed_value) {
   } else {
     v.Skip("design study", p.design ? "no X display for the figures (run under xvfb-run -a)" : "not in this preset");
   }
+  // The blur prediction against the renderer: slanted edges at 5 elevations x 3 distances through the reference
+  // lens (f/4, at its best single focus), their MTF50 measured from the rendered pixels.
+  v.Stage("optics: rendered slanted edges vs the predicted MTF50",
+          {{"edge-check", "--config", v.Src("design/reference.yaml"), "--samples", std::to_string(p.edge_samples),
+            "--seed", seed, "--out", v.Out("edge-check")}},
+          [&]() {
+            const json e = ReadJson(out / "edge-check" / "edge_check.json");
+            v.Check("optics: rendered edges, worst MTF50 error vs prediction", Num(e, {"max_relative_error"}), "max",
+                    p.edge_mtf50_rel, "", "edge-check/edge_check.json");
+            v.Check("optics: rendered edges within the MTF50 tolerance", Num(e, {"passed"}), "min",
+                    Num(e, {"edges_total"}), "", "edge-check/edge_check.json");
+            v.Figure("edge_check", v.Displayed(ReadFile(out / "edge-check" / "summary.txt")));
+          });
   // One calibration set per unit of the rig, each with its own seed.
   const auto mono_set = [&](const std::string& unit, uint64_t unit_seed) -> std::vector<std::string> {
     return {"dataset",

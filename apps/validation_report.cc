@@ -162,6 +162,10 @@ std::string Validation::Report() const {
     fig("design/figures/vertical_field.png", "vertical field of view over (a, b)", 420);
     page.Paragraph("Full design report: design/index.html");
   }
+  if (f.contains("edge_check")) {
+    page.Heading("Optics: rendered slanted edges against the predicted MTF50");
+    page.Preformatted(f["edge_check"].get<std::string>());
+  }
   if (f.contains("calibration")) {
     page.Heading("Detection and monocular calibration (both units)");
     rows.clear();

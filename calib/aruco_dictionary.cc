@@ -3,6 +3,8 @@
 #include <map>
 #include <opencv2/aruco.hpp>
 
+#include "core/error.h"
+
 namespace hovs::calib {
 namespace {
 const std::map<std::string, int>& Table() {
@@ -17,9 +19,11 @@ const std::map<std::string, int>& Table() {
 }
 }  // namespace
 
-int ArucoDictionaryId(const std::string& name) {
+int ArucoDictionaryId(const std::string& name, const std::string& where) {
   const auto it = Table().find(name);
-  return it == Table().end() ? -1 : it->second;
+  HOVS_REQUIRE(it != Table().end(), where, "unknown ArUco dictionary '", name, "' (known: ", ArucoDictionaryNames(),
+               ")");
+  return it->second;
 }
 
 std::string ArucoDictionaryNames() {

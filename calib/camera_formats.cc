@@ -1,5 +1,8 @@
 #include "calib/camera_formats.h"
 
+#include <algorithm>
+#include <cctype>
+
 #include <yaml-cpp/yaml.h>
 
 #include <cmath>
@@ -221,8 +224,19 @@ UnifiedModel<double> UnifiedFromKalibr(const KalibrCamera& c, const std::string&
   return m;
 }
 
+void CheckMeiCameraName(const std::string& name, const std::string& where) {
+  const bool plain = !name.empty() && name.size() <= 64 && std::all_of(name.begin(), name.end(), [](unsigned char c) {
+    return std::isalnum(c) || c == '_' || c == '-' || c == '.';
+  });
+  std::string shown;
+  for (unsigned char c : name) shown += c == '\n' ? std::string("\\n") : c < 32 ? std::string("?") : std::string(1, c);
+  HOVS_REQUIRE(plain, where, "'", shown,
+               "' is not a usable camera name (1 to 64 letters, digits, '_', '-' or '.'; it is written into YAML)");
+}
+
 std::string FormatMeiYaml(const UnifiedModel<double>& m, const std::string& name) {
   HOVS_REQUIRE(m.skew == 0, "MEI YAML", "the MEI model has no skew (the model's is ", m.skew, ")");
+  CheckMeiCameraName(name, "camera_name");
   const auto num = [](double v) { return FormatNumber("%.17g", v); };
   return "%YAML:1.0\n---\nmodel_type: MEI\ncamera_name: " + name + "\nimage_width: " + std::to_string(m.width) +
          "\nimage_height: " + std::to_string(m.height) + "\nmirror_parameters:\n   xi: " + num(m.xi) +

@@ -50,6 +50,9 @@ std::vector<KalibrCamera> ParseKalibrCamchain(const std::string& text, const std
 UnifiedModel<double> UnifiedFromKalibr(const KalibrCamera& camera, const std::string& where);
 bool LooksLikeKalibrCamchain(const std::string& text);
 
+// A MEI file's camera_name is written as a plain YAML scalar: 1 to 64 letters, digits, '_', '-' or '.' (a newline,
+// ': ', '#' or a quote would change the file's structure). Throws hovs::Error(where) otherwise.
+void CheckMeiCameraName(const std::string& name, const std::string& where);
 std::string FormatMeiYaml(const UnifiedModel<double>& model, const std::string& camera_name);
 UnifiedModel<double> ParseMeiYaml(const std::string& text, const std::string& source);
 bool LooksLikeMeiYaml(const std::string& text);

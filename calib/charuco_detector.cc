@@ -20,8 +20,7 @@ void CharucoSpec::Check(const std::string& where) const {
                square, ")");
   HOVS_REQUIRE(std::isfinite(marker) && marker > 0 && marker < square, where,
                "the marker must be smaller than the square (got ", marker, " m in ", square, " m)");
-  const int id = ArucoDictionaryId(dictionary);
-  HOVS_REQUIRE(id >= 0, where, "unknown ArUco dictionary '", dictionary, "' (known: ", ArucoDictionaryNames(), ")");
+  const int id = ArucoDictionaryId(dictionary, where);
   const int markers = squares_x * squares_y / 2;
   const int available = cv::aruco::getPredefinedDictionary(id)->bytesList.rows;
   HOVS_REQUIRE(markers <= available, where, "the board needs ", markers, " markers but ", dictionary, " has ",
@@ -57,9 +56,9 @@ CharucoSpec ParseCharucoSpec(const std::string& text, const std::string& where) 
 namespace {
 
 cv::Ptr<cv::aruco::CharucoBoard> MakeBoard(const CharucoSpec& s) {
-  return cv::aruco::CharucoBoard::create(s.squares_x, s.squares_y, static_cast<float>(s.square),
-                                         static_cast<float>(s.marker),
-                                         cv::aruco::getPredefinedDictionary(ArucoDictionaryId(s.dictionary)));
+  return cv::aruco::CharucoBoard::create(
+      s.squares_x, s.squares_y, static_cast<float>(s.square), static_cast<float>(s.marker),
+      cv::aruco::getPredefinedDictionary(ArucoDictionaryId(s.dictionary, "ChArUco board")));
 }
 
 struct Found {

@@ -49,7 +49,7 @@ std::string FormatOcamCalibResults(const PolynomialModel<double>& m) {
 }
 
 PolynomialModel<double> ParseOcamCalibResults(const std::string& text, const std::string& source) {
-  std::istringstream in(text);
+  std::istringstream in(NormalisedText(text));
   std::string line;
   int lineno = 0;
   // The next data line (skipping comments and blank lines), as numbers.
@@ -135,7 +135,7 @@ std::string FormatOcamExtrinsics(const OcamExtrinsics& poses) {
 
 OcamExtrinsics ParseOcamExtrinsics(const std::string& text, const std::string& source) {
   OcamExtrinsics out;
-  std::istringstream in(text);
+  std::istringstream in(NormalisedText(text));
   std::string line, name;
   int lineno = 0;
   std::vector<double> m;

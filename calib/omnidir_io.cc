@@ -330,7 +330,7 @@ OmnidirFile ParseOmnidirXml(const std::string& text, const std::string& source) 
 }
 
 OmnidirFile LoadOmnidirYaml(const std::filesystem::path& path) {
-  HOVS_REQUIRE(std::filesystem::exists(path), path.string(), "file not found");
+  RequireFile(path, "omnidir file");
   const std::string text = ReadFile(path);
   if (LooksLikeOmnidirXml(text)) return ParseOmnidirXml(text, path.string());
   return ParseOmnidirYaml(text, path.string());

@@ -425,7 +425,7 @@ std::vector<BoardObservation> LoadCornerCsv(const std::filesystem::path& path) {
 
 std::vector<BoardObservation> ParseCornerCsv(const std::string& text, const std::string& source) {
   const std::filesystem::path path(source);  // names the table in errors
-  std::stringstream in(text);
+  std::stringstream in(NormalisedText(text));
   std::string line;
   std::getline(in, line);
   if (!line.empty() && line.back() == '\r') line.pop_back();

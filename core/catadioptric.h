@@ -130,15 +130,23 @@ struct CatadioptricCamera {
 
   // The mirror point where X reflects into the camera centre. Solved in double, lifted to T.
   ProjectionStatus SolveReflectionPoint(const Vec3<T>& X, Vec3<T>* M) const {
+    return SolveReflectionPointVia(X, CameraCentre(), M);
+  }
+
+  // The mirror point where X reflects into the point C (mirror frame: the camera centre, or a point of a thin
+  // lens's pupil), tried from `start` (sheet x, y; e.g. the solution for a nearby C) before the usual guesses.
+  ProjectionStatus SolveReflectionPointVia(const Vec3<T>& X, const Vec3<T>& C, Vec3<T>* M,
+                                           const Vec2d* start = nullptr) const {
     const HyperboloidMirror<double> md = mirror.template Cast<double>();
     const Vec3d Xd = ConvertMatrix<double>(X);
-    const Vec3d Cd = ConvertMatrix<double>(Vec3<T>(CameraCentre()));
+    const Vec3d Cd = ConvertMatrix<double>(C);
     const double rim = md.RimRadius();
     const auto residual = [&](const auto& xy) { return ReflectionResidual(md, Xd, Cd, xy); };
 
-    // Starting points: the single-viewpoint guess, then points along the azimuth of X.
-    Vec2d starts[4];
+    // Starting points: the caller's, the single-viewpoint guess, then points along the azimuth of X.
+    Vec2d starts[5];
     int num_starts = 0;
+    if (start) starts[num_starts++] = *start;
     Vec3d m0;
     if (md.PointAlong(Xd, &m0)) starts[num_starts++] = m0.head<2>();
     const double rxy = Xd.head<2>().norm();
@@ -158,7 +166,6 @@ struct CatadioptricCamera {
       const Vec3d n = md.Normal(Md);
       if (!((Xd - Md).dot(n) > 0)) return ProjectionStatus::kInsideMirror;
       if (!((Cd - Md).dot(n) > 0)) return ProjectionStatus::kNoSolution;
-      const Vec3<T> C = CameraCentre();
       const auto residual_t = [&](const Vec2<T>& p) { return ReflectionResidual(mirror, X, C, p); };
       const Vec2<T> xy_t = LiftNewton2<T>(residual_t, xy, r.jacobian);
       *M = mirror.SurfacePoint(xy_t(0), xy_t(1));

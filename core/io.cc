@@ -11,6 +11,7 @@
 #include <cstdio>
 #include <cstring>
 #include <fstream>
+#include <map>
 #include <mutex>
 #include <optional>
 #include <nlohmann/json.hpp>
@@ -35,6 +36,13 @@ std::mutex g_inputs_mutex;
 std::vector<fs::path>& Inputs() {
   static std::vector<fs::path> inputs;
   return inputs;
+}
+struct Expected {
+  std::string checksum, record;
+};
+std::map<fs::path, Expected>& ExpectedChecksums() {  // by resolved path; under g_inputs_mutex
+  static std::map<fs::path, Expected> expected;
+  return expected;
 }
 
 // The absolute, normalised form of a path whose last parts may not exist (symbolic links resolved where they
@@ -65,6 +73,35 @@ void NoteInput(const fs::path& path) {
 void ClearNotedInputs() {
   std::lock_guard<std::mutex> lock(g_inputs_mutex);
   Inputs().clear();
+  ExpectedChecksums().clear();
+}
+
+void ExpectChecksum(const fs::path& path, const std::string& checksum, const std::string& record) {
+  const fs::path r = Resolved(path);
+  std::lock_guard<std::mutex> lock(g_inputs_mutex);
+  ExpectedChecksums()[r] = {checksum, record};
+}
+
+namespace {
+std::optional<Expected> ExpectedFor(const fs::path& path) {
+  const fs::path r = Resolved(path);
+  std::lock_guard<std::mutex> lock(g_inputs_mutex);
+  const auto it = ExpectedChecksums().find(r);
+  if (it == ExpectedChecksums().end()) return std::nullopt;
+  return it->second;
+}
+void RequireMatch(const fs::path& path, const Expected& e, const std::string& actual) {
+  HOVS_REQUIRE(actual == e.checksum, path.string(), "does not match its checksum in ", e.record, " (", actual,
+               ", recorded ", e.checksum, "): the file was changed or damaged after it was written");
+}
+}  // namespace
+
+void VerifyExpectedChecksum(const fs::path& path) {
+  if (const auto e = ExpectedFor(path)) RequireMatch(path, *e, FileChecksum(path));
+}
+
+void VerifyExpectedChecksum(const fs::path& path, const std::string& bytes) {
+  if (const auto e = ExpectedFor(path)) RequireMatch(path, *e, TextChecksum(bytes));
 }
 
 std::vector<fs::path> NotedInputs() {
@@ -98,12 +135,17 @@ void WriteFileAtomic(const fs::path& path, const std::string& content) {
   UnregisterCleanup(tmp);
 }
 
-std::string ReadFile(const fs::path& path, size_t max_bytes) {
+void RequireFile(const fs::path& path, const std::string& what) {
   std::error_code ec;
   const auto st = fs::status(path, ec);
-  HOVS_REQUIRE(fs::exists(st), path.string(), "file not found");
-  HOVS_REQUIRE(!fs::is_directory(st), path.string(), "is a folder, not a file");
+  HOVS_REQUIRE(fs::exists(st), path.string(), what == "a file" ? std::string("file") : what, " not found");
+  HOVS_REQUIRE(!fs::is_directory(st), path.string(), "is a folder, not ", what);
   HOVS_REQUIRE(fs::is_regular_file(st), path.string(), "is not a regular file");
+}
+
+std::string ReadFile(const fs::path& path, size_t max_bytes) {
+  RequireFile(path);
+  std::error_code ec;
   const auto size = fs::file_size(path, ec);
   HOVS_REQUIRE(!ec, path.string(), "cannot read: ", ec.message());
   HOVS_REQUIRE(size <= max_bytes, path.string(), "is ", size, " bytes; at most ", max_bytes, " are read");
@@ -113,7 +155,23 @@ std::string ReadFile(const fs::path& path, size_t max_bytes) {
   std::string data(size, '\0');
   in.read(data.data(), static_cast<std::streamsize>(size));
   HOVS_REQUIRE(static_cast<size_t>(in.gcount()) == size, path.string(), "read failed");
+  VerifyExpectedChecksum(path, data);
   return data;
+}
+
+std::string NormalisedText(const std::string& text) {
+  const size_t start = text.rfind("\xEF\xBB\xBF", 0) == 0 ? 3 : 0;
+  std::string out;
+  out.reserve(text.size() - start);
+  for (size_t i = start; i < text.size(); ++i) {
+    if (text[i] != '\r') {
+      out += text[i];
+    } else {
+      out += '\n';
+      if (i + 1 < text.size() && text[i + 1] == '\n') ++i;
+    }
+  }
+  return out;
 }
 
 std::vector<fs::path> ListImageFiles(const fs::path& folder) {
@@ -299,21 +357,25 @@ StagedDirectory::StagedDirectory(fs::path target, std::string command, std::vect
   const fs::path parent = target_.has_parent_path() ? target_.parent_path() : fs::path(".");
   std::error_code ec;
   fs::create_directories(parent, ec);
-  HOVS_REQUIRE(!ec, parent.string(), "cannot create folder: ", ec.message());
+  HOVS_REQUIRE(!ec, target_.string(), "cannot create the folder that holds it (", parent.string(), "): ", ec.message());
   staging_ = HiddenSibling(parent, target_.filename().string(), kStagingTag);
   if (resume) {
     if (const auto earlier = NewestDeadStaging(parent, target_.filename().string(), command_)) {
       fs::rename(*earlier, staging_, ec);
       HOVS_REQUIRE(!ec, earlier->string(), "cannot take over the interrupted run's folder: ", ec.message());
-      resumed_ = true;
+      // What a killed run kept is never removed by a run that fails: a resume refused for its configuration (or
+      // failing for any other reason) leaves the folder, now under this process's name, for the next --resume.
+      resumed_ = keep_ = true;
     }
   }
-  CleanStaleStaging(parent, target_.filename().string(), keep_interrupted);
+  // Other runs' leftovers are only renamed here (a capture's frames); they are removed when this run commits, so
+  // that a run refused or failing never deletes what an interrupted run kept.
+  if (keep_interrupted) CleanStaleStaging(parent, target_.filename().string(), true);
   if (!resumed_) {
     fs::create_directory(staging_, ec);
-    HOVS_REQUIRE(!ec, staging_.string(), "cannot create the staging folder: ", ec.message());
+    HOVS_REQUIRE(!ec, target_.string(), "cannot write there (its staging folder beside it: ", ec.message(), ")");
   }
-  RegisterForCleanup(staging_);
+  if (!keep_) RegisterForCleanup(staging_);  // an interrupt removes a new staging folder, never an adopted one
   WriteOutputMarker(staging_, command_);
 }
 
@@ -327,21 +389,34 @@ StagedDirectory::~StagedDirectory() {
   UnregisterCleanup(staging_);
 }
 
-std::string FileChecksum(const fs::path& path) {
-  std::ifstream in(path, std::ios::binary);
-  HOVS_REQUIRE(in.good(), path.string(), "cannot read the file for its checksum");
-  uint64_t h = 14695981039346656037ull;
-  std::vector<char> buf(1 << 16);
-  while (in) {
-    in.read(buf.data(), static_cast<std::streamsize>(buf.size()));
-    const std::streamsize n = in.gcount();
-    for (std::streamsize i = 0; i < n; ++i)
-      h = (h ^ static_cast<uint8_t>(buf[static_cast<size_t>(i)])) * 1099511628211ull;
-  }
-  HOVS_REQUIRE(in.eof(), path.string(), "read error while taking its checksum");
+namespace {
+constexpr uint64_t kFnvBasis = 14695981039346656037ull;
+uint64_t Fnv1a(uint64_t h, const char* data, size_t n) {
+  for (size_t i = 0; i < n; ++i) h = (h ^ static_cast<uint8_t>(data[i])) * 1099511628211ull;
+  return h;
+}
+std::string ChecksumText(uint64_t h) {
   char text[40];
   std::snprintf(text, sizeof text, "fnv1a64:%016llx", static_cast<unsigned long long>(h));
   return text;
+}
+}  // namespace
+
+std::string FileChecksum(const fs::path& path) {
+  std::ifstream in(path, std::ios::binary);
+  HOVS_REQUIRE(in.good(), path.string(), "cannot read the file for its checksum");
+  uint64_t h = kFnvBasis;
+  std::vector<char> buf(1 << 16);
+  while (in) {
+    in.read(buf.data(), static_cast<std::streamsize>(buf.size()));
+    h = Fnv1a(h, buf.data(), static_cast<size_t>(in.gcount()));
+  }
+  HOVS_REQUIRE(in.eof(), path.string(), "read error while taking its checksum");
+  return ChecksumText(h);
+}
+
+std::string TextChecksum(const std::string& bytes) {
+  return ChecksumText(Fnv1a(kFnvBasis, bytes.data(), bytes.size()));
 }
 
 void StagedDirectory::Commit() {
@@ -365,6 +440,9 @@ void StagedDirectory::Commit() {
   committed_ = true;
   UnregisterCleanup(staging_);
   if (!old.empty()) fs::remove_all(old, ec);
+  // The target is complete: what killed runs left for it is obsolete.
+  CleanStaleStaging(target_.has_parent_path() ? target_.parent_path() : fs::path("."), target_.filename().string(),
+                    false);
 }
 
 }  // namespace hovs

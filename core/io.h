@@ -12,9 +12,17 @@ namespace hovs {
 // Writes content to path atomically (temporary file in the same folder, then rename). Throws hovs::Error.
 void WriteFileAtomic(const std::filesystem::path& path, const std::string& content);
 
+// Throws hovs::Error naming `path` unless it is a regular file: "<what> not found", or "is a folder, not <what>"
+// (a folder given where a file is expected), or "is not a regular file".
+void RequireFile(const std::filesystem::path& path, const std::string& what = "a file");
+
 // Reads a whole file, at most max_bytes (a larger file is an error naming it: inputs are parsed in memory). The
 // path is noted as an input of this process (NoteInput). Throws hovs::Error naming the file.
 std::string ReadFile(const std::filesystem::path& path, size_t max_bytes = size_t(1) << 30);
+
+// Text as its parsers read it: a UTF-8 byte-order mark at the start removed, and every line end (LF, CR LF, or a
+// lone CR as old Mac tools write) made LF, so that a table or model file from another system reads as written.
+std::string NormalisedText(const std::string& text);
 
 // The image files of a folder (png, jpg, jpeg, tif, tiff, exr, bmp, pgm; any case), sorted by name. Throws
 // hovs::Error naming the folder when it is not a folder or holds no image.
@@ -32,6 +40,16 @@ void NoteInput(const std::filesystem::path& path);
 std::vector<std::filesystem::path> NotedInputs();
 // Forgets the noted inputs: each command of a process (hovs validate runs several) starts with none.
 void ClearNotedInputs();
+
+// Files whose content a record vouches for (a dataset manifest's checksums): ReadFile checks the bytes it reads
+// against the expected checksum, and VerifyExpectedChecksum the files read by other means (OpenEXR through
+// OpenImageIO). A file that does not match is an error naming it, so a tampered or damaged image never passes for
+// the one the record names. ClearNotedInputs forgets the expectations too.
+void ExpectChecksum(const std::filesystem::path& path, const std::string& checksum, const std::string& record);
+// Throws hovs::Error naming `path` when a checksum is expected for it and the file (or `bytes`, its content
+// already read) does not match. Does nothing for other files.
+void VerifyExpectedChecksum(const std::filesystem::path& path);
+void VerifyExpectedChecksum(const std::filesystem::path& path, const std::string& bytes);
 
 // The marker file in every hovs output folder: {"format": "hovs-output", "command": "<command>", "hovs": version}.
 inline constexpr const char* kOutputMarker = ".hovs-output";
@@ -54,12 +72,13 @@ void CheckOutputFile(const std::filesystem::path& path, const std::string& signa
 // replaces `target` with the staged folder in one rename (an earlier output is moved aside first and removed
 // after). If Commit() is never called (an error was thrown), the destructor removes the staging folder and
 // `target` is left untouched; an interrupt removes it too (core/interrupt.h). Staging folders that a killed run
-// left behind for the same target are removed (or, with keep_interrupted, renamed to a visible
-// <name>.interrupted-<pid> beside it: a capture's frames are kept).
+// left behind for the same target are removed when this run commits, never before (with keep_interrupted they
+// are renamed at once to a visible <name>.interrupted-<pid> beside it: a capture's frames are kept).
 //
 // Resumable runs: with `resume`, the newest staging folder that a killed run of the same command left for the
-// same target becomes this run's staging folder, with what it holds (resumed() says so); KeepOnFailure() makes
-// an uncommitted staging folder stay when the object is destroyed, for such a later run.
+// same target becomes this run's staging folder, with what it holds (resumed() says so). An adopted folder is
+// never removed by this run: if it does not commit (a configuration refused, an error, an interrupt), the folder
+// stays for the next resume. KeepOnFailure() makes a new staging folder stay in the same way.
 class StagedDirectory {
  public:
   StagedDirectory(std::filesystem::path target, std::string command, std::vector<std::filesystem::path> inputs = {},
@@ -85,5 +104,7 @@ class StagedDirectory {
 // A file's checksum as "fnv1a64:<16 hex digits>" (FNV-1a, 64 bits): enough to tell a complete file from a
 // truncated or rewritten one. Throws hovs::Error naming the file when it cannot be read.
 std::string FileChecksum(const std::filesystem::path& path);
+// The same checksum of bytes in memory (a record's payload, a file already read).
+std::string TextChecksum(const std::string& bytes);
 
 }  // namespace hovs

@@ -68,6 +68,12 @@ double FiniteNumber(const nlohmann::json& v, const std::string& where) {
 }
 }  // namespace
 
+std::string JsonString(const nlohmann::json& j, const char* key, const std::string& where) {
+  HOVS_REQUIRE(j.is_object() && j.contains(key) && j[key].is_string(), where + " (" + key + ")",
+               "missing or not a string");
+  return j[key].get<std::string>();
+}
+
 double JsonNumber(const nlohmann::json& j, const char* key, const std::string& where) {
   HOVS_REQUIRE(j.is_object() && j.contains(key), where, "missing '", key, "'");
   return FiniteNumber(j[key], where + "." + key);

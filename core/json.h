@@ -21,6 +21,8 @@ nlohmann::json ReadJsonFile(const std::filesystem::path& path);
 // from a float to an int are undefined (6.7e79 read as a width); these name `where` and the key instead.
 // The string at j[key], or "" when j is not an object or the field is absent or not a string (no throw).
 std::string JsonText(const nlohmann::json& j, const char* key);
+// The string at j[key]; throws hovs::Error when absent or not a string.
+std::string JsonString(const nlohmann::json& j, const char* key, const std::string& where);
 // A finite number at j[key]; throws hovs::Error when absent, not a number or not finite.
 double JsonNumber(const nlohmann::json& j, const char* key, const std::string& where);
 // A whole number in [lo, hi] at j[key] (an integer, or a float without a fraction).

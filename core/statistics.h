@@ -51,6 +51,15 @@ inline double Median(std::vector<double> v) {
   return v[v.size() / 2];
 }
 
+// The p-quantile (p in [0, 1]) of sorted values by the nearest rank: the smallest value with at least a share p of
+// the values at or below it (index ceil(p n) - 1). 0 for none.
+inline double Percentile(const std::vector<double>& sorted, double p) {
+  if (sorted.empty()) return 0.0;
+  const double rank = std::ceil(p * static_cast<double>(sorted.size()));
+  const size_t k = static_cast<size_t>(std::max(1.0, rank)) - 1;
+  return sorted[std::min(k, sorted.size() - 1)];
+}
+
 // Order statistics of a sample (latencies, errors): median (upper of an even count), 95th percentile (the value
 // at index floor(0.95 n) of the sorted sample), maximum and mean. All 0 for an empty sample.
 struct SampleSummary {

@@ -8,12 +8,35 @@
 
 namespace hovs {
 
+namespace {
+// A key given twice in one mapping: yaml-cpp keeps both pairs and a lookup finds one of them, so the file would
+// silently mean something else than it says. Checked over the whole document (at most 64 levels deep).
+void RefuseDuplicateKeys(const YamlReader& r, const YAML::Node& n, const std::string& path, int depth) {
+  HOVS_REQUIRE(depth <= 64, r.Where(n, path), "nested deeper than 64 levels");
+  if (n.IsMap()) {
+    std::set<std::string> seen;
+    for (const auto& kv : n) {
+      const std::string k = kv.first.IsScalar() ? kv.first.Scalar() : "";
+      const std::string key = path.empty() ? k : path + "." + k;
+      HOVS_REQUIRE(!kv.first.IsScalar() || seen.insert(k).second, r.Where(kv.first, key), "duplicate key '", k,
+                   "' (given twice; give it once)");
+      RefuseDuplicateKeys(r, kv.second, key, depth + 1);
+    }
+  } else if (n.IsSequence()) {
+    for (size_t i = 0; i < n.size(); ++i) RefuseDuplicateKeys(r, n[i], path + "[" + std::to_string(i) + "]", depth + 1);
+  }
+}
+}  // namespace
+
 YAML::Node YamlReader::Load(const std::string& text) const {
+  YAML::Node root;
   try {
-    return YAML::Load(text);
+    root = YAML::Load(text);
   } catch (const YAML::ParserException& e) {
     throw Error(source_ + ":" + std::to_string(e.mark.line + 1), "not valid YAML: " + e.msg);
   }
+  RefuseDuplicateKeys(*this, root, "", 0);
+  return root;
 }
 
 std::string YamlReader::Where(const YAML::Node& n, const std::string& key) const {
@@ -23,6 +46,7 @@ std::string YamlReader::Where(const YAML::Node& n, const std::string& key) const
 }
 
 void YamlReader::OnlyKeys(const YAML::Node& map, const std::string& path, const std::set<std::string>& known) const {
+  Present(map, path);
   HOVS_REQUIRE(map.IsMap(), Where(map, path), "expected a mapping");
   std::set<std::string> seen;
   for (const auto& kv : map) {
@@ -38,14 +62,22 @@ void YamlReader::OnlyKeys(const YAML::Node& map, const std::string& path, const 
 
 const YAML::Node& YamlReader::Require(const YAML::Node& map, const std::string& path, const std::string& key,
                                       YAML::Node* out) const {
-  HOVS_REQUIRE(map.IsMap(), Where(map, path), "expected a mapping with '", key, "'");
-  *out = map[key];
-  HOVS_REQUIRE(out->IsDefined() && !out->IsNull(), Where(map, path), "missing '", path.empty() ? key : path + "." + key,
-               "'");
+  const std::string name = path.empty() ? key : path + "." + key;
+  HOVS_REQUIRE(map.IsDefined() && map.IsMap(), Where(map, path), "expected a mapping with '", name, "'");
+  // Looked up without touching the node first: a const lookup of an absent key is an invalid node, which
+  // yaml-cpp refuses to assign ("invalid node; this may result from using a map iterator...").
+  const YAML::Node found = static_cast<const YAML::Node&>(map)[key];
+  HOVS_REQUIRE(found.IsDefined() && !found.IsNull(), Where(map, path), "missing '", name, "'");
+  out->reset(found);
   return *out;
 }
 
+void YamlReader::Present(const YAML::Node& n, const std::string& key) const {
+  HOVS_REQUIRE(n.IsDefined() && !n.IsNull(), source_ + " (" + key + ")", "missing '", key, "'");
+}
+
 double YamlReader::Number(const YAML::Node& n, const std::string& key) const {
+  Present(n, key);
   HOVS_REQUIRE(n.IsScalar(), Where(n, key), "expected a number");
   double v = 0;
   try {
@@ -53,6 +85,32 @@ double YamlReader::Number(const YAML::Node& n, const std::string& key) const {
   } catch (const YAML::Exception&) { throw Error(Where(n, key), "expected a number, got '" + n.Scalar() + "'"); }
   HOVS_REQUIRE(std::isfinite(v), Where(n, key), "must be a finite number (got ", n.Scalar(), ")");
   return v;
+}
+
+double YamlReader::DistanceOrInfinity(const YAML::Node& n, const std::string& key) const {
+  Present(n, key);
+  if (n.IsScalar() && (n.Scalar() == "infinity" || n.Scalar() == "inf")) return HUGE_VAL;
+  const double v = Number(n, key);
+  HOVS_REQUIRE(v > 0, Where(n, key), "must be a positive distance in metres or 'infinity' (got ", v, ")");
+  return v;
+}
+
+ThinLens YamlReader::Lens(const YAML::Node& n, const std::string& key, double focal_length) const {
+  Present(n, key);
+  HOVS_REQUIRE(n.IsMap(), Where(n, key),
+               "expected a mapping {f_number or aperture_diameter, focus_distance, wavelength}");
+  OnlyKeys(n, key, {"f_number", "aperture_diameter", "focus_distance", "wavelength"});
+  HOVS_REQUIRE(!(n["f_number"] && n["aperture_diameter"]), Where(n, key),
+               "give the aperture as f_number or as aperture_diameter, not both");
+  ThinLens lens;
+  lens.focal_length = focal_length;
+  if (n["f_number"]) lens.f_number = Number(n["f_number"], key + ".f_number");
+  if (n["aperture_diameter"])
+    lens.f_number = focal_length / Positive(n["aperture_diameter"], key + ".aperture_diameter");
+  if (n["focus_distance"]) lens.focus_distance = DistanceOrInfinity(n["focus_distance"], key + ".focus_distance");
+  if (n["wavelength"]) lens.wavelength = Number(n["wavelength"], key + ".wavelength");
+  lens.Check(Where(n, key));
+  return lens;
 }
 
 double YamlReader::Positive(const YAML::Node& n, const std::string& key) const {
@@ -63,7 +121,8 @@ double YamlReader::Positive(const YAML::Node& n, const std::string& key) const {
 
 int YamlReader::Integer(const YAML::Node& n, const std::string& key) const {
   const double v = Number(n, key);
-  HOVS_REQUIRE(v == std::floor(v) && std::abs(v) < 1e9, Where(n, key), "expected an integer, got ", n.Scalar());
+  HOVS_REQUIRE(v == std::floor(v), Where(n, key), "expected an integer, got ", n.Scalar());
+  HOVS_REQUIRE(std::abs(v) < 1e9, Where(n, key), "expected an integer of magnitude below 1000000000, got ", n.Scalar());
   return static_cast<int>(v);
 }
 
@@ -85,17 +144,20 @@ std::string YamlReader::Name(const YAML::Node& n, const std::string& key) const 
 }
 
 bool YamlReader::Bool(const YAML::Node& n, const std::string& key) const {
+  Present(n, key);
   try {
     return n.as<bool>();
   } catch (const YAML::Exception&) { throw Error(Where(n, key), "expected true or false"); }
 }
 
 std::string YamlReader::String(const YAML::Node& n, const std::string& key) const {
+  Present(n, key);
   HOVS_REQUIRE(n.IsScalar(), Where(n, key), "expected a string");
   return n.as<std::string>();
 }
 
 Vec3d YamlReader::Vector3(const YAML::Node& n, const std::string& key) const {
+  Present(n, key);
   HOVS_REQUIRE(n.IsSequence() && n.size() == 3, Where(n, key), "expected [x, y, z]");
   return Vec3d(Number(n[0], key + "[0]"), Number(n[1], key + "[1]"), Number(n[2], key + "[2]"));
 }

@@ -10,6 +10,7 @@
 #include <string>
 
 #include "core/error.h"
+#include "core/lens.h"
 #include "core/types.h"
 
 namespace hovs {
@@ -36,6 +37,9 @@ class YamlReader {
   const YAML::Node& Require(const YAML::Node& map, const std::string& path, const std::string& key,
                             YAML::Node* out) const;
 
+  // Throws hovs::Error naming the key when n is absent (an invalid or null node): every accessor below checks
+  // this first, so a missing key is named instead of reaching yaml-cpp's own "invalid node" exception.
+  void Present(const YAML::Node& n, const std::string& key) const;
   double Number(const YAML::Node& n, const std::string& key) const;
   double Positive(const YAML::Node& n, const std::string& key) const;
   int Integer(const YAML::Node& n, const std::string& key) const;
@@ -47,6 +51,12 @@ class YamlReader {
   std::string String(const YAML::Node& n, const std::string& key) const;
   Vec3d Vector3(const YAML::Node& n, const std::string& key) const;
   std::array<float, 3> Colour(const YAML::Node& n, const std::string& key) const;  // [r, g, b] in [0, 1]
+
+  // A distance that may be "infinity" (or "inf"): a positive number otherwise.
+  double DistanceOrInfinity(const YAML::Node& n, const std::string& key) const;
+  // A lens block {f_number | aperture_diameter, focus_distance, wavelength} (core/lens.h) of a lens of the given
+  // focal length, each key optional (defaults: f/4, focused at infinity, 550 nm), checked (ThinLens::Check).
+  ThinLens Lens(const YAML::Node& n, const std::string& key, double focal_length) const;
 
   const std::string& source() const { return source_; }
 

@@ -1,13 +1,16 @@
 #include "depth/learning_export.h"
 
 #include <cmath>
+#include <cstdio>
 #include <vector>
 
 #include "core/any_model.h"
 #include "core/error.h"
 #include "core/io.h"
 #include "core/json.h"
+#include "core/large_pages.h"
 #include "core/manifest.h"
+#include "core/progress.h"
 #include "io/image_io.h"
 #include "scenes/ground_truth.h"
 #include "unwrap/remap.h"
@@ -82,11 +85,26 @@ int64_t ExportView(const UnitExport& u, const fs::path& image, const fs::path& e
 
 }  // namespace
 
+size_t EquirectMemoryBytes(int width, size_t units) {
+  const size_t pixels = size_t(width) * size_t(width / 2);
+  // Per unit: map_x, map_y (floats) and the remap table's dense tiles at worst as much again; per view: the 8-bit
+  // view, RGB floats, range and mask floats, and the PNG encoder's copy.
+  return units * pixels * 16 + pixels * (3 + 12 + 4 + 4 + 12);
+}
+
 EquirectExport ExportEquirect(const fs::path& manifest_path, const EquirectOptions& options, const fs::path& folder,
                               const nlohmann::json& versions) {
   options.Check("--width");
   const nlohmann::json manifest = LoadDatasetManifest(manifest_path);
   const std::string where = manifest_path.string();
+  RequireMemory("--width",
+                "an equirectangular export of " + std::to_string(manifest["units"].size()) + " units at " +
+                    std::to_string(options.width) + " x " + std::to_string(options.width / 2),
+                EquirectMemoryBytes(options.width, manifest["units"].size()), AvailableMemoryBytes(),
+                "give a smaller --width");
+  if (options.progress)
+    std::fprintf(stderr, "building the %d x %d maps of %zu units\n", options.width, options.width / 2,
+                 manifest["units"].size());
   std::vector<UnitExport> units;
   for (const auto& uj : manifest["units"]) {
     const std::string name = uj["name"].get<std::string>();
@@ -104,6 +122,9 @@ EquirectExport ExportEquirect(const fs::path& manifest_path, const EquirectOptio
   result.units = static_cast<int>(units.size());
   nlohmann::json poses = nlohmann::json::array();
   int64_t valid = 0, total = 0;
+  size_t views_total = 0, views_done = 0;
+  for (const auto& f : manifest["frames"]) views_total += f["views"].size();
+  const ProgressLine progress("view", views_total, options.progress);
   for (const auto& f : manifest["frames"]) {
     const std::string frame = "frame" + std::to_string(f["id"].get<int64_t>());
     nlohmann::json fp = {{"frame", frame}, {"id", f["id"]}, {"units", nlohmann::json::object()}};
@@ -113,6 +134,8 @@ EquirectExport ExportEquirect(const fs::path& manifest_path, const EquirectOptio
       HOVS_REQUIRE(v["ground_truth"].contains("exr"), where, "frame ", f["id"].get<int64_t>(),
                    " has no ground-truth image: the export needs its Z and mask channels (hovs dataset --truth "
                    "default or all)");
+      progress.Step(views_done + 1, views_done, views_total - views_done);
+      ++views_done;
       const std::string unit = v["unit"].get<std::string>();
       const UnitExport* u = nullptr;
       for (const auto& candidate : units)

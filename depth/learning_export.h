@@ -24,7 +24,8 @@
 namespace hovs::depth {
 
 struct EquirectOptions {
-  int width = 1024;  // the height is width / 2
+  int width = 1024;       // the height is width / 2
+  bool progress = false;  // a progress line on stderr (the maps' build, then each view)
   void Check(const std::string& where) const;
 };
 
@@ -34,7 +35,12 @@ struct EquirectExport {
 };
 
 // Writes the folder into `folder` (an existing, empty staging folder). Throws hovs::Error naming the manifest
-// when it is not a rendered dataset (no ground truth).
+// when it is not a rendered dataset (no ground truth), and "--width" when the maps and one view's buffers would
+// not fit in the memory left (EquirectMemoryBytes), before anything is built.
+// The memory an export of `units` units at `width` takes at its peak: each unit's per-pixel map and one view's
+// buffers (RGB, range, mask, the remapped view).
+size_t EquirectMemoryBytes(int width, size_t units);
+
 EquirectExport ExportEquirect(const std::filesystem::path& manifest, const EquirectOptions& options,
                               const std::filesystem::path& folder, const nlohmann::json& versions);
 

@@ -79,8 +79,7 @@ double Rms(const AnyModel& model, const Rigid3d& mirror_from_board, const std::v
 }  // namespace
 
 void MarkerDetectOptions::Check(const std::string& where) const {
-  HOVS_REQUIRE(calib::ArucoDictionaryId(dictionary) >= 0, where, "unknown ArUco dictionary '", dictionary,
-               "' (known: ", calib::ArucoDictionaryNames(), ")");
+  calib::ArucoDictionaryId(dictionary, where + " (dictionary)");
   HOVS_REQUIRE(views >= 1 && views <= 64, where, "views must be 1..64");
   HOVS_REQUIRE(hfov_deg > 0 && hfov_deg < 170 && width >= 64 && height >= 64, where, "bad view size or field");
   HOVS_REQUIRE(corner_refinement == "edges" || corner_refinement == "subpix", where + ".corner_refinement",
@@ -130,7 +129,8 @@ std::vector<CornerObservation> MarkerDetector::Detect(const unwrap::Image8& imag
   std::vector<unwrap::Image8> views;
   remapper.Run(image.View(image.channels == 3 ? unwrap::PixelFormat::kRgb8 : unwrap::PixelFormat::kGray8),
                unwrap::Interpolation::kBicubic, &views);
-  const auto dict = cv::aruco::getPredefinedDictionary(calib::ArucoDictionaryId(options_.dictionary));
+  const auto dict =
+      cv::aruco::getPredefinedDictionary(calib::ArucoDictionaryId(options_.dictionary, "marker detection"));
   auto params = cv::aruco::DetectorParameters::create();
   params->cornerRefinementMethod = cv::aruco::CORNER_REFINE_SUBPIX;
   params->cornerRefinementWinSize = 4;

@@ -60,7 +60,7 @@ DesignConfig ParseDesignConfigUnguarded(const std::string& text, const std::stri
   HOVS_REQUIRE(root.IsMap(), source, "expected a YAML mapping at the top level");
   r.OnlyKeys(root, "",
              {"name", "camera", "mirror", "mounting_height", "constraints", "objective", "search", "marked_design",
-              "resolution_samples", "long_range_elevation_deg", "near_ground_radius", "family"});
+              "resolution_samples", "long_range_elevation_deg", "near_ground_radius", "family", "lens", "blur"});
   DesignConfig cfg;
   cfg.source = source;
   cfg.text = text;
@@ -77,6 +77,20 @@ DesignConfig ParseDesignConfigUnguarded(const std::string& text, const std::stri
     p.camera.width = r.Integer(c["width"], "camera.width");
     p.camera.height = r.Integer(c["height"], "camera.height");
     p.camera.lens_aperture = r.Number(c["lens_aperture"], "camera.lens_aperture");
+  }
+  if (root["lens"]) p.camera.lens = r.Lens(root["lens"], "lens", p.camera.focal_length);
+  if (root["blur"]) {
+    const YAML::Node b = root["blur"];
+    r.OnlyKeys(b, "blur", {"limit_px", "scene_distance"});
+    if (b["limit_px"]) p.blur.limit_px = r.Positive(b["limit_px"], "blur.limit_px");
+    if (b["scene_distance"]) {
+      const YAML::Node d = b["scene_distance"];
+      HOVS_REQUIRE(d.IsSequence() && d.size() == 2, r.Where(d, "blur.scene_distance"),
+                   "expected [near, far] in metres from F1 (far may be infinity)");
+      p.blur.near = r.Positive(d[0], "blur.scene_distance[0]");
+      p.blur.far = r.DistanceOrInfinity(d[1], "blur.scene_distance[1]");
+      HOVS_REQUIRE(p.blur.far > p.blur.near, r.Where(d, "blur.scene_distance"), "far must exceed near");
+    }
   }
   if (root["mirror"]) {
     const YAML::Node m = root["mirror"];
@@ -162,7 +176,7 @@ DesignConfig ParseDesignConfig(const std::string& text, const std::string& sourc
 }
 
 DesignConfig LoadDesignConfig(const std::filesystem::path& path) {
-  HOVS_REQUIRE(std::filesystem::is_regular_file(path), path.string(), "config file not found");
+  RequireFile(path, "config file");
   return ParseDesignConfig(ReadFile(path), path.string());
 }
 

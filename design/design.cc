@@ -197,6 +197,14 @@ void CameraSpec::Check(const std::string& where) const {
   CheckFinitePositive(pixel_pitch, where + ".pixel_pitch", "pixel pitch");
   CheckFinitePositive(lens_aperture, where + ".lens_aperture", "lens aperture");
   HOVS_REQUIRE(width > 0 && height > 0, where, "sensor size must be positive (got ", width, " x ", height, ")");
+  Lens().Check(where + ".lens");
+}
+
+void BlurSpec::Check(const std::string& where) const {
+  HOVS_REQUIRE(std::isfinite(limit_px) && limit_px > 0, where + ".limit_px", "must be a positive blur in px (got ",
+               limit_px, ")");
+  HOVS_REQUIRE(std::isfinite(near) && near > 0 && !std::isnan(far) && far > near, where + ".scene_distance",
+               "must be [near, far] with 0 < near < far (far may be infinity; got [", near, ", ", far, "])");
 }
 
 double DesignProblem::NearGroundElevationDeg() const { return -std::atan2(mounting_height, near_ground_radius) / kDeg; }
@@ -207,6 +215,7 @@ double DesignProblem::RimLimitPx() const {
 
 void DesignProblem::Check(const std::string& where) const {
   camera.Check(where + ".camera");
+  blur.Check(where + ".blur");
   CheckFinitePositive(mounting_height, where + ".mounting_height", "mounting height");
   const auto check_range = [&](const Range& r, const std::string& name) {
     CheckFinitePositive(r.min, where + ".search." + name, name + " minimum");

@@ -31,6 +31,7 @@
 #include <vector>
 
 #include "core/catadioptric.h"
+#include "core/lens.h"
 
 namespace hovs::design {
 
@@ -39,10 +40,24 @@ struct CameraSpec {
   double pixel_pitch = 4.54e-6;  // m
   int width = 2750, height = 2200;
   double lens_aperture = 0.020;  // m, diameter of the lens (occludes the image centre)
+  ThinLens lens;                 // f-number, focus in force, wavelength (its focal length: Lens())
 
-  PinholeCamera<double> Pinhole() const {
-    return PinholeCamera<double>::FromPhysical(focal_length, pixel_pitch, width, height);
+  ThinLens Lens() const {
+    ThinLens l = lens;
+    l.focal_length = focal_length;
+    return l;
   }
+  // The projection at the focus in force: image scale s / pitch with s = f d_f / (d_f - f) (core/lens.h).
+  PinholeCamera<double> Pinhole() const { return Lens().Camera(pixel_pitch, width, height); }
+  void Check(const std::string& where) const;
+};
+
+// What the blur figures of a design cover (optics/README.md): the RMS radius a field point may have to count as
+// sharp (the depth of field's limit), and the scene distances from F1 the worst blur and the best single focus
+// are taken over.
+struct BlurSpec {
+  double limit_px = 1.0;
+  double near = 1.0, far = HUGE_VAL;  // m from F1
   void Check(const std::string& where) const;
 };
 
@@ -70,6 +85,7 @@ struct DesignProblem {
   double long_range_elevation_deg = -5.0;  // where long_range_resolution is measured
   double near_ground_radius = 3.0;         // m, the ground disc near_ground_coverage counts
   Constraints constraints;
+  BlurSpec blur;
   Objective objective = Objective::kSmallestSystem;
   Range a{0.020, 0.080}, b{0.020, 0.080}, d{0.080, 0.080};  // search box, m
 

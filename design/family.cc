@@ -128,6 +128,7 @@ MirrorFamily RunFamilyStudy(const DesignConfig& cfg) {
     }
     out.seconds[member.name] = Since(t);
     f.resolution = RadialResolution(f.Chosen().metrics.p, cfg.problem.camera, cfg.resolution_samples);
+    f.optics = AnalyseOptics(f.Chosen().metrics.p, f.problem, member.name);
     out.mirrors.push_back(std::move(f));
   }
   for (size_t i = 0; i < out.mirrors.size(); ++i)
@@ -161,6 +162,7 @@ nlohmann::json FamilyJson(const DesignConfig& cfg, const MirrorFamily& family) {
     m["integer_mm_optimum"] = f.integer_mm ? OptimumJson(*f.integer_mm) : nlohmann::json(nullptr);
     m["rod_position"] = f.Chosen().metrics.plate_height;
     m["rod_offset_from_first"] = f.Chosen().metrics.plate_height - family.mirrors.front().Chosen().metrics.plate_height;
+    if (f.optics) m["optics"] = OpticsJson(*f.optics);
     mirrors.push_back(m);
   }
   j["mirrors"] = mirrors;
@@ -205,6 +207,12 @@ std::string WriteFamilyReport(const DesignConfig& cfg, const MirrorFamily& famil
   }
 
   WriteFamilyFigures(cfg, family, dir / "figures");
+  {
+    std::string csv = BlurCsvHeader(/*with_mirror=*/true);
+    for (const FamilyMirror& f : family.mirrors)
+      if (f.optics) csv += BlurCsvRows(*f.optics, f.member.name);
+    WriteFileAtomic(dir / "blur.csv", csv);
+  }
 
   std::ostringstream sum;
   sum << "hovs design: turret family " << cfg.name << " (" << family.mirrors.size() << " mirrors)\n";
@@ -217,6 +225,8 @@ std::string WriteFamilyReport(const DesignConfig& cfg, const MirrorFamily& famil
         << FormatNumber("%.4g", ObjectiveDisplay(f.member.objective, f.Chosen().objective))
         << (f.Chosen().max_violation <= 0 ? "" : "  [INFEASIBLE]") << "\n";
   }
+  for (const FamilyMirror& f : family.mirrors)
+    if (f.optics) sum << OpticsSummary(*f.optics, f.problem);
   for (const auto& [x, y] : family.coincident)
     sum << "  note: mirrors " << x << " and " << y << " coincide; the turret offers fewer scales\n";
   sum << "  report in " << out_dir.string() << "\n";
@@ -247,10 +257,15 @@ std::string WriteFamilyReport(const DesignConfig& cfg, const MirrorFamily& famil
       crow.push_back({f.member.name, c.name, FormatNumber("%.6g", c.value) + " " + c.unit,
                       FormatNumber("%.6g", c.limit) + " " + c.unit, c.value <= 0 ? "yes" : "NO"});
   page.Table({"mirror", "constraint", "g", "limit", "satisfied"}, crow);
+  for (const FamilyMirror& f : family.mirrors)
+    if (f.optics)
+      AppendOpticsSection(&page, *f.optics, f.problem,
+                          WriteOpticsFigures(*f.optics, f.problem, dir, f.member.name + "_"));
   page.Heading("Files");
   page.Paragraph(
       "family.json (every design, constraint and solver log, the config and versions), family.csv (the "
-      "table), radial_resolution.csv, config.yaml, summary.txt.");
+      "table), radial_resolution.csv, blur.csv (each mirror's blur atlas, a mirror column first), config.yaml, "
+      "summary.txt.");
   AppendConfigAndVersions(&page, cfg.text, versions);
   WriteFileAtomic(dir / "index.html", page.Render());
   stage.Commit();

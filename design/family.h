@@ -16,6 +16,7 @@
 #include <vector>
 
 #include "design/config.h"
+#include "design/optics_report.h"
 #include "design/design.h"
 
 namespace hovs::design {
@@ -26,6 +27,7 @@ struct FamilyMirror {
   Optimum continuous;
   std::optional<Optimum> integer_mm;
   std::vector<ResolutionSample> resolution;  // of the chosen design
+  std::optional<DesignOptics> optics;        // of the chosen design: focus, blur, depth of field
   const Optimum& Chosen() const { return integer_mm ? *integer_mm : continuous; }
 };
 

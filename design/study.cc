@@ -65,6 +65,15 @@ nlohmann::json ProblemJson(const DesignConfig& cfg) {
                  {"width", p.camera.width},
                  {"height", p.camera.height},
                  {"lens_aperture", p.camera.lens_aperture}};
+  const auto distance = [](double d) { return std::isinf(d) ? nlohmann::json("infinity") : nlohmann::json(d); };
+  const ThinLens lens = p.camera.Lens();
+  j["lens"] = {{"f_number", lens.f_number},
+               {"aperture_diameter", lens.ApertureDiameter()},
+               {"focus_distance", distance(lens.focus_distance)},
+               {"sensor_distance", lens.SensorDistance()},
+               {"wavelength", lens.wavelength},
+               {"relative_irradiance", lens.RelativeIrradiance()}};
+  j["blur"] = {{"limit_px", p.blur.limit_px}, {"scene_distance", {p.blur.near, distance(p.blur.far)}}};
   j["mounting_height"] = p.mounting_height;
   j["objective"] = ToString(p.objective);
   j["search"] = {{"a", {p.a.min, p.a.max}},
@@ -222,6 +231,14 @@ DesignStudy RunDesignStudy(const DesignConfig& cfg, SweepResult sweep, double sw
     st.resolution_marked = RadialResolution(*cfg.marked, cfg.problem.camera, cfg.resolution_samples);
   }
   st.resolution_continuous = RadialResolution(st.continuous.metrics.p, cfg.problem.camera, cfg.resolution_samples);
+  t = Clock::now();
+  st.optics.push_back(st.integer_mm ? AnalyseOptics(st.integer_mm->metrics.p, cfg.problem, "integer_mm_optimum")
+                                    : AnalyseOptics(st.continuous.metrics.p, cfg.problem, "continuous_optimum"));
+  const DesignPoint& chosen = st.optics.front().p;
+  if (cfg.marked && (std::abs(cfg.marked->a - chosen.a) > 1e-9 || std::abs(cfg.marked->b - chosen.b) > 1e-9 ||
+                     std::abs(cfg.marked->d - chosen.d) > 1e-9))
+    st.optics.push_back(AnalyseOptics(*cfg.marked, cfg.problem, "marked"));
+  st.seconds["optics"] = Since(t);
   return st;
 }
 
@@ -239,6 +256,9 @@ nlohmann::json DesignStudyJson(const DesignConfig& cfg, const DesignStudy& st) {
   for (uint32_t v : s.violated) feasible += v == 0;
   j["sweep"] = {{"points", s.size()}, {"feasible_points", feasible}, {"constraints", s.constraint_names}};
   if (auto b = s.BestFeasible()) j["sweep"]["best_feasible_objective"] = s.objective[*b];
+  nlohmann::json optics = nlohmann::json::array();
+  for (const DesignOptics& o : st.optics) optics.push_back(OpticsJson(o));
+  j["optics"] = optics;
   j["seconds"] = st.seconds;
   return j;
 }
@@ -284,6 +304,13 @@ std::string WriteDesignReport(const DesignConfig& cfg, const DesignStudy& st, co
     put("continuous_optimum", st.resolution_continuous);
     put("marked", st.resolution_marked);
     WriteFileAtomic(dir / "radial_resolution.csv", csv.str());
+  }
+
+  // Blur of the analysed designs.
+  {
+    std::string csv = BlurCsvHeader(/*with_mirror=*/true);
+    for (const DesignOptics& o : st.optics) csv += BlurCsvRows(o, o.label);
+    WriteFileAtomic(dir / "blur.csv", csv);
   }
 
   // Figures.
@@ -397,6 +424,7 @@ std::string WriteDesignReport(const DesignConfig& cfg, const DesignStudy& st, co
   else if (cfg.integer_mm)
     sum << "  integer-mm optimum   none: no integer-millimetre design is feasible\n";
   if (st.marked) line("marked design", *st.marked);
+  for (const DesignOptics& o : st.optics) sum << OpticsSummary(o, cfg.problem);
   sum << "  sweep: " << s.size() << " designs, " << j["sweep"]["feasible_points"].get<size_t>()
       << " feasible; report in " << out_dir.string() << "\n";
   WriteFileAtomic(dir / "summary.txt", sum.str());
@@ -438,13 +466,16 @@ std::string WriteDesignReport(const DesignConfig& cfg, const DesignStudy& st, co
       "Feasible region near the optimum: constraint boundaries, integer-millimetre designs (the article's Fig. 4)",
       540);
   page.Figure("figures/radial_resolution.png", "Radial resolution over the vertical field", 540);
+  for (const DesignOptics& o : st.optics)
+    AppendOpticsSection(&page, o, cfg.problem, WriteOpticsFigures(o, cfg.problem, dir, o.label + "_"));
   page.Heading("Solver log");
   std::string log;
   for (const auto& l : st.continuous.solver_log) log += l + "\n";
   page.Preformatted(log + "chosen: " + st.continuous.method);
   page.Heading("Files");
   page.Paragraph("design.json (every figure, the config and versions), sweep.csv (" + std::to_string(s.size()) +
-                 " designs), radial_resolution.csv, config.yaml, summary.txt.");
+                 " designs), radial_resolution.csv, blur.csv (the blur atlas of each analysed design: one row per "
+                 "elevation and scene distance), config.yaml, summary.txt.");
   AppendConfigAndVersions(&page, cfg.text, versions);
   WriteFileAtomic(dir / "index.html", page.Render());
 

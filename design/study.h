@@ -10,6 +10,7 @@
 
 #include "design/config.h"
 #include "design/design.h"
+#include "design/optics_report.h"
 #include "results/html.h"
 
 namespace hovs::design {
@@ -20,6 +21,7 @@ struct DesignStudy {
   std::optional<Optimum> integer_mm;
   std::optional<Optimum> marked;  // the config's marked design, evaluated
   std::vector<ResolutionSample> resolution_continuous, resolution_marked;
+  std::vector<DesignOptics> optics;       // the chosen design (integer-mm optimum, else continuous) and the marked one
   std::map<std::string, double> seconds;  // wall time per step
 };
 
@@ -46,7 +48,7 @@ nlohmann::json ProblemJson(const DesignConfig& config);
 nlohmann::json OptimumJson(const Optimum& o);
 nlohmann::json DesignStudyJson(const DesignConfig& config, const DesignStudy& study);
 
-// Writes out_dir/ atomically: config.yaml, sweep.csv, design.json, radial_resolution.csv, figures/*.png,
+// Writes out_dir/ atomically: config.yaml, sweep.csv, design.json, radial_resolution.csv, blur.csv, figures/*.png,
 // index.html, summary.txt. Nothing is left behind if anything fails. Returns the summary text.
 std::string WriteDesignReport(const DesignConfig& config, const DesignStudy& study,
                               const std::filesystem::path& out_dir);

@@ -67,11 +67,30 @@ void WriteFrameImage(const fs::path& path, const Frame& f) {
 CaptureResult CaptureDataset(const std::vector<CameraSource*>& sources, const CaptureOptions& o, const fs::path& out,
                              const nlohmann::json& versions, const std::atomic<bool>* stop) {
   o.Check(sources.size(), "capture");
+  // A capture that ends before its first frame is written leaves nothing behind (the folder as it was: absent or
+  // empty), so that the same command can run again into it; one with frames keeps them, with its manifest.
+  const bool created = !fs::exists(out);
+  struct RemoveIfEmptyCapture {
+    const fs::path& out;
+    bool created;
+    const int* written;
+    bool armed = true;
+    ~RemoveIfEmptyCapture() {
+      if (!armed || *written > 0) return;
+      std::error_code ec;
+      if (created) {
+        fs::remove_all(out, ec);
+      } else {
+        for (const char* f : {"images", "dataset.json", kOutputMarker}) fs::remove_all(out / f, ec);
+      }
+    }
+  };
+  CaptureResult r;
+  RemoveIfEmptyCapture cleanup{out, created, &r.written};
   fs::create_directories(out / "images");
   WriteOutputMarker(out, "capture");
   std::vector<std::string> names = o.unit_names;
   for (size_t k = names.size(); k < sources.size(); ++k) names.push_back("unit" + std::to_string(k));
-  CaptureResult r;
   nlohmann::json units = nlohmann::json::array();
   for (size_t k = 0; k < sources.size(); ++k) units.push_back({{"name", names[k]}, {"camera", sources[k]->Info()}});
   nlohmann::json& m = r.manifest;
@@ -179,6 +198,7 @@ CaptureResult CaptureDataset(const std::vector<CameraSource*>& sources, const Ca
   // Every wait is bounded overall: a frame set must be queued within grab_timeout_s of the previous one (or of
   // the start), whatever the cameras deliver meanwhile (incomplete frames, frames without a partner).
   auto last_progress = std::chrono::steady_clock::now();
+  std::vector<Frame> first_frame(sources.size());  // size and pixel format only
   try {
     while (queued < o.frames) {
       {
@@ -206,6 +226,15 @@ CaptureResult CaptureDataset(const std::vector<CameraSource*>& sources, const Ca
         HOVS_REQUIRE(f.has_value() || (stop && stop->load()), "capture", "camera ", names[k],
                      " delivered no frame within ", o.grab_timeout_s, " s (timeout)");
         if (!f) break;
+        if (f->complete) {
+          // Every frame of a camera has its first frame's size and pixel format (a dataset's unit has one).
+          Frame& first = first_frame[k];
+          if (first.width == 0) first.width = f->width, first.height = f->height, first.pixel_format = f->pixel_format;
+          HOVS_REQUIRE(f->width == first.width && f->height == first.height && f->pixel_format == first.pixel_format,
+                       "capture", "camera ", names[k], "'s frame ", f->frame_id, " is ", f->width, " x ", f->height,
+                       " ", f->pixel_format, " but its first was ", first.width, " x ", first.height, " ",
+                       first.pixel_format);
+        }
         if (!f->complete) {
           ++r.incomplete;
           std::lock_guard<std::mutex> lock(mu);

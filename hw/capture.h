@@ -45,7 +45,9 @@ struct CaptureResult {
 };
 
 // sources: one or two started-or-not sources (Start is called here). stop: set asynchronously (SIGINT) to end
-// the capture early with a valid manifest.
+// the capture early with a valid manifest. A capture that ends (by an error or a stop) before its first frame is
+// written leaves `out` as it found it (absent or empty), so that the same command can run into it again; every
+// frame of a camera must have its first frame's size and pixel format.
 CaptureResult CaptureDataset(const std::vector<CameraSource*>& sources, const CaptureOptions& options,
                              const std::filesystem::path& out, const nlohmann::json& versions,
                              const std::atomic<bool>* stop);

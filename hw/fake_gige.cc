@@ -20,8 +20,8 @@ FakeGigECamera::FakeGigECamera(const std::string& interface, const std::string& 
     HOVS_REQUIRE(f.width == frames_[0].width && f.height == frames_[0].height &&
                      f.data.size() == size_t(f.width) * f.height && f.data.size() >= 8,
                  "camera simulator", "frames must share one size and hold width x height bytes");
-  HOVS_REQUIRE(lost_packet_ratio >= 0 && lost_packet_ratio < 0.5, "camera simulator",
-               "lost packet ratio must lie in [0, 0.5)");
+  HOVS_REQUIRE(lost_packet_ratio >= 0 && lost_packet_ratio <= kMaxLostPacketRatio, "camera simulator",
+               "lost packet ratio must lie in [0, ", kMaxLostPacketRatio, "]");
   impl_->gv = arv_gv_fake_camera_new(interface.c_str(), serial.c_str());
   if (!impl_->gv || !arv_gv_fake_camera_is_running(impl_->gv)) {
     if (impl_->gv) g_object_unref(impl_->gv);

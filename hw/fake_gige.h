@@ -19,6 +19,9 @@ struct FakeFrame {
   std::vector<uint8_t> data;  // Mono8 or BayerRG8: width * height bytes
 };
 
+// The largest share of GVSP packets the simulator drops on purpose (beyond half, Aravis' resend cannot keep up).
+inline constexpr double kMaxLostPacketRatio = 0.49;
+
 class FakeGigECamera {
  public:
   // interface: an address like "127.0.0.1" or an interface name. lost_packet_ratio: GVSP packets the simulator

@@ -114,8 +114,9 @@ class GrblMachine::GrblAxis final : public rig::Axis {
   void MoveTo(double target) override {
     const rig::AxisSpec& s = spec();
     const std::string where = m_->port_.path() + " (axis " + rig::AxisName(id_) + ")";
-    HOVS_REQUIRE(std::isfinite(target) && target >= s.min && target <= s.max, where, "target ", target,
-                 " outside the travel [", s.min, ", ", s.max, "]");
+    HOVS_REQUIRE(std::isfinite(target) && target >= s.min && target <= s.max, where, "target ",
+                 rig::AxisValueText(id_, target), " outside the travel [", rig::AxisValueText(id_, s.min), ", ",
+                 rig::AxisValueText(id_, s.max), "]");
     const GrblAxisMap& map = m_->options_.axes.at(id_);
     const double wire = map.rotary ? target / kDeg : target * 1e3;
     char line[96];

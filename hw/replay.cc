@@ -46,6 +46,11 @@ class Replay : public CameraSource {
     const ReplayItem& it = items_[next_ % items_.size()];
     int w = 0, h = 0, c = 0;
     const io::PixelBuffer px = io::ReadImage(it.image, &w, &h, &c);
+    // A camera's frames keep one size: a replay whose images change size is refused at the first that does.
+    if (next_ == 0) first_width_ = w, first_height_ = h;
+    HOVS_REQUIRE(w == first_width_ && h == first_height_, it.image.string(), "is ", w, " x ", h,
+                 " but the replay's first frame is ", first_width_, " x ", first_height_,
+                 " (a camera's frames keep one size)");
     Frame f;
     f.width = w, f.height = h, f.pixel_format = format_;
     f.frame_id = next_;
@@ -70,6 +75,7 @@ class Replay : public CameraSource {
   bool loop_;
   bool running_ = false;
   size_t next_ = 0;
+  int first_width_ = 0, first_height_ = 0;
 };
 
 }  // namespace

@@ -143,6 +143,7 @@ PixelBuffer ReadImage(const fs::path& path, int* width, int* height, int* channe
     return out;
   }
   NoteInput(path);
+  VerifyExpectedChecksum(path);
   auto in = OpenWithOiio(path);
   const OIIO::ImageSpec& spec = in->spec();
   CheckSize(where, spec.width, spec.height, spec.nchannels, BitsOf(spec.format));
@@ -189,6 +190,7 @@ ExrChannels ReadExr(const fs::path& path) {
   std::error_code ec;
   HOVS_REQUIRE(fs::is_regular_file(path, ec), where, fs::exists(path, ec) ? "is not a file" : "file not found");
   NoteInput(path);
+  VerifyExpectedChecksum(path);
   auto in = OpenWithOiio(path);
   const OIIO::ImageSpec& spec = in->spec();
   HOVS_REQUIRE(spec.nchannels >= 1 && spec.nchannels <= 64, where, "has ", spec.nchannels, " channels (1 to 64 read)");

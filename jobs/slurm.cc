@@ -6,6 +6,7 @@
 
 #include <chrono>
 #include <cmath>
+#include <iostream>
 #include <sstream>
 #include <thread>
 
@@ -173,14 +174,27 @@ ProgramRun RunProgram(const std::vector<std::string>& argv) {
   return r;
 }
 
-std::string SubmitScript(const fs::path& script) {
-  const ProgramRun r = RunProgram({"sbatch", "--parsable", script.string()});
+std::string SubmitScript(const fs::path& script, bool hold) {
+  std::vector<std::string> argv = {"sbatch", "--parsable"};
+  if (hold) argv.push_back("--hold");
+  argv.push_back(script.string());
+  const ProgramRun r = RunProgram(argv);
   HOVS_REQUIRE(r.exit_code != 127, "sbatch", "not found on PATH: is Slurm's client installed (Debian: slurm-client)?");
   HOVS_REQUIRE(r.exit_code == 0, "sbatch", "refused ", script.string(), ": ", r.output);
   std::string id = r.output.substr(0, r.output.find_first_of(";\n"));  // "id" or "id;cluster"
   HOVS_REQUIRE(!id.empty() && id.find_first_not_of("0123456789") == std::string::npos, "sbatch", "unexpected reply '",
                r.output, "' (expected a job id)");
   return id;
+}
+
+void ReleaseJob(const std::string& job_id) {
+  const ProgramRun r = RunProgram({"scontrol", "release", job_id});
+  HOVS_REQUIRE(r.exit_code == 0, "scontrol release " + job_id, "refused: ", r.output);
+}
+
+void CancelJob(const std::string& job_id) {
+  const ProgramRun r = RunProgram({"scancel", job_id});
+  HOVS_REQUIRE(r.exit_code == 0, "scancel " + job_id, "refused: ", r.output);
 }
 
 bool TaskState::Active() const {
@@ -252,7 +266,8 @@ void MergeShards(const ShardedCommand& command, int shards, const fs::path& job_
   std::vector<fs::path> dirs;
   for (int i = 0; i < shards; ++i) dirs.push_back(ShardDir(job_dir, i));
   if (command.name == "tolerance")
-    study::MergeToleranceShards(dirs, command.out);
+    for (const auto& w : study::MergeToleranceShards(dirs, command.out))
+      std::cerr << "hovs slurm: warning: " << w << "\n";
   else if (command.name == "design")
     design::MergeDesignShards(dirs, command.out);
   else if (command.name == "dataset")

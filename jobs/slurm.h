@@ -49,7 +49,10 @@ ProgramRun RunProgram(const std::vector<std::string>& argv);
 
 // Submits the script with `sbatch --parsable`; returns the job id. Throws hovs::Error when sbatch is missing or
 // refuses the job (with its message).
-std::string SubmitScript(const std::filesystem::path& script);
+std::string SubmitScript(const std::filesystem::path& script, bool hold = false);
+// scontrol release (a job submitted held) and scancel; throw hovs::Error with Slurm's reply when refused.
+void ReleaseJob(const std::string& job_id);
+void CancelJob(const std::string& job_id);
 
 struct TaskState {
   int index = 0;

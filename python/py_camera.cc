@@ -10,6 +10,7 @@
 #include <utility>
 
 #include "apps/model_files.h"
+#include "core/io.h"
 #include "python/arrays.h"
 #include "python/bindings.h"
 
@@ -164,7 +165,7 @@ py::dict Parameters(const Camera& c) {
 
 Camera LoadCamera(const std::string& path, const std::string& unit, const std::string& model, double scene_distance,
                   const std::optional<std::pair<int, int>>& image_size) {
-  HOVS_REQUIRE(std::filesystem::exists(path), path, "file not found");
+  RequireFile(path, "model file");
   HOVS_REQUIRE(model == "auto" || model == "physical" || model == "polynomial" || model == "unified", "model",
                "expected auto, physical, polynomial or unified (got '", model, "')");
   apps::ImageSize size;

@@ -19,11 +19,17 @@ namespace {
 
 namespace fs = std::filesystem;
 
-py::dict ReadExrFile(const std::string& path) {
+// An EXR's channels; `image`, when given, is the file whose size the ground truth must have (as the CLI checks).
+py::dict ReadExrFile(const std::string& path, const fs::path& image = {}) {
   const io::ExrChannels ch = [&] {
     py::gil_scoped_release release;
     return io::ReadExr(path);
   }();
+  if (!image.empty()) {
+    const io::ImageHeader h = io::ReadImageHeader(image);
+    HOVS_REQUIRE(ch.width == h.width && ch.height == h.height, path, "the ground truth is ", ch.width, " x ", ch.height,
+                 " but its image ", image.string(), " is ", h.width, " x ", h.height);
+  }
   py::dict d;
   for (const auto& [name, values] : ch.channels) d[py::str(name)] = NewFloatImage(ch.width, ch.height, values.data());
   return d;
@@ -86,7 +92,7 @@ class Dataset {
     const auto& truth = Truth(id, unit);
     HOVS_REQUIRE(truth.contains("exr"), path_.string(), "frame ", id, " has no ground-truth image (written with ",
                  "--truth none)");
-    return ReadExrFile(ManifestPath(path_, truth["exr"]).string());
+    return ReadExrFile(ManifestPath(path_, truth["exr"]).string(), ManifestPath(path_, View(id, unit)["image"]));
   }
 
   py::dict Corners(int64_t id, const std::string& unit) const {
@@ -136,8 +142,9 @@ class Dataset {
 }  // namespace
 
 void BindDataset(py::module_& m) {
-  m.def("read_exr", &ReadExrFile, py::arg("path"),
-        "An OpenEXR file's channels by name, each float32 (H, W) (ground truth, range exports).");
+  m.def(
+      "read_exr", [](const std::string& path) { return ReadExrFile(path); }, py::arg("path"),
+      "An OpenEXR file's channels by name, each float32 (H, W) (ground truth, range exports).");
   py::class_<Dataset>(m, "Dataset", "A hovs dataset (its dataset.json manifest): rendered sets and real captures.")
       .def(py::init<const std::string&>(), py::arg("path"))
       .def_property_readonly("path", &Dataset::path)

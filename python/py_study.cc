@@ -65,6 +65,8 @@ Rigid3d RightFromLeft(const py::handle& pose) {
   const Rows r = AsRows(pose, 4, "right_from_left");
   HOVS_REQUIRE(!r.single && r.n == 4, "right_from_left", "expected a 4 x 4 matrix");
   const double* p = r.data();
+  for (int k = 0; k < 16; ++k)
+    HOVS_REQUIRE(std::isfinite(p[k]), "right_from_left", "entry (", k / 4, ", ", k % 4, ") is not a finite number");
   Eigen::Matrix3d R;
   for (int i = 0; i < 3; ++i)
     for (int j = 0; j < 3; ++j) R(i, j) = p[4 * i + j];

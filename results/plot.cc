@@ -41,6 +41,7 @@
 #include <filesystem>
 
 #include "core/error.h"
+#include "core/io.h"
 
 namespace {
 
@@ -204,7 +205,7 @@ void AddContours(vtkChartXY* chart, vtkImageData* image, const std::vector<doubl
 namespace hovs::results {
 
 ImageStats PngStats(const std::filesystem::path& path) {
-  HOVS_REQUIRE(std::filesystem::is_regular_file(path), path.string(), "PNG file not found");
+  RequireFile(path, "PNG file");
   vtkNew<vtkPNGReader> reader;
   HOVS_REQUIRE(reader->CanReadFile(path.c_str()), path.string(), "not a PNG file");
   reader->SetFileName(path.c_str());

@@ -3,6 +3,7 @@
 #include <cmath>
 
 #include "core/error.h"
+#include "core/format.h"
 
 namespace hovs::rig {
 
@@ -11,11 +12,19 @@ const char* AxisName(AxisId axis) {
   return kNames[static_cast<int>(axis)];
 }
 
-void AxisSpec::Check(const std::string& where) const {
-  HOVS_REQUIRE(std::isfinite(min) && std::isfinite(max) && min < max, where, "travel [", min, ", ", max,
+bool AxisIsAngular(AxisId axis) { return axis == AxisId::kTurret || axis == AxisId::kTiltX || axis == AxisId::kTiltY; }
+
+std::string AxisValueText(AxisId axis, double value) {
+  return AxisIsAngular(axis) ? FormatNumber("%.6g", value * 180 / M_PI) + " deg" : FormatNumber("%.6g", value) + " m";
+}
+
+void AxisSpec::Check(const std::string& where, AxisId axis) const {
+  const auto text = [&](double v) { return AxisValueText(axis, v); };
+  HOVS_REQUIRE(std::isfinite(min) && std::isfinite(max) && min < max, where, "travel [", text(min), ", ", text(max),
                "] must be finite with min < max");
-  HOVS_REQUIRE(std::isfinite(step) && step > 0 && step < max - min, where,
-               "step must be positive and below the travel");
+  // A motor step so coarse that the travel holds few positions cannot position anything.
+  HOVS_REQUIRE(std::isfinite(step) && step > 0 && step <= 0.01 * (max - min), where, "the step ", text(step),
+               " must be positive and at most a hundredth of the travel (", text(max - min), ")");
   HOVS_REQUIRE(std::isfinite(time_constant) && time_constant > 0 && time_constant <= 100, where,
                "time_constant must be in (0, 100] s");
   HOVS_REQUIRE(std::isfinite(backlash) && backlash >= 0 && backlash < 0.1 * (max - min), where,
@@ -26,9 +35,10 @@ void AxisSpec::Check(const std::string& where) const {
 
 SimulatedAxis::SimulatedAxis(AxisId id, const AxisSpec& spec, double start, uint64_t seed)
     : id_(id), spec_(spec), rng_(seed) {
-  spec_.Check(std::string("axis ") + AxisName(id));
-  HOVS_REQUIRE(start >= spec.min && start <= spec.max, std::string("axis ") + AxisName(id), "start ", start,
-               " outside the travel [", spec.min, ", ", spec.max, "]");
+  spec_.Check(std::string("axis ") + AxisName(id), id);
+  HOVS_REQUIRE(start >= spec.min && start <= spec.max, std::string("axis ") + AxisName(id), "start ",
+               AxisValueText(id, start), " outside the travel [", AxisValueText(id, spec.min), ", ",
+               AxisValueText(id, spec.max), "]");
   commanded_ = goal_ = motor_ = output_ = start;
 }
 
@@ -36,8 +46,8 @@ void SimulatedAxis::MoveTo(double target) {
   const std::string where = std::string("axis ") + AxisName(id_);
   HOVS_REQUIRE(std::isfinite(target), where, "target is not a finite number");
   const double q = spec_.min + std::round((target - spec_.min) / spec_.step) * spec_.step;
-  HOVS_REQUIRE(q >= spec_.min - 1e-12 && q <= spec_.max + 1e-12, where, "target ", target, " outside the travel [",
-               spec_.min, ", ", spec_.max, "]");
+  HOVS_REQUIRE(q >= spec_.min - 1e-12 && q <= spec_.max + 1e-12, where, "target ", AxisValueText(id_, target),
+               " outside the travel [", AxisValueText(id_, spec_.min), ", ", AxisValueText(id_, spec_.max), "]");
   if (q == commanded_) return;
   // Lost steps: the motor covers only part of the move; the controller counts it all.
   goal_ = motor_ + (q - commanded_) * (1.0 - fault_.lost_steps);

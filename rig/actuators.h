@@ -24,6 +24,10 @@ enum class AxisId { kTurret = 0, kRod, kX, kY, kTiltX, kTiltY, kFocus };
 inline constexpr int kAxisCount = 7;
 const char* AxisName(AxisId axis);
 inline AxisId AxisAt(int i) { return static_cast<AxisId>(i); }
+// The turret and the tilts are angles (radians in code, degrees in machine files); the others lengths (m).
+bool AxisIsAngular(AxisId axis);
+// A position or length of the axis as the machine file gives it: "12.5 deg" or "0.0032 m".
+std::string AxisValueText(AxisId axis, double value);
 
 // What a real or simulated axis is like. The simulated plant uses every field; a real controller reports its
 // travel and step and leaves the rest to the hardware.
@@ -33,7 +37,8 @@ struct AxisSpec {
   double time_constant = 0.05;  // s, first-order lag of the motor towards its commanded position
   double backlash = 0;          // dead band between the motor and the output, full width
   double noise = 0;             // 1 sigma, added to the output at the end of every move (repeatability)
-  void Check(const std::string& where) const;
+  // `axis` gives the unit of the values in errors (the machine file's: degrees for the angular axes).
+  void Check(const std::string& where, AxisId axis) const;
 };
 
 // Injectable faults of the simulated plant.

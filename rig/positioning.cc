@@ -4,11 +4,16 @@
 #include <random>
 
 #include "core/error.h"
+#include "core/statistics.h"
 
 namespace hovs::rig {
 namespace {
 
 constexpr double kDeg = M_PI / 180.0;
+// The label's PnP sigma (LabelMeasurement::sigma) assumes independent corner errors; the measurements of a
+// rendered unit scatter up to twice as much (the corners' errors are correlated, their refinement biased), so the
+// loop and the resolution check take twice it as the noise.
+constexpr double kSigmaMargin = 2.0;
 
 // The controlled axes and the measured deviation each one cancels.
 constexpr AxisId kControlled[] = {AxisId::kX, AxisId::kY, AxisId::kRod, AxisId::kTiltX, AxisId::kTiltY};
@@ -73,8 +78,11 @@ std::array<double, kAxisCount> DisturbedStart(const TurretSpec& spec, int k, con
   axes[static_cast<int>(AxisId::kTiltY)] = tilt * std::sin(b) - seat.rotation.y();
   for (int i = 0; i < kAxisCount; ++i) {
     const AxisSpec& s = spec.axes[i];
-    HOVS_REQUIRE(axes[i] >= s.min && axes[i] <= s.max, "disturbed start", "axis ", AxisName(AxisAt(i)),
-                 " would start at ", axes[i], ", outside its travel [", s.min, ", ", s.max, "]");
+    const AxisId id = AxisAt(i);
+    HOVS_REQUIRE(axes[i] >= s.min && axes[i] <= s.max, spec.source + " (axes." + AxisName(id) + ")",
+                 "the start asked of mirror '", spec.mirrors.at(k).id, "' puts axis ", AxisName(id), " at ",
+                 AxisValueText(id, axes[i]), ", outside its travel [", AxisValueText(id, s.min), ", ",
+                 AxisValueText(id, s.max), "]: ask for a smaller start or widen the travel");
   }
   return axes;
 }
@@ -110,9 +118,11 @@ AlignResult Align(Plant& plant, const TurretSpec& spec, const AlignOptions& o) {
   std::array<double, kControlledCount> integral{}, last_error{}, last_move{}, origin{};
   for (int j = 0; j < kControlledCount; ++j) origin[j] = machine.axis(kControlled[j]).Reported();
   std::array<bool, kControlledCount> saturated{};
-  // Fault evidence per axis: commanded and measured motion over recent moves.
+  // Fault evidence per axis: commanded and measured motion over recent moves, and the label's measurement noise
+  // (the median of its measurements' sigmas): motion is only judged where it stands out of that noise.
   std::array<double, kControlledCount> stuck_commanded{}, stuck_measured{};
-  std::array<int, kControlledCount> short_moves{};
+  std::array<int, kControlledCount> short_moves{}, stuck_moves{};
+  std::array<std::vector<double>, kControlledCount> sigmas;
   bool have_last = false;
   int label_failures = 0;
   AlignResult r;
@@ -142,7 +152,13 @@ AlignResult Align(Plant& plant, const TurretSpec& spec, const AlignOptions& o) {
     step.measured = m.pose;
     step.markers = m.markers;
     step.label_rms_px = m.rms_px;
+    step.label_sigma = m.sigma;
     const auto e = Deviations(m.pose);
+    std::array<double, kControlledCount> noise{};
+    for (int j = 0; j < kControlledCount; ++j) {
+      sigmas[j].push_back(m.sigma[j]);
+      noise[j] = kSigmaMargin * Median(sigmas[j]);
+    }
     bool within = true;
     for (int j = 0; j < kControlledCount; ++j) within = within && std::abs(e[j]) <= tol[j];
     if (within) {
@@ -158,10 +174,16 @@ AlignResult Align(Plant& plant, const TurretSpec& spec, const AlignOptions& o) {
         const std::string name = AxisName(kControlled[j]);
         stuck_commanded[j] += std::abs(commanded);
         stuck_measured[j] += commanded == 0 ? 0 : measured * (commanded > 0 ? 1 : -1);
-        if (stuck_commanded[j] >= 5 * tol[j] && std::abs(stuck_measured[j]) < 0.2 * stuck_commanded[j])
+        stuck_moves[j] += commanded != 0;
+        // The measured motion over those moves is a sum of measurement differences: its noise is about
+        // sigma sqrt(2 moves). A stuck axis is called only when the commanded motion is six times that.
+        const double motion_noise = noise[j] * std::sqrt(2.0 * std::max(1, stuck_moves[j]));
+        if (stuck_commanded[j] >= 5 * tol[j] && stuck_commanded[j] >= 6 * motion_noise &&
+            std::abs(stuck_measured[j]) < 0.2 * stuck_commanded[j])
           fail(name, "axis " + name + " does not move: commanded " + Format(stuck_commanded[j], units[j], scales[j]) +
                          " in all, the label measured " + Format(stuck_measured[j], units[j], scales[j]) + " (stuck)");
-        if (std::abs(commanded) >= 10 * tol[j]) {
+        // Lost steps: a move that a 20 % shortfall makes stand out of the noise by three sigmas.
+        if (std::abs(commanded) >= 10 * tol[j] && std::abs(commanded) >= 15 * std::sqrt(2.0) * noise[j]) {
           const double ratio = measured / commanded;
           short_moves[j] = ratio < 0.8 ? short_moves[j] + 1 : 0;
           if (short_moves[j] >= 2 && r.failure.empty())
@@ -169,8 +191,8 @@ AlignResult Align(Plant& plant, const TurretSpec& spec, const AlignOptions& o) {
                            " of the commanded " + Format(commanded, units[j], scales[j]) +
                            " (twice in a row); home the axis");
         }
-        if (std::abs(measured) >= 0.2 * std::abs(commanded) && commanded != 0)
-          stuck_commanded[j] = stuck_measured[j] = 0;
+        if (std::abs(measured) >= 0.2 * std::abs(commanded) && commanded != 0 && std::abs(measured) > 3 * noise[j])
+          stuck_commanded[j] = stuck_measured[j] = 0, stuck_moves[j] = 0;
       }
       if (!r.failure.empty()) {
         step.note = r.failure;
@@ -210,6 +232,36 @@ AlignResult Align(Plant& plant, const TurretSpec& spec, const AlignOptions& o) {
     }
   r.final_truth = plant.Truth();
   return r;
+}
+
+void RequireLabelPrecision(const TurretSpec& spec, int k, const AlignOptions& o, const std::string& where) {
+  o.Check("align options");
+  const std::array<double, kControlledCount> sigma = LabelPrecision(spec, k, o.label, 1);
+  const double tol[kControlledCount] = {o.lateral_tolerance, o.lateral_tolerance, o.height_tolerance, o.tilt_tolerance,
+                                        o.tilt_tolerance};
+  const char* names[kControlledCount] = {"the lateral offset x", "the lateral offset y", "the height",
+                                         "the tilt about x", "the tilt about y"};
+  const char* units[kControlledCount] = {"mm", "mm", "mm", "deg", "deg"};
+  const double scales[kControlledCount] = {1e3, 1e3, 1e3, 1 / kDeg, 1 / kDeg};
+  int worst = 0;  // the deviation whose noise is largest against its tolerance
+  for (int j = 1; j < kControlledCount; ++j)
+    if (sigma[j] / tol[j] > sigma[worst] / tol[worst]) worst = j;
+  const int j = worst;
+  if (kSigmaMargin * sigma[j] <= 2 * tol[j]) return;
+  // The sigma grows about as the square of the pixel size (coarser pixels and less sharp corners); the
+  // suggestion is the coarsest resolution below that which divides the image.
+  int finer = std::max(1, static_cast<int>(std::floor(spec.downscale * std::sqrt(tol[j] / sigma[j]))));
+  while (finer > 1 && (spec.camera.width % finer != 0 || spec.camera.height % finer != 0)) --finer;
+  const PinholeCamera<double> cam = spec.ImageCamera();
+  throw Error(where, "at " + std::to_string(cam.width) + " x " + std::to_string(cam.height) + " pixels (1/" +
+                         std::to_string(spec.downscale) + " of the camera's) the label measures " + names[j] +
+                         " of mirror '" + spec.mirrors.at(k).id + "' to " + Format(sigma[j], units[j], scales[j]) +
+                         " (1 sigma; real measurements scatter up to twice as much), more than the alignment's "
+                         "tolerance of " +
+                         Format(tol[j], units[j], scales[j]) +
+                         ": the loop cannot align there; use a finer resolution "
+                         "(--downscale " +
+                         std::to_string(finer) + " or less)");
 }
 
 }  // namespace hovs::rig

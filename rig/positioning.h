@@ -12,9 +12,12 @@
 // command is limited to the travel; while it saturates the error is not integrated (anti-windup).
 //
 // Faults end the loop with one error naming the axis or the measurement, never an endless loop:
-//   stuck axis    the axis was commanded at least 5 tolerances over the last moves and the measurement did not
-//                 follow (less than 20 % of it)
-//   lost steps    over two moves of at least 10 tolerances, the measured motion was under 80 % of the commanded
+//   stuck axis    the axis was commanded at least 5 tolerances, and 6 times the noise of the measured motion,
+//                 over the last moves, and the measurement did not follow (less than 20 % of it)
+//   lost steps    over two moves of at least 10 tolerances (and 15 times the noise of one measured move), the
+//                 measured motion was under 80 % of the commanded
+// The noise is the label's own (twice the median PnP sigma of its measurements; RequireLabelPrecision), so that
+// a healthy axis at a coarse resolution is not taken for a faulty one.
 //   label         the label could not be measured in three images in a row
 //   not converged max_iterations reached
 #pragma once
@@ -105,6 +108,7 @@ struct LoopStep {
   std::array<double, kAxisCount> command;   // sent (equal to reported for axes not moved)
   int markers = 0;
   double label_rms_px = 0;
+  std::array<double, 5> label_sigma{};  // LabelMeasurement::sigma of the measurement
   std::string note;
 };
 
@@ -118,5 +122,12 @@ struct AlignResult {
 };
 
 AlignResult Align(Plant& plant, const TurretSpec& spec, const AlignOptions& options);
+
+// Refuses, before any run, an image resolution at which the label cannot measure mirror k's pose to the
+// alignment's tolerances: a deviation whose noise (twice LabelPrecision's sigma: real measurements scatter up to
+// that) exceeds twice its tolerance could never be seen within it, and the loop would chase its noise (and take
+// that noise for a stuck axis). Throws
+// hovs::Error(where) naming the deviation, both figures and the coarsest resolution worth trying.
+void RequireLabelPrecision(const TurretSpec& spec, int k, const AlignOptions& options, const std::string& where);
 
 }  // namespace hovs::rig

@@ -44,11 +44,21 @@ Prepared AlignAndFocus(const TurretSpec& spec, int k, uint64_t seed) {
 std::vector<MirrorCalibration> CalibrateRig(const TurretSpec& spec, const RigCalibrationOptions& o, const fs::path& out,
                                             const std::map<std::string, std::string>& versions) {
   o.Check("rig calibrate");
+  for (size_t k = 0; k < spec.mirrors.size(); ++k)
+    if (o.mirrors.empty() || std::find(o.mirrors.begin(), o.mirrors.end(), static_cast<int>(k)) != o.mirrors.end())
+      RequireLabelPrecision(spec, static_cast<int>(k), {}, spec.source);
   StagedDirectory stage(out, "rig calibrate", {spec.source});
   const fs::path& dir = stage.staging();
   std::vector<MirrorCalibration> result;
-  nlohmann::json rig = {
-      {"machine", spec.source}, {"seed", o.seed}, {"downscale", spec.downscale}, {"mirrors", nlohmann::json::object()}};
+  nlohmann::json rig = {{"format", "hovs-rig"},
+                        {"version", kRigFolderVersion},
+                        {"machine",
+                         {{"source", spec.source},
+                          {"name", spec.name},
+                          {"geometry_checksum", TextChecksum(MachineGeometryJson(spec).dump())}}},
+                        {"seed", o.seed},
+                        {"downscale", spec.downscale},
+                        {"mirrors", nlohmann::json::object()}};
   for (size_t k = 0; k < spec.mirrors.size(); ++k) {
     if (!o.mirrors.empty() && std::find(o.mirrors.begin(), o.mirrors.end(), static_cast<int>(k)) == o.mirrors.end())
       continue;
@@ -73,8 +83,13 @@ std::vector<MirrorCalibration> CalibrateRig(const TurretSpec& spec, const RigCal
     const AnyModel model = AnyModel::Polynomial(c.polynomial.model);
     const unwrap::RemapTable table = unwrap::BuildRemapTable(model, unwrap::ResolveLayout(o.layout, &model), {});
     unwrap::SaveRemapTable(dir / id / "views.hmap", table);
-    rig["mirrors"][id] = {{"calibration", id + "/calibration/calibration.json"},
-                          {"map", id + "/views.hmap"},
+    const std::string calibration = id + "/calibration/calibration.json", map = id + "/views.hmap";
+    const HyperboloidMirror<double>& mirror = spec.mirrors[k].mirror;
+    rig["mirrors"][id] = {{"calibration", calibration},
+                          {"calibration_checksum", FileChecksum(dir / calibration)},
+                          {"map", map},
+                          {"map_checksum", FileChecksum(dir / map)},
+                          {"mirror", {{"a", mirror.a}, {"b", mirror.b}, {"rim_diameter", mirror.rim_diameter}}},
                           {"pose",
                            {{"lateral_mm", p.pose.LateralM() * 1e3},
                             {"tilt_deg", p.pose.TiltRad() * 180 / M_PI},

@@ -2,16 +2,20 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <sstream>
 
+#include "calib/checkerboard_detector.h"
+#include "calib/model_io.h"
+#include "core/any_model.h"
 #include "core/error.h"
 #include "core/format.h"
 #include "core/io.h"
 #include "core/json.h"
-#include "calib/checkerboard_detector.h"
 #include "core/statistics.h"
 #include "results/html.h"
 #include "results/plot.h"
+#include "unwrap/remap_table.h"
 
 namespace hovs::rig {
 namespace {
@@ -95,6 +99,7 @@ void AlignStudyOptions::Check(const std::string& where, const TurretSpec& spec) 
 
 std::vector<AlignRun> RunAlignStudy(const TurretSpec& spec, const AlignStudyOptions& o) {
   o.Check("align study", spec);
+  for (int k : o.mirrors) RequireLabelPrecision(spec, k, o.align, spec.source);
   std::vector<AlignRun> runs;
   for (int k : o.mirrors)
     for (int i = 0; i < o.starts; ++i) {
@@ -172,6 +177,11 @@ nlohmann::json AlignRunJson(const TurretSpec& spec, const AlignRun& run) {
     x["measured"] = s.measured ? PoseJson(*s.measured) : nlohmann::json(nullptr);
     x["markers"] = s.markers;
     x["label_rms_px"] = s.label_rms_px;
+    x["label_sigma"] = {{"x_mm", 1e3 * s.label_sigma[0]},
+                        {"y_mm", 1e3 * s.label_sigma[1]},
+                        {"height_mm", 1e3 * s.label_sigma[2]},
+                        {"tilt_x_deg", s.label_sigma[3] * 180 / M_PI},
+                        {"tilt_y_deg", s.label_sigma[4] * 180 / M_PI}};
     x["reported"] = AxesJson(s.reported);
     x["command"] = AxesJson(s.command);
     if (!s.note.empty()) x["note"] = s.note;
@@ -326,33 +336,109 @@ std::string WriteAlignReport(const TurretSpec& spec, const AlignStudyOptions& o,
   return sum.str();
 }
 
+namespace {
+
+// The median difference (deg) between the elevations that `model` and the machine's nominal model of mirror k
+// give the pixels of k's image annulus (the image camera at 1/downscale of the camera).
+double FieldDifferenceDeg(const TurretSpec& spec, int k, int downscale, const AnyModel& model) {
+  TurretSpec at = spec;
+  at.downscale = downscale;
+  CatadioptricCamera<double> nominal = RigAt(at, k, {});
+  nominal.camera = at.ImageCamera();
+  const HyperboloidMirror<double>& m = spec.mirrors.at(k).mirror;
+  const double rim = nominal.camera.fx * m.RimRadius() / spec.mirrors[k].PlateHeight();
+  std::vector<double> diffs;
+  for (int i = 0; i < 8; ++i)
+    for (int j = 0; j < 16; ++j) {
+      const double r = rim * (0.45 + 0.5 * i / 7.0), phi = 2 * M_PI * j / 16;
+      const Vec2d uv(nominal.camera.cx + r * std::cos(phi), nominal.camera.cy + r * std::sin(phi));
+      Vec3d a, b;
+      if (!nominal.CamFromImg(uv, &a) || !model.MirrorFromImg(uv, &b)) continue;
+      const auto elevation = [](const Vec3d& v) { return std::atan2(v.z(), v.head<2>().norm()) * 180 / M_PI; };
+      diffs.push_back(std::abs(elevation(a) - elevation(b)));
+    }
+  return diffs.size() < 32 ? std::numeric_limits<double>::infinity() : Median(diffs);
+}
+
+}  // namespace
+
 RigFolder LoadRigFolder(const std::filesystem::path& rig_json, const TurretSpec& spec) {
+  namespace fs = std::filesystem;
   const nlohmann::json j = ReadJsonFile(rig_json);
   const std::string where = rig_json.string();
-  HOVS_REQUIRE(j.is_object() && j.contains("mirrors") && j["mirrors"].is_object(), where,
+  HOVS_REQUIRE(j.is_object() && JsonText(j, "format") == "hovs-rig", where,
+               "not a hovs rig folder record (hovs rig calibrate writes rig.json)");
+  HOVS_REQUIRE(j.contains("version") && j["version"] == kRigFolderVersion, where + " (version)",
+               "this hovs reads rig folders of version ", kRigFolderVersion,
+               " (the files' checks need it): run hovs rig calibrate again");
+  HOVS_REQUIRE(j.contains("mirrors") && j["mirrors"].is_object(), where,
                "expected {\"mirrors\": {\"<id>\": {\"calibration\": ..., \"map\": ...}}}");
+  HOVS_REQUIRE(j.contains("machine") && j["machine"].is_object(), where + " (machine)", "missing");
+  HOVS_REQUIRE(JsonString(j["machine"], "geometry_checksum", where + " (machine)") ==
+                   TextChecksum(MachineGeometryJson(spec).dump()),
+               where, "was made on machine '", JsonText(j["machine"], "name"), "' (", JsonText(j["machine"], "source"),
+               "), whose camera, mirrors or label differ from ", spec.source,
+               "'s: its calibrations are not for this machine");
   RigFolder r;
   r.root = rig_json.parent_path();
-  if (j.contains("downscale")) {
-    HOVS_REQUIRE(
-        j["downscale"].is_number_integer() && j["downscale"].get<int>() >= 1 && j["downscale"].get<int>() <= 16,
-        where + " (downscale)", "must be an integer 1..16");
-    r.downscale = j["downscale"].get<int>();
-  }
+  r.downscale = static_cast<int>(JsonInteger(j, "downscale", 1, 16, where));
+  HOVS_REQUIRE(spec.camera.width % r.downscale == 0 && spec.camera.height % r.downscale == 0, where + " (downscale)",
+               r.downscale, " does not divide the camera's image");
   if (j.contains("seed")) {
     HOVS_REQUIRE(j["seed"].is_number_unsigned(), where + " (seed)", "must be a non-negative integer");
     r.seed = j["seed"].get<uint64_t>();
   }
+  const int width = spec.camera.width / r.downscale, height = spec.camera.height / r.downscale;
   for (const auto& [id, e] : j["mirrors"].items()) {
-    spec.MirrorIndex(id);
-    HOVS_REQUIRE(e.is_object() && e.contains("calibration") && e["calibration"].is_string() && e.contains("map") &&
-                     e["map"].is_string(),
-                 where + " (mirrors." + id + ")", "needs \"calibration\" and \"map\" file names");
-    RigFolder::Entry entry{r.root / e["calibration"].get<std::string>(), r.root / e["map"].get<std::string>()};
-    for (const auto& p : {entry.calibration, entry.map})
-      HOVS_REQUIRE(std::filesystem::is_regular_file(p), where + " (mirrors." + id + ")",
-                   "file not found: ", p.string());
-    r.mirrors[id] = entry;
+    const std::string w = where + " (mirrors." + id + ")";
+    const int k = spec.MirrorIndex(id);
+    HOVS_REQUIRE(e.is_object(), w, "expected an object");
+    const HyperboloidMirror<double>& m = spec.mirrors[k].mirror;
+    HOVS_REQUIRE(e.contains("mirror") && JsonNumber(e["mirror"], "a", w) == m.a &&
+                     JsonNumber(e["mirror"], "b", w) == m.b &&
+                     JsonNumber(e["mirror"], "rim_diameter", w) == m.rim_diameter,
+                 w, "was calibrated for another mirror than the machine's '", id, "'");
+    RigFolder::Entry entry;
+    entry.calibration = ContainedPath(r.root, JsonString(e, "calibration", w), w + ".calibration");
+    entry.map = ContainedPath(r.root, JsonString(e, "map", w), w + ".map");
+    for (const auto& [path, key] :
+         {std::pair{entry.calibration, "calibration_checksum"}, std::pair{entry.map, "map_checksum"}}) {
+      RequireFile(path);
+      HOVS_REQUIRE(FileChecksum(path) == JsonString(e, key, w), path.string(), "does not match its checksum in ", where,
+                   ": the file was replaced or changed after hovs rig calibrate wrote it");
+    }
+    entry.model = calib::LoadPolynomialModelFile(entry.calibration);
+    HOVS_REQUIRE(entry.model.width == width && entry.model.height == height, entry.calibration.string(), "is for ",
+                 entry.model.width, " x ", entry.model.height, " images; the folder's (1/", r.downscale,
+                 " of the camera) are ", width, " x ", height);
+    const AnyModel model = AnyModel::Polynomial(entry.model, entry.calibration.string());
+    const double off = FieldDifferenceDeg(spec, k, r.downscale, model);
+    if (!(off <= 0.5)) {
+      std::string best;
+      double best_off = std::numeric_limits<double>::infinity();
+      for (size_t o = 0; o < spec.mirrors.size(); ++o) {
+        const double d = FieldDifferenceDeg(spec, static_cast<int>(o), r.downscale, model);
+        if (d < best_off) best_off = d, best = spec.mirrors[o].id;
+      }
+      throw Error(entry.calibration.string(),
+                  "does not image mirror '" + id + "''s field (its elevations differ from the machine's model by " +
+                      FormatNumber("%.3g", off) + " deg; mirror '" + best + "' fits it within " +
+                      FormatNumber("%.3g", best_off) + " deg): it is not this mirror's calibration");
+    }
+    const unwrap::RemapTable table = unwrap::LoadRemapTable(entry.map);
+    HOVS_REQUIRE(table.source_width == width && table.source_height == height, entry.map.string(), "maps ",
+                 table.source_width, " x ", table.source_height, " images; the folder's are ", width, " x ", height);
+    const nlohmann::json header = ParseJson(table.header, entry.map.string() + " (header)");
+    bool same = header.contains("model") && header["model"].contains("parameters");
+    for (const auto& [name, value] : model.Parameters()) {
+      if (!same) break;
+      const auto& p = header["model"]["parameters"];
+      same = p.contains(name) && p[name].is_number() &&
+             std::abs(p[name].get<double>() - value) <= 1e-9 * std::max(1.0, std::abs(value));
+    }
+    HOVS_REQUIRE(same, entry.map.string(), "was not built from ", entry.calibration.string(),
+                 " (its model's parameters differ): rebuild the folder with hovs rig calibrate");
+    r.mirrors[id] = std::move(entry);
   }
   return r;
 }
@@ -362,6 +448,7 @@ SwitchResult SimulateSwitch(const TurretSpec& spec, int from, int to, uint64_t s
   HOVS_REQUIRE(from >= 0 && from < static_cast<int>(spec.mirrors.size()) && to >= 0 &&
                    to < static_cast<int>(spec.mirrors.size()),
                "rig switch", "no such mirror");
+  RequireLabelPrecision(spec, to, align, spec.source);
   const auto seats = DrawSeats(spec, seed * 31u + 17u);
   SimulatedUnit unit(spec, from, spec.NominalAxes(from, 1.15 * spec.mirrors[from].PlateHeight()), seats, seed);
   SwitchResult s;

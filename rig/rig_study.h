@@ -10,6 +10,7 @@
 #include <string>
 #include <vector>
 
+#include "core/polynomial.h"
 #include "rig/focus.h"
 #include "rig/positioning.h"
 
@@ -73,17 +74,27 @@ nlohmann::json AlignRunJson(const TurretSpec& spec, const AlignRun& run);
 std::string WriteAlignReport(const TurretSpec& spec, const AlignStudyOptions& options,
                              const std::vector<AlignRun>& runs, const std::filesystem::path& out_dir);
 
-// The rig folder: rig.json {"mirrors": {"<id>": {"calibration": "<file>", "map": "<file>"}}}, paths relative to
-// the folder. Every id must be a mirror of the machine and every file must exist.
+// The rig folder (hovs rig calibrate): rig.json {"format": "hovs-rig", "version": 2, "machine": {source, name,
+// geometry_checksum}, "seed", "downscale", "mirrors": {"<id>": {"calibration", "calibration_checksum", "map",
+// "map_checksum", "mirror": {a, b, rim_diameter}, ...}}}, paths relative to the folder.
+inline constexpr int kRigFolderVersion = 2;
 struct RigFolder {
   std::filesystem::path root;
   int downscale = 1;             // the image resolution its calibrations are for (1/downscale of the camera's)
   std::optional<uint64_t> seed;  // the machine's seats its calibrations were made on (hovs rig calibrate --seed)
   struct Entry {
     std::filesystem::path calibration, map;
+    PolynomialModel<double> model;  // the calibration's, checked
   };
   std::map<std::string, Entry> mirrors;
 };
+// Reads rig.json and checks every file it names against the machine, the mirror and the camera it is for, so
+// that a switch never loads another mirror's calibration, a map of another camera or size, or a folder made on
+// another machine: the machine's geometry (MachineGeometryJson's checksum), each id a mirror of the machine with
+// the recorded a, b and rim, each path inside the folder, each file's checksum, each calibration of the image
+// size at the folder's resolution and imaging the field of its mirror (its elevation at the image's annulus within
+// 0.5 deg of the machine's model of that mirror, which the other mirrors are not), each map built from its
+// calibration for that size. Throws hovs::Error naming rig.json, the mirror and the file.
 RigFolder LoadRigFolder(const std::filesystem::path& rig_json, const TurretSpec& spec);
 
 // A switch in simulation: the unit starts on mirror `from`, aligned as its seat allows (the axes at that mirror's

@@ -8,8 +8,10 @@
 
 #include "calib/aruco_dictionary.h"
 #include "core/error.h"
+#include "core/format.h"
 #include "core/io.h"
 #include "core/yaml_reader.h"
+#include "rig/focus.h"
 #include "scenes/scene_config.h"
 
 namespace hovs::rig {
@@ -17,12 +19,8 @@ namespace {
 
 constexpr double kDeg = M_PI / 180.0;
 
-bool Angular(int axis) {
-  const AxisId a = AxisAt(axis);
-  return a == AxisId::kTurret || a == AxisId::kTiltX || a == AxisId::kTiltY;
-}
-
-AxisSpec ReadAxis(const YamlReader& r, const YAML::Node& n, const std::string& key, bool degrees) {
+AxisSpec ReadAxis(const YamlReader& r, const YAML::Node& n, const std::string& key, AxisId id) {
+  const bool degrees = AxisIsAngular(id);
   r.OnlyKeys(n, key, {"min", "max", "step", "time_constant", "backlash", "noise"});
   for (const char* k : {"min", "max", "step", "time_constant"})
     HOVS_REQUIRE(n[k], r.Where(n, key), "missing '", key, ".", k, "'");
@@ -34,8 +32,91 @@ AxisSpec ReadAxis(const YamlReader& r, const YAML::Node& n, const std::string& k
   a.time_constant = r.Positive(n["time_constant"], key + ".time_constant");
   if (n["backlash"]) a.backlash = r.Number(n["backlash"], key + ".backlash") * s;
   if (n["noise"]) a.noise = r.Number(n["noise"], key + ".noise") * s;
-  a.Check(r.Where(n, key));
+  a.Check(r.Where(n, key), id);
   return a;
+}
+
+// The radius of mirror k's mounting plate about its axis: the rim, and the label's markers with their margins.
+double PlateRadius(const TurretSpec& s, const TurretMirror& m) {
+  const double half_diagonal = std::sqrt(0.5) * (s.label.marker_length + 2 * s.label.margin);
+  double r = m.mirror.RimRadius();
+  for (const Vec2d& c : s.label.centres) r = std::max(r, c.norm() + half_diagonal);
+  return r;
+}
+
+// The machine's geometry, checked once at load so that an impossible machine is refused naming its key, not
+// blamed later on a covered label or a stuck axis: the label beside the rim and in view, the plates apart on the
+// turret, every slot and plate height within its axis' travel, the focus bracket within the focus travel, and
+// motor steps fine enough for the alignment's tolerances.
+void CheckMachineGeometry(const TurretSpec& s, const YamlReader& r, const YAML::Node& root) {
+  const double half_diagonal = std::sqrt(0.5) * (s.label.marker_length + 2 * s.label.margin);
+  const YAML::Node centres = root["label"]["centres"];
+  for (size_t i = 0; i < s.label.centres.size(); ++i) {
+    const std::string key = "label.centres[" + std::to_string(i) + "]";
+    const Vec2d c = s.label.centres[i];
+    for (size_t j = 0; j < i; ++j)
+      HOVS_REQUIRE((c - s.label.centres[j]).lpNorm<Eigen::Infinity>() >= s.label.marker_length + 2 * s.label.margin,
+                   r.Where(centres[i], key), "marker ", i, " overlaps marker ", j);
+    for (const TurretMirror& m : s.mirrors) {
+      // Seen by the camera directly: beside the mirror's rim, and inside the image at the plate's height.
+      HOVS_REQUIRE(c.norm() - half_diagonal > m.mirror.RimRadius(), r.Where(centres[i], key), "marker ", i, " at ",
+                   FormatNumber("%.4g", 1e3 * c.norm()), " mm from the axis lies under mirror '", m.id,
+                   "' (rim radius ", FormatNumber("%.4g", 1e3 * m.mirror.RimRadius()),
+                   " mm): the camera cannot see it");
+      const double z = m.PlateHeight() - s.label.depth;
+      for (int k = 0; k < 4; ++k) {
+        const Vec3d p = Vec3d(c.x(), c.y(), z) + Vec3d(s.label.Corner(static_cast<int>(i), k).x() - c.x(),
+                                                       s.label.Corner(static_cast<int>(i), k).y() - c.y(), 0);
+        const double u = s.camera.cx + s.camera.fx * p.x() / p.z(), v = s.camera.cy + s.camera.fy * p.y() / p.z();
+        HOVS_REQUIRE(u >= 0 && v >= 0 && u <= s.camera.width - 1 && v <= s.camera.height - 1, r.Where(centres[i], key),
+                     "marker ", i, " at (", FormatNumber("%.4g", 1e3 * c.x()), ", ", FormatNumber("%.4g", 1e3 * c.y()),
+                     ") mm lies outside the image under mirror '", m.id, "' (plate ", FormatNumber("%.4g", 1e3 * z),
+                     " mm above the lens)");
+      }
+    }
+  }
+  const AxisSpec& turret = s.axes[static_cast<int>(AxisId::kTurret)];
+  const YAML::Node mirrors = root["mirrors"];
+  for (size_t i = 0; i < s.mirrors.size(); ++i) {
+    const TurretMirror& m = s.mirrors[i];
+    const std::string key = "mirrors[" + std::to_string(i) + "].slot_deg";
+    HOVS_REQUIRE(m.slot >= turret.min && m.slot <= turret.max, r.Where(mirrors[i], key), "mirror '", m.id, "' sits at ",
+                 AxisValueText(AxisId::kTurret, m.slot), ", outside the turret's travel [",
+                 AxisValueText(AxisId::kTurret, turret.min), ", ", AxisValueText(AxisId::kTurret, turret.max), "]");
+    for (size_t j = 0; j < i; ++j) {
+      const TurretMirror& o = s.mirrors[j];
+      const double apart = 2 * s.turret_radius * std::abs(std::sin(0.5 * (m.slot - o.slot)));
+      const double needed = PlateRadius(s, m) + PlateRadius(s, o);
+      HOVS_REQUIRE(apart >= needed, r.Where(mirrors[i], key), "the plates of mirrors '", o.id, "' and '", m.id,
+                   "' overlap: their axes are ", FormatNumber("%.4g", 1e3 * apart), " mm apart on the turret (radius ",
+                   FormatNumber("%.4g", 1e3 * s.turret_radius), " mm), the plates need ",
+                   FormatNumber("%.4g", 1e3 * needed), " mm");
+    }
+  }
+  const AxisSpec& focus = s.axes[static_cast<int>(AxisId::kFocus)];
+  const FocusOptions fo;
+  for (const TurretMirror& m : s.mirrors) {
+    // The label (at the plate) is focused for the alignment, the mirror image (within the focus bracket) after it.
+    const double lo = std::min(m.PlateHeight(), fo.low * m.PlateHeight()), hi = fo.high * m.PlateHeight();
+    HOVS_REQUIRE(focus.min <= m.PlateHeight() && focus.max >= m.PlateHeight() && focus.max > lo && focus.min < hi,
+                 r.Where(root["axes"]["focus"], "axes.focus"), "the focus travel [", FormatNumber("%.4g", focus.min),
+                 ", ", FormatNumber("%.4g", focus.max), "] m must hold mirror '", m.id, "''s plate at ",
+                 FormatNumber("%.4g", m.PlateHeight()), " m and reach into its focus bracket ",
+                 FormatNumber("%.4g", lo), " .. ", FormatNumber("%.4g", hi), " m");
+  }
+  // The loop positions to its tolerances (positioning.h AlignOptions); a coarser motor step cannot.
+  const AlignOptions ao;
+  const std::pair<AxisId, double> fine[] = {{AxisId::kX, ao.lateral_tolerance},
+                                            {AxisId::kY, ao.lateral_tolerance},
+                                            {AxisId::kRod, ao.height_tolerance},
+                                            {AxisId::kTiltX, ao.tilt_tolerance},
+                                            {AxisId::kTiltY, ao.tilt_tolerance}};
+  for (const auto& [id, tol] : fine) {
+    const AxisSpec& a = s.axes[static_cast<int>(id)];
+    HOVS_REQUIRE(a.step <= 0.5 * tol, r.Where(root["axes"][AxisName(id)], std::string("axes.") + AxisName(id)),
+                 "the step ", AxisValueText(id, a.step), " is coarser than half the alignment's tolerance (",
+                 AxisValueText(id, tol), "): the loop could not settle within it");
+  }
 }
 
 Eigen::Quaterniond Rotation(const Vec3d& v) { return QuaternionFromAngleAxis<double>(v); }
@@ -107,7 +188,7 @@ TurretSpec ParseUnguarded(const std::string& text, const std::string& source, co
     const YAML::Node& l = r.Require(root, "", "label", &n);
     r.OnlyKeys(l, "label", {"dictionary", "marker_length", "margin", "centres"});
     if (l["dictionary"]) s.label.dictionary = r.String(l["dictionary"], "label.dictionary");
-    calib::ArucoDictionaryId(s.label.dictionary);  // throws on an unknown name
+    calib::ArucoDictionaryId(s.label.dictionary, r.Where(l, "label.dictionary"));
     if (l["marker_length"]) s.label.marker_length = r.Positive(l["marker_length"], "label.marker_length");
     if (l["margin"]) s.label.margin = r.Positive(l["margin"], "label.margin");
     YAML::Node c;
@@ -126,12 +207,14 @@ TurretSpec ParseUnguarded(const std::string& text, const std::string& source, co
     for (int i = 0; i < kAxisCount; ++i) {
       YAML::Node v;
       const std::string k = std::string("axes.") + AxisName(AxisAt(i));
-      s.axes[i] = ReadAxis(r, r.Require(a, "axes", AxisName(AxisAt(i)), &v), k, Angular(i));
+      s.axes[i] = ReadAxis(r, r.Require(a, "axes", AxisName(AxisAt(i)), &v), k, AxisAt(i));
     }
     const AxisSpec& rod = s.axes[static_cast<int>(AxisId::kRod)];
     for (const auto& m : s.mirrors)
       HOVS_REQUIRE(m.PlateHeight() >= rod.min && m.PlateHeight() <= rod.max, r.Where(a["rod"], "axes.rod"), "mirror '",
-                   m.id, "' needs the plate at ", m.PlateHeight() * 1e3, " mm, outside the rod's travel");
+                   m.id, "' needs the plate at ", AxisValueText(AxisId::kRod, m.PlateHeight()),
+                   ", outside the rod's travel [", AxisValueText(AxisId::kRod, rod.min), ", ",
+                   AxisValueText(AxisId::kRod, rod.max), "]");
   }
   if (root["render"]) {
     const YAML::Node& o = root["render"];
@@ -147,6 +230,7 @@ TurretSpec ParseUnguarded(const std::string& text, const std::string& source, co
                  r.Where(o, "render.downscale"), "must be 1..16 and divide the image size");
     HOVS_REQUIRE(s.samples >= 1 && s.samples <= 1024, r.Where(o, "render.samples"), "must be 1..1024");
   }
+  CheckMachineGeometry(s, r, root);
   s.world_from_cam = s.surroundings->description.units[0].world_from_mirror * CamFromMirror(s, 0, {}).Inverse();
   return s;
 }
@@ -188,12 +272,39 @@ std::array<double, kAxisCount> TurretSpec::NominalAxes(int k, double focus) cons
   return a;
 }
 
+nlohmann::json MachineGeometryJson(const TurretSpec& s) {
+  nlohmann::json mirrors = nlohmann::json::array();
+  for (const auto& m : s.mirrors)
+    mirrors.push_back({{"id", m.id},
+                       {"a", m.mirror.a},
+                       {"b", m.mirror.b},
+                       {"rim_diameter", m.mirror.rim_diameter},
+                       {"slot_rad", m.slot}});
+  nlohmann::json centres = nlohmann::json::array();
+  for (const auto& c : s.label.centres) centres.push_back({c.x(), c.y()});
+  return {{"camera",
+           {{"fx", s.camera.fx},
+            {"fy", s.camera.fy},
+            {"cx", s.camera.cx},
+            {"cy", s.camera.cy},
+            {"width", s.camera.width},
+            {"height", s.camera.height}}},
+          {"lens_aperture", s.lens_aperture},
+          {"turret_radius", s.turret_radius},
+          {"mirrors", mirrors},
+          {"label",
+           {{"dictionary", s.label.dictionary},
+            {"marker_length", s.label.marker_length},
+            {"margin", s.label.margin},
+            {"centres", centres}}}};
+}
+
 TurretSpec ParseTurretSpec(const std::string& text, const std::string& source, const std::filesystem::path& base) {
   return WithYamlErrors(source, [&] { return ParseUnguarded(text, source, base); });
 }
 
 TurretSpec LoadTurretSpec(const std::filesystem::path& path) {
-  HOVS_REQUIRE(std::filesystem::is_regular_file(path), path.string(), "machine file not found");
+  RequireFile(path, "machine file");
   return ParseTurretSpec(ReadFile(path), path.string(), path.parent_path());
 }
 
@@ -260,7 +371,7 @@ scenes::SceneConfig TurretSceneConfig(const TurretSpec& spec, int k, const Mirro
   for (const auto& o : desc.objects) next_id = std::max(next_id, o.id + 1);
   desc.objects.push_back({next_id, "label", "label"});
   const cv::Ptr<cv::aruco::Dictionary> dict =
-      cv::aruco::getPredefinedDictionary(calib::ArucoDictionaryId(spec.label.dictionary));
+      cv::aruco::getPredefinedDictionary(calib::ArucoDictionaryId(spec.label.dictionary, spec.source));
   const HyperboloidMirror<double>& m = spec.mirrors[k].mirror;
   const double side = spec.label.marker_length + 2 * spec.label.margin;
   const int px_per_cell = 40, cells = dict->markerSize + 2;

@@ -24,6 +24,7 @@
 #include <array>
 #include <filesystem>
 #include <memory>
+#include <nlohmann/json.hpp>
 #include <optional>
 #include <string>
 #include <vector>
@@ -79,6 +80,10 @@ struct TurretSpec {
 };
 
 TurretSpec ParseTurretSpec(const std::string& yaml_text, const std::string& source, const std::filesystem::path& base);
+
+// What calibrations made on a machine depend on: the camera, the turret and its mirrors (ids, a, b, rim, slots) and
+// the label, as JSON (a rig folder records its checksum: files made on another machine are refused).
+nlohmann::json MachineGeometryJson(const TurretSpec& spec);
 TurretSpec LoadTurretSpec(const std::filesystem::path& path);
 
 struct MirrorPose {

@@ -11,6 +11,8 @@
 #include "core/format.h"
 #include "core/interrupt.h"
 #include "core/io.h"
+#include "core/json.h"
+#include "core/shard_set.h"
 #include "core/manifest.h"
 #include "core/progress.h"
 #include "raytrace/render.h"
@@ -212,7 +214,9 @@ void RenderSceneFolder(const SceneConfig& cfg, const fs::path& out, bool progres
   nlohmann::json boards = nlohmann::json::array();
   for (const auto& b : cfg.boards) boards.push_back(BoardToJson(b));
   m["boards"] = boards;
-  m["frames"] = {{{"id", 0}, {"views", views}}};
+  nlohmann::json frame = {{"id", 0}, {"views", views}};
+  frame["checksums"] = FrameChecksums(stage.staging(), frame);
+  m["frames"] = {frame};
   m["render_stats"] = stats;
   WriteFileAtomic(stage.staging() / "dataset.json", m.dump(2) + "\n");
   stage.Commit();
@@ -489,56 +493,41 @@ void MergeDatasetShards(const std::vector<fs::path>& shards, const fs::path& out
   std::vector<fs::path> inputs;
   for (const auto& dir : shards) {
     const fs::path file = dir / "dataset.json";
-    HOVS_REQUIRE(fs::exists(file), dir.string(), "not a dataset folder (no dataset.json)");
+    HOVS_REQUIRE(fs::is_regular_file(file), dir.string(), "not a dataset folder (no dataset.json)");
     manifests.push_back(LoadDatasetManifest(file));
     inputs.push_back(file);
-    HOVS_REQUIRE(manifests.back().contains("shard"), file.string(), "is not a shard (written without --shard)");
   }
   // Everything but the frames and the shard record must agree: config, seed, kind, units, versions, board.
-  const auto head = [](nlohmann::json m) {
-    m.erase("frames"), m.erase("shard");
-    return m;
-  };
-  const nlohmann::json ref = head(manifests[0]);
-  const int count = manifests[0]["shard"]["count"].get<int>();
-  std::vector<int> seen(count, -1);
-  for (size_t k = 0; k < manifests.size(); ++k) {
-    const std::string where = inputs[k].string();
-    const nlohmann::json h = head(manifests[k]);
-    if (h != ref) {
-      std::string differ;
-      for (const auto& [key, value] : ref.items())
-        if (!h.contains(key) || h[key] != value) differ += (differ.empty() ? "" : ", ") + key;
-      throw Error(where, "does not belong with " + inputs[0].string() + ": its " + differ + " differ");
-    }
-    const auto& sh = manifests[k]["shard"];
-    HOVS_REQUIRE(sh["count"].get<int>() == count, where, "is a shard of ", sh["count"].get<int>(),
-                 " but the first is of ", count);
-    const int index = sh["index"].get<int>();
-    HOVS_REQUIRE(index >= 0 && index < count, where, "shard index ", index, " is out of range");
-    HOVS_REQUIRE(seen[index] < 0, where, "is shard ", index, ", given twice (also ", inputs[seen[index]].string(), ")");
-    seen[index] = static_cast<int>(k);
-  }
-  for (int i = 0; i < count; ++i) HOVS_REQUIRE(seen[i] >= 0, "merge", "shard ", i, " of ", count, " is missing");
+  const std::vector<size_t> order = OrderShards(manifests, inputs, {"frames"});
+  nlohmann::json merged = manifests[order[0]];
+  merged.erase("shard");
+  merged.erase("frames");
+  const int frames =
+      static_cast<int>(JsonInteger(merged["generator"], "count", 1, 1000000, inputs[0].string() + " (generator)"));
   CheckOutputFolder(out, "merge", inputs);
   StagedDirectory stage(out, "merge", inputs);
-  nlohmann::json merged = ref;
   merged["frames"] = nlohmann::json::array();
-  for (int i = 0; i < count; ++i) {
-    const fs::path dir = shards[seen[i]];
-    for (const auto& fr : manifests[seen[i]]["frames"]) {
-      HOVS_REQUIRE(fr["id"].get<size_t>() == merged["frames"].size(), inputs[seen[i]].string(), "frame ",
-                   fr["id"].dump(), " is out of order (expected ", merged["frames"].size(), ")");
+  for (const size_t k : order) {
+    const fs::path dir = shards[k];
+    for (const auto& fr : manifests[k]["frames"]) {
+      HOVS_REQUIRE(fr["id"].get<int64_t>() == static_cast<int64_t>(merged["frames"].size()), inputs[k].string(),
+                   "frame ", fr["id"].dump(), " is out of order (expected ", merged["frames"].size(), ")");
+      HOVS_REQUIRE(fr.contains("checksums"), inputs[k].string(), "frame ", fr["id"].dump(),
+                   " has no checksums: a shard is merged only when every file can be verified");
       for (const auto& view : fr["views"]) {
         std::vector<std::string> files = {view["image"].get<std::string>()};
-        // The shard's thumbnail (the same bytes the merged page would make from the same image).
+        if (view.contains("ground_truth"))
+          for (const char* key : {"exr", "sidecar"})
+            if (view["ground_truth"].contains(key)) files.push_back(view["ground_truth"][key]);
+        // Every file as its shard recorded it (LoadDatasetManifest expects the checksums), then the shard's
+        // thumbnail, derived from the image (the same bytes the merged page would make from it).
+        for (const auto& f : files) {
+          HOVS_REQUIRE(fs::is_regular_file(dir / f), (dir / f).string(), "is missing from its shard");
+          VerifyExpectedChecksum(dir / f);
+        }
         const std::string thumb = "thumbs/" + fs::path(view["image"].get<std::string>()).filename().string();
         if (fs::is_regular_file(dir / thumb)) files.push_back(thumb);
-        if (view.contains("ground_truth"))
-          for (const char* k : {"exr", "sidecar"})
-            if (view["ground_truth"].contains(k)) files.push_back(view["ground_truth"][k]);
         for (const auto& f : files) {
-          HOVS_REQUIRE(fs::exists(dir / f), (dir / f).string(), "is missing from its shard");
           fs::create_directories((stage.staging() / f).parent_path());
           // A hard link where the file system allows (a merged set of hundreds of GB is not copied), else a copy.
           std::error_code ec;
@@ -549,7 +538,6 @@ void MergeDatasetShards(const std::vector<fs::path>& shards, const fs::path& out
       merged["frames"].push_back(fr);
     }
   }
-  const int frames = merged["generator"]["count"].get<int>();
   HOVS_REQUIRE(static_cast<int>(merged["frames"].size()) == frames, "merge", "the shards hold ",
                merged["frames"].size(), " frames but the set has ", frames);
   WriteFileAtomic(stage.staging() / "dataset.json", merged.dump(2) + "\n");

@@ -85,10 +85,14 @@ std::optional<nlohmann::json> FrameJournal::Kept(int64_t id) const {
   return it->second;
 }
 
-void FrameJournal::Record(nlohmann::json* entry) {
+nlohmann::json FrameChecksums(const fs::path& dir, const nlohmann::json& entry) {
   nlohmann::json sums = nlohmann::json::object();
-  for (const auto& rel : EntryFiles(*entry)) sums[rel] = FileChecksum(dir_ / rel);
-  (*entry)["checksums"] = sums;
+  for (const auto& rel : EntryFiles(entry)) sums[rel] = FileChecksum(dir / rel);
+  return sums;
+}
+
+void FrameJournal::Record(nlohmann::json* entry) {
+  (*entry)["checksums"] = FrameChecksums(dir_, *entry);
   out_ << entry->dump() << "\n";
   out_.flush();
   HOVS_REQUIRE(out_.good(), path_.string(), "cannot write the journal");

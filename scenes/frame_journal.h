@@ -15,6 +15,11 @@
 
 namespace hovs::scenes {
 
+// The "checksums" of a manifest frame entry: {relative path: FileChecksum} of every file its views name (image,
+// ground-truth EXR and sidecar), under dir. Every hovs writer of a manifest records them (core/manifest.h: the
+// readers verify them).
+nlohmann::json FrameChecksums(const std::filesystem::path& dir, const nlohmann::json& entry);
+
 class FrameJournal {
  public:
   // config: what must be equal for frames to be kept (the manifest's head and generator, the shard). resumed: the

@@ -203,10 +203,26 @@ std::vector<CornerTruth> VisibleSidecarCorners(const nlohmann::json& side, const
   try {
     std::vector<CornerTruth> out;
     std::set<int> ids;
-    for (const auto& c : side.at("boards").at(0).at("corners")) {
-      if (c.at("status") != "visible") continue;
+    // The statuses BoardCornerTruth writes; a corner's id is its index on the board (as the writer lists them).
+    static const std::set<std::string> kStatuses = [] {
+      std::set<std::string> s = {"visible", "facing_away", "occluded"};
+      for (ProjectionStatus p :
+           {ProjectionStatus::kMissesMirror, ProjectionStatus::kInsideMirror, ProjectionStatus::kOccluded,
+            ProjectionStatus::kBehindCamera, ProjectionStatus::kOutsideImage, ProjectionStatus::kNoSolution})
+        s.insert(ToString(p));
+      return s;
+    }();
+    const auto& corners = side.at("boards").at(0).at("corners");
+    HOVS_REQUIRE(corners.is_array(), where, "the board's corners must be a list");
+    const int64_t count = static_cast<int64_t>(corners.size());
+    for (const auto& c : corners) {
+      const std::string status = JsonText(c, "status");
+      HOVS_REQUIRE(kStatuses.count(status), where, "a corner's status '", status, "' is not one hovs writes");
+      const int64_t id = JsonInteger(c, "id", 0, count - 1, where);
+      HOVS_REQUIRE(ids.insert(static_cast<int>(id)).second, where, "corner ", id, " appears twice");
+      if (status != "visible") continue;
       CornerTruth t;
-      t.id = static_cast<int>(JsonInteger(c, "id", 0, 1 << 30, where)), t.status = "visible";
+      t.id = static_cast<int>(id), t.status = "visible";
       const std::vector<double> b = JsonNumbers(c, "board", 2, 2, where), px = JsonNumbers(c, "pixel", 2, 2, where);
       t.board_xy = Vec2d(b[0], b[1]);
       t.pixel = Vec2d(px[0], px[1]);
@@ -215,7 +231,6 @@ std::vector<CornerTruth> VisibleSidecarCorners(const nlohmann::json& side, const
       HOVS_REQUIRE(t.board_xy.allFinite() && t.pixel.allFinite() && t.board_xy.cwiseAbs().maxCoeff() <= 100 &&
                        t.pixel.cwiseAbs().maxCoeff() <= 1e6,
                    where, "corner ", t.id, " has non-finite or absurd coordinates");
-      HOVS_REQUIRE(ids.insert(t.id).second, where, "corner ", t.id, " appears twice");
       out.push_back(t);
     }
     return out;

@@ -22,9 +22,9 @@ namespace {
 constexpr double kDeg = M_PI / 180.0;
 
 cv::Ptr<cv::aruco::GridBoard> MakeGridBoard(const BoardSpec& s) {
-  return cv::aruco::GridBoard::create(s.markers_x, s.markers_y, static_cast<float>(s.marker_length),
-                                      static_cast<float>(s.marker_separation),
-                                      cv::aruco::getPredefinedDictionary(calib::ArucoDictionaryId(s.dictionary)));
+  return cv::aruco::GridBoard::create(
+      s.markers_x, s.markers_y, static_cast<float>(s.marker_length), static_cast<float>(s.marker_separation),
+      cv::aruco::getPredefinedDictionary(calib::ArucoDictionaryId(s.dictionary, "board")));
 }
 }  // namespace
 
@@ -80,8 +80,7 @@ void CheckBoard(const BoardSpec& s, const std::string& where) {
   } else if (s.kind == BoardSpec::Kind::kCharuco) {
     s.Charuco().Check(where);
   } else {
-    HOVS_REQUIRE(calib::ArucoDictionaryId(s.dictionary) >= 0, where, "unknown ArUco dictionary '", s.dictionary,
-                 "' (known: ", calib::ArucoDictionaryNames(), ")");
+    calib::ArucoDictionaryId(s.dictionary, where);
     HOVS_REQUIRE(s.markers_x >= 1 && s.markers_y >= 1, where, "needs at least one marker");
     HOVS_REQUIRE(s.marker_length > 0 && s.marker_separation >= 0, where, "marker sizes must be positive");
   }
@@ -124,7 +123,7 @@ Rect MakeBoardRect(const BoardSpec& s, const Rigid3d& world_from_board, int obje
   if (charuco) {
     cv::aruco::CharucoBoard::create(s.squares_x, s.squares_y, static_cast<float>(s.square),
                                     static_cast<float>(s.marker_length),
-                                    cv::aruco::getPredefinedDictionary(calib::ArucoDictionaryId(s.dictionary)))
+                                    cv::aruco::getPredefinedDictionary(calib::ArucoDictionaryId(s.dictionary, "board")))
         ->draw(cv::Size(w, h), img, margin, 1);
   } else {
     MakeGridBoard(s)->draw(cv::Size(w, h), img, margin, 1);
@@ -529,7 +528,7 @@ void CheckUnitsClearOfObjects(const raytrace::SceneDescription& description, con
 }
 
 SceneConfig LoadSceneConfig(const std::filesystem::path& path) {
-  HOVS_REQUIRE(std::filesystem::is_regular_file(path), path.string(), "scene file not found");
+  RequireFile(path, "scene file");
   return ParseSceneConfig(ReadFile(path), path.string(), path.parent_path());
 }
 

@@ -4,13 +4,14 @@
 # time. New inputs go to build-fuzz/corpus/<name> (kept between runs); a finding (crash, sanitizer report, hang,
 # out-of-memory) stops the script with the harness's report and the input under build-fuzz/findings/.
 # Usage: scripts/fuzz.sh [name ...]      (names: mapping_file ocam omnidir camera_files model_file scene manifest corners
-#                                          layout design image; default all)
+#                                          layout design image machine tolerance rig_folder shard_records; default all)
 # Longer runs: HOVS_FUZZ_SECONDS=3600 bash scripts/fuzz.sh mapping_file
 set -euo pipefail
 cd "$(dirname "$0")/.."
 jobs=$(nproc 2>/dev/null || echo 2)
 seconds=${HOVS_FUZZ_SECONDS:-60}
-all=(mapping_file ocam omnidir camera_files model_file scene manifest corners layout design image)
+all=(mapping_file ocam omnidir camera_files model_file scene manifest corners layout design image machine tolerance
+     rig_folder shard_records)
 names=("$@")
 if [ "${#names[@]}" -eq 0 ]; then names=("${all[@]}"); fi
 

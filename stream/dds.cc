@@ -168,6 +168,23 @@ std::string RosTopic(const std::string& prefix, const std::vector<std::string>& 
   return out.empty() ? "/" : out;
 }
 
+void CheckRosNamespace(const std::string& ns, const std::string& where) {
+  HOVS_REQUIRE(!ns.empty() && ns != "/", where, "the namespace is empty");
+  HOVS_REQUIRE(ns.size() <= 200, where, "the namespace has ", ns.size(), " characters (at most 200)");
+  HOVS_REQUIRE(ns.back() != '/', where, "'", ns, "' ends with '/'");
+  HOVS_REQUIRE(ns.find("//") == std::string::npos, where, "'", ns, "' has an empty name between two '/'");
+  HOVS_REQUIRE(ns.find("__") == std::string::npos, where, "'", ns, "' repeats '_' (ROS 2 names may not hold \"__\")");
+  for (size_t i = 0; i < ns.size(); ++i) {
+    const unsigned char c = static_cast<unsigned char>(ns[i]);
+    HOVS_REQUIRE(std::isalnum(c) || c == '_' || c == '/', where, "'", ns, "' holds the character '", ns.substr(i, 1),
+                 "' (ROS 2 names take letters, digits, '_' and '/')");
+    HOVS_REQUIRE(!std::isdigit(c) || (i > 0 && ns[i - 1] != '/'), where, "'", ns,
+                 "': a name may not start with a digit");
+  }
+  HOVS_REQUIRE(!std::isdigit(static_cast<unsigned char>(ns[0])), where, "'", ns,
+               "': a name may not start with a digit");
+}
+
 std::string DdsTopic(const std::string& ros_topic) {
   return "rt" + (ros_topic.empty() || ros_topic[0] != '/' ? "/" + ros_topic : ros_topic);
 }

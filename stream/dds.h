@@ -48,6 +48,11 @@ class Participant {
 // ROS 2 graph names: a topic name from a prefix and parts ("hovs", "front", "image_raw" -> "/hovs/front/image_raw"),
 // characters outside [A-Za-z0-9_] replaced by '_' and a leading digit prefixed with '_', as ROS requires.
 std::string RosTopic(const std::string& prefix, const std::vector<std::string>& parts);
+// A namespace the user gives (--topic-prefix) is used as given, never mangled: ROS 2's rules for names (tokens of
+// letters, digits and '_' separated by '/', a leading '/' allowed; no token starting with a digit, no empty token,
+// no trailing '/', no "__"), at most 200 characters so that every topic under it stays within rmw's limit.
+// Throws hovs::Error(where) naming the rule broken.
+void CheckRosNamespace(const std::string& ns, const std::string& where);
 // The DDS topic a ROS 2 topic travels on: "/hovs/points" -> "rt/hovs/points".
 std::string DdsTopic(const std::string& ros_topic);
 

@@ -90,6 +90,7 @@ nlohmann::json PublishStats::ToJson() const {
 Publisher::Publisher(const DdsOptions& options, const PublisherTopics& topics)
     : topics_(topics), participant_(std::make_unique<Participant>(options)), writers_(std::make_unique<Writers>()) {
   HOVS_REQUIRE(!topics_.images.empty() || topics_.cloud, "DDS publisher", "nothing to publish");
+  CheckRosNamespace(topics_.prefix, "DDS publisher (topic prefix)");
   dds_qos_t* qos = WriterQos(options.max_blocking_s);
   const dds_entity_t pp = participant_->handle();
   auto make = [&](Writers::Entry* e, const std::string& ros, const std::string& frame, MessageType type) {

@@ -5,9 +5,11 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 
 #include "core/any_model.h"
 #include "core/error.h"
+#include "core/format.h"
 #include "core/io.h"
 #include "core/progress.h"
 #include "core/statistics.h"
@@ -43,6 +45,9 @@ const std::vector<Metric>& Metrics() {
 namespace {
 
 constexpr double kDeg = M_PI / 180;
+constexpr double kFailed = std::numeric_limits<double>::quiet_NaN();
+// The share of a figure's grid an erroneous unit must evaluate for the figure to count (SampleFigures).
+constexpr double kMinCoverage = 0.9;
 
 int ParameterIndex(const std::string& name) {
   for (size_t i = 0; i < Parameters().size(); ++i)
@@ -85,6 +90,21 @@ struct SplitMix64 {
   double Uniform() { return (Next() >> 11) * 0x1.0p-53; }  // [0, 1)
 };
 
+// The largest size a tolerance may have, in its parameter's unit, and why: beyond it a unit is not the nominal
+// design with errors but another design (and most of its figures fail).
+std::pair<double, std::string> LargestTolerance(const std::string& name, const design::DesignPoint& p,
+                                                const design::CameraSpec& camera) {
+  const double c = std::sqrt(p.a * p.a + p.b * p.b);
+  if (name == "mirror_a") return {0.05e3 * p.a, "5 % of the nominal a"};
+  if (name == "mirror_b") return {0.05e3 * p.b, "5 % of the nominal b"};
+  if (name == "rim_diameter") return {0.05e3 * p.d, "5 % of the nominal rim diameter"};
+  if (name == "mirror_tilt") return {5.0, "5 degrees"};
+  if (name == "lateral_offset") return {0.05e3 * p.d, "5 % of the rim diameter"};
+  if (name == "height") return {0.05e3 * 2 * c, "5 % of the distance 2c between the foci"};
+  if (name == "focal_length") return {10.0, "10 % of the focal length"};
+  return {0.05 * std::min(camera.width, camera.height), "5 % of the image's shorter side"};
+}
+
 }  // namespace
 
 void ToleranceConfig::Check(const std::string& where) const {
@@ -95,6 +115,11 @@ void ToleranceConfig::Check(const std::string& where) const {
                  "' (known: ", KnownNames(false), ")");
     HOVS_REQUIRE(std::isfinite(t.size) && t.size >= 0, where + " (tolerances." + key + ")",
                  "must be a finite size >= 0");
+    const auto [most, why] = LargestTolerance(key, nominal, design.problem.camera);
+    HOVS_REQUIRE(t.size <= most, where + " (tolerances." + key + ")", FormatNumber("%g", t.size), " ",
+                 Parameters()[ParameterIndex(key)].unit, " is not a manufacturing tolerance: at most ",
+                 FormatNumber("%.4g", most), " (", why,
+                 "); an error this large makes another design, which hovs design studies");
   }
   HOVS_REQUIRE(std::isfinite(view_range) && view_range > 0.2 && view_range <= 1e4, where + " (view_range)",
                "must be in (0.2, 10000] m");
@@ -170,7 +195,7 @@ ToleranceConfig ParseToleranceConfig(const std::string& text, const std::string&
 }
 
 ToleranceConfig LoadToleranceConfig(const fs::path& path, const design::DesignConfig* design_override) {
-  HOVS_REQUIRE(fs::is_regular_file(path), path.string(), "tolerance config not found");
+  RequireFile(path, "tolerance config");
   return ParseToleranceConfig(ReadFile(path, size_t(1) << 20), path.string(), path.parent_path(), design_override);
 }
 
@@ -283,6 +308,11 @@ struct ToleranceEvaluator::Impl {
 
   SampleFigures Evaluate(const UnitErrors& left, const UnitErrors& right) const {
     SampleFigures f;
+    // A figure is the worst over its grid; where the erroneous unit cannot evaluate most of the grid (its mirror
+    // no longer covers the pixels, the points leave the image), the figure failed: NaN, never a small worst.
+    const auto covered = [](size_t evaluated, size_t total) {
+      return total > 0 && static_cast<double>(evaluated) >= kMinCoverage * static_cast<double>(total);
+    };
     const auto rig = ErroneousRig(config.nominal, config.design.problem.camera, left);
     // Ray error and the caustic's extent.
     std::vector<Vec3d> origins, dirs;
@@ -303,26 +333,35 @@ struct ToleranceEvaluator::Impl {
         f.values[1] = std::max(f.values[1], 1e3 * (v - v.dot(dirs[i]) * dirs[i]).norm());
       }
     }
+    if (!covered(origins.size(), field_pixels.size()) || !std::isfinite(f.values[0]) || !std::isfinite(f.values[1]))
+      f.values[0] = f.values[1] = kFailed;
     // The six views.
+    size_t view_total = 0, view_done = 0;
     for (size_t k = 0; k < views.size(); ++k)
       for (const Vec2d& q : view_pixels[k]) {
+        ++view_total;
         Vec3d b, seen;
         Vec2d q2;
         if (!views[k].MirrorFromImg(q, &b) || !SeenBearing(rig, config.view_range * b, &seen) ||
             !views[k].ImgFromMirror(seen, &q2))
           continue;
+        ++view_done;
         f.values[2] = std::max(f.values[2], (q2 - q).norm());
       }
+    if (!covered(view_done, view_total) || !std::isfinite(f.values[2])) f.values[2] = kFailed;
     // The two-unit rig.
     const auto rig_right = ErroneousRig(config.nominal, config.design.problem.camera, right);
     const Vec3d right_centre(config.baseline, 0, 0);
+    size_t depth_done = 0;
     for (const Vec3d& X : depth_points) {
       Vec3d bl, br;
       if (!SeenBearing(rig, X, &bl) || !SeenBearing(rig_right, X - right_centre, &br)) continue;
       const depth::Triangulation t = depth::Triangulate(stereo, bl, br, 0.0);
       if (!t.ok) continue;
+      ++depth_done;
       f.values[3] = std::max(f.values[3], 100 * std::abs(t.range_left - X.norm()) / X.norm());
     }
+    if (!covered(depth_done, depth_points.size()) || !std::isfinite(f.values[3])) f.values[3] = kFailed;
     return f;
   }
 };

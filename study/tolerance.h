@@ -104,8 +104,12 @@ CatadioptricCamera<double> ErroneousRig(const design::DesignPoint& p, const desi
 // Sample `index`'s errors of unit `unit` (0 or 1): seeded by (seed, index, unit) alone.
 UnitErrors DrawErrors(const ToleranceConfig& config, int64_t index, int unit);
 
+// A sample's figures in Metrics() order. NaN: the figure failed, because the erroneous unit could evaluate less
+// than 90 % of the figure's grid (its mirror no longer covers the pixels, the points leave its image, the rig does
+// not triangulate). A failed figure is counted as failed, never as a small error: it ranks above every value.
 struct SampleFigures {
-  double values[4] = {0, 0, 0, 0};  // in Metrics() order
+  double values[4] = {0, 0, 0, 0};
+  bool Failed(int m) const { return !(values[m] == values[m]); }
 };
 
 // The nominal geometry and the grids, built once; Evaluate is thread-safe.
@@ -136,13 +140,16 @@ std::vector<Sample> RunSamples(const ToleranceConfig& config, int64_t count, int
 nlohmann::json AnalyseSamples(const ToleranceConfig& config, const std::vector<Sample>& samples);
 
 // Writes out/ (staged): tolerance.json, samples.csv and, for a whole study (not a shard), index.html and
-// figures/ (histograms, where VTK can render). `shard_count` > 1: a shard, for MergeToleranceShards.
-void WriteToleranceStudy(const ToleranceConfig& config, int64_t count, int shard_index, int shard_count,
-                         const std::filesystem::path& out, const std::map<std::string, std::string>& versions,
-                         bool progress = false);
+// figures/ (histograms, where VTK can render). `shard_count` > 1: a shard, for MergeToleranceShards. Returns the
+// study's warnings (figures a share of the samples could not evaluate), for the command to print.
+std::vector<std::string> WriteToleranceStudy(const ToleranceConfig& config, int64_t count, int shard_index,
+                                             int shard_count, const std::filesystem::path& out,
+                                             const std::map<std::string, std::string>& versions, bool progress = false);
 // Joins shard folders of one study into the folder one process writes; refuses shards of another config, seed,
-// sample count or version, naming the shard.
-void MergeToleranceShards(const std::vector<std::filesystem::path>& shards, const std::filesystem::path& out);
+// sample count or version, or a samples file that does not match its checksum, naming the shard. Returns the
+// study's warnings.
+std::vector<std::string> MergeToleranceShards(const std::vector<std::filesystem::path>& shards,
+                                              const std::filesystem::path& out);
 // True if the folder holds a tolerance study or shard (tolerance.json).
 bool IsToleranceFolder(const std::filesystem::path& dir);
 

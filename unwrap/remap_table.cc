@@ -343,6 +343,9 @@ RemapTable BuildRemapTable(const AnyModel& model, const Layout& layout, const Re
                            const std::string& versions_json) {
   options.Check("remap options");
   layout.Check("layout " + layout.name);
+  // Every caller (the commands, the export, the Python module) meets the same memory check before a table of
+  // views larger than the memory left is built.
+  CheckViewsMemory("layout " + layout.name, layout.views, AvailableMemoryBytes());
   const auto start = std::chrono::steady_clock::now();
   RemapTable table;
   table.source_width = model.width(), table.source_height = model.height();

@@ -1,5 +1,6 @@
 #include <gtest/gtest.h>
 
+#include <sys/wait.h>
 #include <unistd.h>
 
 #include <filesystem>
@@ -9,6 +10,8 @@
 #include "core/io.h"
 #include "core/json.h"
 #include "core/manifest.h"
+#include "core/shard_set.h"
+#include "core/yaml_reader.h"
 
 namespace hovs {
 namespace {
@@ -63,9 +66,10 @@ TEST(Io, StagedDirectoryIsAllOrNothing) {
   fs::remove_all(root);
 }
 
-TEST(Io, StagingLeftByAKilledRunIsRemovedByTheNextOne) {
+TEST(Io, StagingLeftByAKilledRunIsRemovedWhenTheNextOneCommits) {
   // A run killed before its destructor (Ctrl-C, a crash) leaves its hidden staging folder; the next run for the
-  // same target removes it when its process is gone, and leaves a live process's folder and other names alone.
+  // same target removes it when it commits and the process is gone, and leaves a live process's folder and other
+  // names alone. A run that fails (never commits) removes nothing of it.
   const fs::path root = TempRoot();
   const fs::path dead = root / ".report.partial-999999999-1-0";  // beyond any pid_max: no such process
   const fs::path dead_old = root / ".report.old-999999999-2-0";
@@ -73,12 +77,100 @@ TEST(Io, StagingLeftByAKilledRunIsRemovedByTheNextOne) {
   const fs::path other = root / ".other.partial-999999999-4-0";
   for (const auto& p : {dead, dead_old, live, other}) fs::create_directories(p / "images");
   {
+    StagedDirectory failing(root / "report", "test");  // destroyed without Commit: an error
+  }
+  EXPECT_TRUE(fs::exists(dead));
+  EXPECT_TRUE(fs::exists(dead_old));
+  {
     StagedDirectory stage(root / "report", "test");
-    EXPECT_FALSE(fs::exists(dead));
-    EXPECT_FALSE(fs::exists(dead_old));
-    EXPECT_TRUE(fs::exists(live));
-    EXPECT_TRUE(fs::exists(other));
     EXPECT_TRUE(fs::exists(stage.staging()));
+    stage.Commit();
+  }
+  EXPECT_FALSE(fs::exists(dead));
+  EXPECT_FALSE(fs::exists(dead_old));
+  EXPECT_TRUE(fs::exists(live));
+  EXPECT_TRUE(fs::exists(other));
+  fs::remove_all(root);
+}
+
+TEST(Io, AResumeThatFailsKeepsWhatTheKilledRunKept) {
+  // The folder a killed run kept is adopted by a resume; if that run fails (its configuration refused, say), the
+  // folder stays, under its own name, for the next resume, with everything in it; a plain run that fails leaves it
+  // too; the run that commits takes it.
+  const fs::path root = TempRoot();
+  const fs::path kept = root / ".set.partial-999999999-1-0";
+  fs::create_directories(kept);
+  WriteOutputMarker(kept, "dataset");
+  WriteFileAtomic(kept / "frames.jsonl", "kept frames");
+  const auto staging_folders = [&] {
+    std::vector<fs::path> found;
+    for (const auto& e : fs::directory_iterator(root))
+      if (e.path().filename().string().rfind(".set.partial-", 0) == 0) found.push_back(e.path());
+    return found;
+  };
+  for (int attempt = 0; attempt < 2; ++attempt) {
+    pid_t child = fork();  // each attempt in a process of its own, which then ends (a refused command)
+    ASSERT_GE(child, 0);
+    if (child == 0) {
+      try {
+        StagedDirectory stage(root / "set", "dataset", {}, false, /*resume=*/true);
+        if (!stage.resumed() || ReadFile(stage.staging() / "frames.jsonl") != "kept frames") _exit(3);
+        throw Error("test", "made with another configuration");
+      } catch (const Error&) { _exit(0); }
+      _exit(4);
+    }
+    int status = 0;
+    waitpid(child, &status, 0);
+    ASSERT_TRUE(WIFEXITED(status) && WEXITSTATUS(status) == 0) << "attempt " << attempt << " status " << status;
+    const auto found = staging_folders();
+    ASSERT_EQ(found.size(), 1u) << "attempt " << attempt;
+    EXPECT_EQ(ReadFile(found[0] / "frames.jsonl"), "kept frames") << "attempt " << attempt;
+  }
+  {
+    StagedDirectory plain(root / "set", "dataset");  // without --resume, failing
+  }
+  EXPECT_EQ(staging_folders().size(), 1u);
+  {
+    StagedDirectory stage(root / "set", "dataset", {}, false, /*resume=*/true);
+    EXPECT_TRUE(stage.resumed());
+    stage.Commit();
+  }
+  EXPECT_TRUE(staging_folders().empty());
+  EXPECT_EQ(ReadFile(root / "set" / "frames.jsonl"), "kept frames");
+  fs::remove_all(root);
+}
+
+TEST(Io, ReadersVerifyTheChecksumsARecordVouchesFor) {
+  const fs::path root = TempRoot();
+  WriteFileAtomic(root / "a.png", "the image");
+  ExpectChecksum(root / "a.png", TextChecksum("the image"), "dataset.json");
+  EXPECT_EQ(ReadFile(root / "a.png"), "the image");
+  WriteFileAtomic(root / "a.png", "the imagE");
+  try {
+    ReadFile(root / "a.png");
+    ADD_FAILURE() << "a tampered file was read";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("does not match its checksum in dataset.json"), std::string::npos) << e.what();
+  }
+  EXPECT_THROW(VerifyExpectedChecksum(root / "a.png"), Error);
+  EXPECT_EQ(FileChecksum(root / "a.png"), TextChecksum("the imagE"));
+  ClearNotedInputs();  // forgets the expectation
+  EXPECT_EQ(ReadFile(root / "a.png"), "the imagE");
+  fs::remove_all(root);
+}
+
+TEST(Io, TextFromOtherSystemsReadsAsWritten) {
+  EXPECT_EQ(NormalisedText("\xEF\xBB\xBF"
+                           "a\r\nb\rc\n\rd"),
+            "a\nb\nc\n\nd");
+  EXPECT_EQ(NormalisedText("plain\n"), "plain\n");
+  const fs::path root = TempRoot();
+  fs::create_directories(root / "folder");
+  try {
+    RequireFile(root / "folder", "a scene file");
+    ADD_FAILURE();
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("is a folder, not a scene file"), std::string::npos);
   }
   fs::remove_all(root);
 }
@@ -203,6 +295,74 @@ TEST(Manifest, MalformedFieldsAreNamedErrors) {
   rejected([](nlohmann::json* m) { (*m)["frames"][1]["views"][0]["width"] = 0; }, "width");
   rejected([](nlohmann::json* m) { (*m)["frames"][0]["views"][1]["unit"] = "left"; }, "second view");
   rejected([](nlohmann::json* m) { (*m)["units"][0]["name"] = ""; }, "non-empty");
+  // Checksums in the writer's form, of files inside the manifest's folder (a frame may name files without one).
+  const std::string sum = "fnv1a64:0123456789abcdef";
+  const auto with_sums = [&](nlohmann::json* m) { (*m)["frames"][1]["checksums"] = {{"images/l1.png", sum}}; };
+  {
+    nlohmann::json m = ok;
+    with_sums(&m);
+    EXPECT_NO_THROW(CheckDatasetManifest(m, "m.json"));
+  }
+  rejected([&](nlohmann::json* m) { with_sums(m), (*m)["frames"][1]["checksums"]["images/l1.png"] = "fnv1a64:xyz"; },
+           "16 hex digits");
+  rejected([&](nlohmann::json* m) { with_sums(m), (*m)["frames"][1]["checksums"]["../x.png"] = sum; },
+           "leaves the file's folder");
+}
+
+TEST(Shards, ShardTextAndRecordsAreReadStrictly) {
+  int index = -1, count = -1;
+  ParseShardSpec("3/8", "--shard", &index, &count);
+  EXPECT_EQ(index, 3);
+  EXPECT_EQ(count, 8);
+  // A wrap-around of 2^32 once ran the whole job as shard 0 of 1.
+  for (const char* bad :
+       {"4294967296/4294967297", "-1/2", "2/2", "1/0", " 1/2", "1/2x", "1//2", "1", "/", "1e3/2000", "0/100001"})
+    EXPECT_NE(ErrorOf([&] { ParseShardSpec(bad, "--shard", &index, &count); }).find("--shard"), std::string::npos)
+        << bad;
+  // Records: a count of 2e9 is refused before anything is allocated; a malformed record names the file.
+  const auto doc = [](const nlohmann::json& shard) { return nlohmann::json{{"seed", 1}, {"shard", shard}}; };
+  const std::vector<fs::path> files = {"a.json", "b.json"};
+  EXPECT_EQ(OrderShards({doc({{"index", 1}, {"count", 2}}), doc({{"index", 0}, {"count", 2}})}, files),
+            (std::vector<size_t>{1, 0}));
+  for (const nlohmann::json& bad :
+       {nlohmann::json{{"index", 0}, {"count", 2000000000}}, nlohmann::json{{"index", 0}},
+        nlohmann::json{{"index", "0"}, {"count", 2}}, nlohmann::json{{"index", 0.5}, {"count", 2}},
+        nlohmann::json{{"index", 2}, {"count", 2}}, nlohmann::json(7)}) {
+    const std::string e = ErrorOf([&] { OrderShards({doc(bad), doc({{"index", 1}, {"count", 2}})}, files); });
+    EXPECT_NE(e.find("a.json"), std::string::npos) << bad.dump() << ": " << e;
+  }
+  EXPECT_NE(ErrorOf([&] {
+              OrderShards({doc({{"index", 0}, {"count", 100000}}), doc({{"index", 1}, {"count", 100000}})}, files);
+            }).find("shard 2 of 100000 is missing"),
+            std::string::npos);
+  EXPECT_NE(ErrorOf([&] {
+              OrderShards({doc({{"index", 0}, {"count", 2}}), doc({{"index", 0}, {"count", 2}})}, files);
+            }).find("given twice"),
+            std::string::npos);
+}
+
+}  // namespace
+}  // namespace hovs
+
+namespace hovs {
+namespace {
+
+TEST(Yaml, MissingAndRepeatedKeysAreNamed) {
+  const YamlReader r("scene.yaml");
+  // A key given twice anywhere (yaml-cpp keeps both and a lookup finds one) is refused with its line.
+  EXPECT_NE(ErrorOf([&] { r.Load("a: 1\nb:\n  c: 2\n  c: 3\n"); }).find("scene.yaml:4 (b.c)"), std::string::npos);
+  EXPECT_NE(ErrorOf([&] { r.Load("l:\n  - {x: 1, x: 2}\n"); }).find("duplicate key 'x'"), std::string::npos);
+  // A missing key is named, not yaml-cpp's "invalid node".
+  const YAML::Node root = r.Load("camera: {width: 10}\n");
+  const YAML::Node& camera = root["camera"];
+  YAML::Node v;
+  EXPECT_NE(ErrorOf([&] { r.Require(camera, "camera", "height", &v); }).find("missing 'camera.height'"),
+            std::string::npos);
+  EXPECT_NE(ErrorOf([&] { r.Number(camera["height"], "camera.height"); }).find("missing 'camera.height'"),
+            std::string::npos);
+  EXPECT_NE(ErrorOf([&] { r.String(root["name"], "name"); }).find("missing 'name'"), std::string::npos);
+  EXPECT_NE(ErrorOf([&] { r.Integer(r.Load("n: 1000000000")["n"], "n"); }).find("below 1000000000"), std::string::npos);
+  EXPECT_EQ(r.Integer(r.Require(camera, "camera", "width", &v), "camera.width"), 10);
 }
 
 }  // namespace

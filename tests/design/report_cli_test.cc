@@ -3,6 +3,8 @@
 // runs it under xvfb-run.
 #include <gtest/gtest.h>
 
+#include <functional>
+
 #include <array>
 #include <cstdio>
 #include <filesystem>
@@ -142,6 +144,35 @@ TEST(DesignCli, SweepShardsMergeToTheReportOneProcessWrites) {
   EXPECT_NE(bad.output.find((dir / "other" / "design-shard.json").string() + ": does not belong"), std::string::npos)
       << bad.output;
   EXPECT_FALSE(fs::exists(dir / "bad"));
+  // An edited value merges neither with its checksum as written nor with the checksum made again (the shard's
+  // first row is evaluated again); malformed records are named errors, a wrapped --shard is refused.
+  const fs::path file = dir / "1" / "design-shard.json";
+  const std::string good = hovs::ReadFile(file);
+  const auto refused = [&](const std::function<void(nlohmann::json*)>& edit, const std::string& needle) {
+    nlohmann::json j = nlohmann::json::parse(good);
+    edit(&j);
+    hovs::WriteFileAtomic(file, j.dump());
+    const CliRun r = Hovs("merge " + shards + "--out " + (dir / "bad").string());
+    EXPECT_EQ(r.exit_code, 2) << needle << "\n" << r.output;
+    EXPECT_NE(r.output.find(needle), std::string::npos) << r.output;
+    EXPECT_FALSE(fs::exists(dir / "bad"));
+  };
+  refused([](nlohmann::json* j) { (*j)["rows"]["rim_px"][0] = 1.0; }, "rows_checksum");
+  refused(
+      [](nlohmann::json* j) {
+        (*j)["rows"]["rim_px"][0] = 1.0;
+        (*j)["shard"]["rows_checksum"] = hovs::TextChecksum((*j)["rows"].dump());
+      },
+      "where the design evaluates to");
+  refused([](nlohmann::json* j) { (*j)["shard"]["count"] = 2000000000; }, "shard.count");
+  refused([](nlohmann::json* j) { (*j)["rows"]["objective"] = "many"; }, "rows");
+  refused([](nlohmann::json* j) { (*j)["config"] = 3; }, "config");
+  hovs::WriteFileAtomic(file, good);
+  const CliRun wrapped =
+      Hovs("design --config " + small + " --shard 4294967296/4294967297 --out " + (dir / "wrapped").string());
+  EXPECT_EQ(wrapped.exit_code, 2) << wrapped.output;
+  EXPECT_NE(wrapped.output.find("--shard"), std::string::npos) << wrapped.output;
+  EXPECT_FALSE(fs::exists(dir / "wrapped"));
   const CliRun family = Hovs("design --config " + std::string(HOVS_SOURCE_DIR) + "/design/turret.yaml --shard 0/2 " +
                              "--out " + (dir / "family").string());
   EXPECT_EQ(family.exit_code, 2);

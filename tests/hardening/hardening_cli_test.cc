@@ -201,6 +201,14 @@ TEST_F(Hardening, FilesWithImpossibleSizesAreRefusedBeforeTheyAreRead) {
     const std::vector<float> z(8 * 6 * 12, 1.0f);
     io::WriteExr(exr, 8, 6, {"Z", "P.X", "P.Y", "P.Z", "N.X", "N.Y", "N.Z", "id", "mask", "M.X", "M.Y", "M.Z"},
                  z.data(), {});
+    // A file that does not match the manifest's checksum is refused as such; one whose checksum was made to match
+    // is refused for its size.
+    Refused("depth --dataset " + (w / "street" / "dataset.json").string() + " --out " + (w / "d").string(),
+            "does not match its checksum");
+    nlohmann::json edited = m;
+    edited["frames"][0]["checksums"][m["frames"][0]["views"][0]["ground_truth"]["exr"].get<std::string>()] =
+        FileChecksum(exr);
+    WriteFileAtomic(w / "street" / "dataset.json", edited.dump(1));
     Refused("depth --dataset " + (w / "street" / "dataset.json").string() + " --out " + (w / "d").string(),
             "the ground truth is 8 x 6");
   }
@@ -323,6 +331,95 @@ TEST_F(Hardening, OptionsAndCommandsAreNamedInOneLine) {
   Refused(
       "position -i " + Image().string() + " --design " + Mono().string() + " --search inf --out " + (w / "p").string(),
       "--search");
+}
+
+TEST_F(Hardening, TamperedOrForeignInputsNeverPassForTheOnesTheirRecordsName) {
+  const fs::path w = Work("tampered");
+  // An image changed after its manifest recorded it: every reader verifies the bytes it reads.
+  fs::copy(Mono().parent_path(), w / "mono", fs::copy_options::recursive);
+  const auto m = nlohmann::json::parse(ReadFile(w / "mono" / "dataset.json"));
+  const fs::path image = w / "mono" / m["frames"][0]["views"][0]["image"].get<std::string>();
+  std::string bytes = ReadFile(image);
+  bytes[bytes.size() / 2] ^= 0x01;
+  WriteFileAtomic(image, bytes);
+  Refused("calibrate --dataset " + (w / "mono" / "dataset.json").string() + " --out " + (w / "c").string(),
+          "does not match its checksum");
+  WriteFileAtomic(image, ReadFile(Image()));
+  // Sidecar corners of a status hovs never writes, or of an id beyond the board (their checksum made to match).
+  const std::string sidecar_rel = m["frames"][0]["views"][0]["ground_truth"]["sidecar"];
+  const fs::path sidecar = w / "mono" / sidecar_rel;
+  const std::string good_sidecar = ReadFile(sidecar);
+  for (const auto& [key, value] :
+       std::vector<std::pair<std::string, nlohmann::json>>{{"status", "bogus"}, {"id", 99999}}) {
+    nlohmann::json side = nlohmann::json::parse(good_sidecar);
+    side["boards"][0]["corners"][0][key] = value;
+    WriteFileAtomic(sidecar, side.dump());
+    nlohmann::json edited = m;
+    edited["frames"][0]["checksums"][sidecar_rel] = FileChecksum(sidecar);
+    WriteFileAtomic(w / "mono" / "dataset.json", edited.dump());
+    Refused("calibrate --dataset " + (w / "mono" / "dataset.json").string() + " --truth-corners --out " +
+                (w / "c").string(),
+            key == "status" ? "status 'bogus'" : ".id: expected a whole number in 0..34 (got 99999)");
+  }
+}
+
+TEST_F(Hardening, CapturesThatFailLeaveNothingAndReplaysKeepOneSize) {
+  const fs::path w = Work("capture");
+  // A replay whose second image has another size (a camera's frames keep one).
+  fs::create_directories(w / "frames");
+  const std::vector<float> one(1, 0.5f), six(6, 0.5f);
+  io::WriteImage(w / "frames" / "a.png", 1, 1, 1, one, 8);
+  io::WriteImage(w / "frames" / "b.png", 3, 2, 1, six, 8);
+  Refused("capture --replay " + (w / "frames").string() + " --frames 2 --out " + (w / "c").string(), "b.png");
+  const auto kept = nlohmann::json::parse(ReadFile(w / "c" / "dataset.json"));  // the first frame stays, said so
+  EXPECT_EQ(kept["frames"].size(), 1u);
+  EXPECT_NE(kept["status"].get<std::string>().find("stopped by an error after 1 frames"), std::string::npos);
+  // A capture that fails before its first frame leaves nothing, and the same --out takes a good capture after.
+  fs::create_directories(w / "broken");
+  WriteFileAtomic(w / "broken" / "a.png", "\x89PNG not an image");
+  Refused("capture --replay " + (w / "broken").string() + " --frames 1 --out " + (w / "d").string(), "a.png");
+  EXPECT_FALSE(fs::exists(w / "d")) << "a capture that failed after 0 frames left its folder";
+  const auto good = test::Hovs("-q capture --replay " + Mono().parent_path().string() + "/images --frames 1 --out " +
+                               (w / "d").string());
+  EXPECT_EQ(good.exit_code, 0) << good.output;
+  // The simulator's packet loss is bounded by the command line where the simulator bounds it.
+  Refused("capture --simulate " + Mono().string() + " --simulate-loss 0.9 --frames 1 --out " + (w / "c").string(),
+          "--simulate-loss");
+}
+
+TEST_F(Hardening, OptionsAndFilesOfTheWrongKindAreNamed) {
+  const fs::path w = Work("kinds");
+  ASSERT_EQ(test::Hovs("-q calibrate --dataset " + Mono().string() + " --out " + (w / "cal").string()).exit_code, 0);
+  const std::string cal = (w / "cal" / "calibration.json").string();
+  // A folder where a file is expected, a PNG given as a model, an image size that is not the model's.
+  fs::create_directories(w / "folder");
+  Refused("design --config " + (w / "folder").string() + " --out " + (w / "d").string(), "is a folder, not");
+  Refused("tolerance -c " + (w / "folder").string() + " --out " + (w / "t").string(), "is a folder, not");
+  Refused("unwrap --model " + Image().string() + " --input " + Image().string() + " --out " + (w / "u").string(),
+          "is an image, not a camera model");
+  Refused("convert " + cal + " --to kalibr --image-size 100x100 --out " + (w / "k").string(),
+          "is for 550 x 440 images, not 100 x 100");
+  // A camera name that would write a second YAML key, a ROS 2 namespace that is not one.
+  Refused("convert " + cal + " --to mei --camera-name 'a\nimage_width: 5' --out " + (w / "k").string(),
+          "--camera-name");
+  for (const char* prefix : {"1bad", "a//b", "a/", "a b", "ns/2x", "a__b"})
+    Refused("live --simulate " + Mono().string() + " --model " + Mono().string() + " --publish --topic-prefix '" +
+                prefix + "' -n 1 --out " + (w / "l").string(),
+            "--topic-prefix");
+  // I/N parsed strictly: 2^32 once wrapped to shard 0 of 1 and ran the whole job.
+  Refused("dataset --scene " + kScenes + "/reference_calibration.yaml --count 2 --shard 4294967296/4294967297 --out " +
+              (w / "s").string(),
+          "--shard");
+  Refused("tolerance -c " + std::string(HOVS_SOURCE_DIR) + "/study/reference.yaml --shard 1/2/3 --out " +
+              (w / "t").string(),
+          "--shard");
+  // A required key missing from a scene is named (not yaml-cpp's "invalid node").
+  std::string scene = ReadFile(kScenes + "/reference_board.yaml");
+  const size_t unit = scene.find("units:");
+  ASSERT_NE(unit, std::string::npos);
+  WriteFileAtomic(w / "scene.yaml", scene);
+  const auto r = test::Hovs("render --scene " + (w / "scene.yaml").string() + " --out " + (w / "r").string());
+  EXPECT_EQ(r.output.find("invalid node"), std::string::npos) << r.output;
 }
 
 }  // namespace

@@ -157,7 +157,7 @@ TEST(Grbl, MovesInMillimetresAndDegreesAndWaitsUntilIdle) {
   EXPECT_EQ(lines[5], "G90 G0 C90.0000");
   // An axis this controller does not drive, a target outside the travel: refused before anything is sent.
   EXPECT_NE(ErrorOf([&] { m.axis(rig::AxisId::kFocus); }).find("axis focus is not driven"), std::string::npos);
-  EXPECT_NE(ErrorOf([&] { m.axis(rig::AxisId::kY).MoveTo(0.02); }).find("(axis y): target 0.02 outside the travel"),
+  EXPECT_NE(ErrorOf([&] { m.axis(rig::AxisId::kY).MoveTo(0.02); }).find("(axis y): target 0.02 m outside the travel"),
             std::string::npos);
   EXPECT_EQ(emu.lines().size(), 6u);
 }

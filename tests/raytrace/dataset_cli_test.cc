@@ -326,7 +326,8 @@ TEST(CalibrateCli, CalibratesASyntheticSetAgainstGroundTruthAndRejectsBadInput) 
   const auto sidecars = nlohmann::json::parse(ReadFile(dir / "set-bad" / "dataset.json"));
   WriteFileAtomic(dir / "set-bad" / sidecars["frames"][0]["views"][0]["ground_truth"]["sidecar"].get<std::string>(),
                   "{bad");
-  rejected("--truth-corners --dataset " + (dir / "set-bad" / "dataset.json").string(), "not valid JSON at line 1");
+  // The damaged sidecar is caught by its checksum before it is parsed.
+  rejected("--truth-corners --dataset " + (dir / "set-bad" / "dataset.json").string(), "does not match its checksum");
   rejected("--truth-corners --dataset " + (dir / "set" / "dataset.json").string() + " --corner-noise -1",
            "--corner-noise");
   rejected("--images " + (dir / "set" / "images").string() + " --board 7x5x0.03 --corner-refinement sharp",

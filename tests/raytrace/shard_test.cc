@@ -8,6 +8,7 @@
 #include <unistd.h>
 
 #include <chrono>
+#include <functional>
 #include <sstream>
 #include <thread>
 
@@ -73,8 +74,37 @@ TEST(DatasetShards, MergedShardsAreTheSetOneProcessWrites) {
   refused({dir / "s2_0", dir / "other_seed"}, "other_seed/dataset.json: does not belong with");
   refused({dir / "s2_0"}, "shard 1 of 2 is missing");
   refused({dir / "s2_0", dir / "s2_0"}, "given twice");
-  refused({dir / "s2_0", dir / "s3_1"}, "is a shard of 3 but the first is of 2");
+  refused({dir / "s2_0", dir / "s3_1"}, "is shard 1 of 3, the first of 2");
   refused({dir / "whole"}, "is not a shard");
+  // Every file is verified against its shard's checksum: a tampered image, a tampered checksum, a frame without
+  // checksums, a malformed shard record (these merged with exit 0, or ended in a JSON exception).
+  const fs::path shard = dir / "s2_1", manifest = shard / "dataset.json";
+  const std::string good = ReadFile(manifest);
+  const auto m = nlohmann::json::parse(good);
+  const fs::path image = shard / m["frames"][0]["views"][0]["image"].get<std::string>();
+  const std::string pixels = ReadFile(image);
+  std::string flipped = pixels;
+  flipped[flipped.size() / 2] ^= 0x10;
+  WriteFileAtomic(image, flipped);
+  refused({dir / "s2_0", shard}, "does not match its checksum");
+  WriteFileAtomic(image, pixels);
+  const auto edited = [&](const std::function<void(nlohmann::json*)>& edit) {
+    nlohmann::json e = m;
+    edit(&e);
+    WriteFileAtomic(manifest, e.dump(2));
+  };
+  edited([&](nlohmann::json* e) {
+    (*e)["frames"][0]["checksums"][m["frames"][0]["views"][0]["image"].get<std::string>()] = "fnv1a64:0000000000000000";
+  });
+  refused({dir / "s2_0", shard}, "does not match its checksum");
+  edited([](nlohmann::json* e) { (*e)["frames"][0].erase("checksums"); });
+  refused({dir / "s2_0", shard}, "has no checksums");
+  edited([](nlohmann::json* e) { (*e)["shard"]["count"] = 2000000000; });
+  refused({dir / "s2_0", shard}, "shard.count");
+  edited([](nlohmann::json* e) { (*e)["shard"]["index"] = "1"; });
+  refused({dir / "s2_0", shard}, "shard.index");
+  WriteFileAtomic(manifest, good);
+  EXPECT_NO_THROW(scenes::MergeDatasetShards({dir / "s2_0", shard}, dir / "good"));
   // From the command line: a bad shard is one clear error, exit 2, nothing written.
   const auto bad = test::Hovs("-q dataset --scene " + std::string(HOVS_SOURCE_DIR) +
                               "/scenes/reference_calibration.yaml -n 2 --shard 2/2 -o " + (dir / "bad").string());
@@ -162,6 +192,16 @@ TEST(DatasetResume, AKilledRunResumesToTheSetAnUninterruptedRunWrites) {
   const auto second = nlohmann::json::parse(journal.substr(third_line, journal.find('\n', third_line) - third_line));
   const fs::path damaged = staging / first["views"][0]["image"].get<std::string>();
   fs::resize_file(damaged, fs::file_size(damaged) / 2);
+  // A --resume with a mistyped option is refused and removes nothing: the kept frames stay for the right command
+  // (the kept folder is moved aside before the configuration check; a refused run must not delete it).
+  const std::string kept_journal = ReadFile(staging / "frames.jsonl");
+  const auto wrong = test::Hovs(args + (dir / "resumed").string() + " --resume --elevation -30 20");
+  EXPECT_EQ(wrong.exit_code, 2) << wrong.output;
+  EXPECT_NE(wrong.output.find("another configuration"), std::string::npos) << wrong.output;
+  staging = StagingOf(dir, "resumed");
+  ASSERT_FALSE(staging.empty()) << "the refused --resume deleted the kept run";
+  EXPECT_EQ(ReadFile(staging / "frames.jsonl"), kept_journal);
+  EXPECT_TRUE(fs::exists(staging / first["views"][0]["image"].get<std::string>()));
   // The same command with --resume continues.
   const auto r = test::Hovs(args + (dir / "resumed").string() + " --resume");
   ASSERT_EQ(r.exit_code, 0) << r.output;

@@ -5,9 +5,11 @@
 
 #include <algorithm>
 #include <fstream>
+#include <functional>
 #include <vector>
 #include <nlohmann/json.hpp>
 
+#include "core/io.h"
 #include "tests/cli_helper.h"
 
 namespace hovs {
@@ -86,6 +88,51 @@ TEST(RigCli, BadInputsExitTwoAndWriteNothing) {
   EXPECT_NE(r.output.find("mirror 'wide' needs the plate at"), std::string::npos) << r.output;
 }
 
+TEST(RigCli, AnImpossibleMachineIsRefusedAtLoadNamingTheKey) {
+  // Each of these loaded and failed later as "the label is covered" or a stuck axis (or asked OpenCV for
+  // dictionary -1): the machine's geometry is checked when the file is read.
+  std::ifstream in(kMachine);
+  const std::string good((std::istreambuf_iterator<char>(in)), {});
+  const fs::path dir = Scratch("rig", "machines");
+  fs::create_directories(dir);
+  int n = 0;
+  const auto refused = [&](const std::string& from, const std::string& to, const std::string& needle) {
+    std::string text = good;
+    ASSERT_NE(text.find(from), std::string::npos) << from;
+    text.replace(text.find(from), from.size(), to);
+    text.replace(text.find("reference_board.yaml"), 20, std::string(HOVS_SOURCE_DIR) + "/scenes/reference_board.yaml");
+    const fs::path file = dir / ("m" + std::to_string(n++) + ".yaml");
+    std::ofstream(file) << text;
+    const fs::path out = dir / "out";
+    const auto r = Hovs("rig align --machine " + file.string() + " --starts 1 --out " + out.string());
+    EXPECT_EQ(r.exit_code, 2) << to << "\n" << r.output;
+    EXPECT_EQ(std::count(r.output.begin(), r.output.end(), '\n'), 1) << r.output;
+    EXPECT_NE(r.output.find(needle), std::string::npos) << to << "\n" << r.output;
+    EXPECT_NE(r.output.find(file.string()), std::string::npos) << r.output;
+    EXPECT_FALSE(fs::exists(out));
+  };
+  refused("dictionary: DICT_4X4_50", "dictionary: DICT_BOGUS", "unknown ArUco dictionary 'DICT_BOGUS'");
+  refused("rim_diameter: 0.080, slot_deg: 90}", "rim_diameter: 0.080, slot_deg: 0}", "overlap");  // one slot, two
+  refused("[0.043, 0.033], [-0.043, 0.033]", "[43.0, 0.033], [-0.043, 0.033]", "label.centres[0]");
+  refused("x:      {min: -0.005, max: 0.005, step: 1.0e-6", "x:      {min: -0.005, max: 0.005, step: 0.009",
+          "a hundredth of the travel");
+  refused("tilt_x: {min: -3, max: 3, step: 0.0005", "tilt_x: {min: -3, max: 3, step: 0.01",
+          "half the alignment's tolerance");
+  refused("slot_deg: 270}", "slot_deg: 400}", "outside the turret's travel [-10 deg, 370 deg]");
+  refused("focus:  {min: 0.08, max: 0.40", "focus:  {min: 0.30, max: 0.40", "the focus travel");
+  refused("turret: {radius: 0.09}", "turret: {radius: 0.02}", "overlap");  // four plates on a 20 mm turret
+  refused("camera: {focal_length: 0.016, pixel_pitch: 4.54e-6, width: 2750, height: 2200, lens_aperture: 0.020}",
+          "camera: {focal_length: 0.016, pixel_pitch: 4.54e-6, width: 2750, lens_aperture: 0.020}",
+          "missing 'camera.height'");
+  // Sixteen plates on the 90 mm turret.
+  std::string mirrors;
+  for (int k = 0; k < 16; ++k)
+    mirrors += "  - {id: m" + std::to_string(k) +
+               ", a: 0.048, b: 0.044, rim_diameter: 0.080, slot_deg: " + std::to_string(22.5 * k) + "}\n";
+  const size_t first = good.find("  - {id: reference"), last = good.find("label:");
+  refused(good.substr(first, last - first), mirrors, "overlap");
+}
+
 TEST(RigCli, ACalibrationStoredInTheRigFolderHoldsAfterASwitch) {
   // The reference mirror calibrated where the loop put it (at half resolution), then a switch from the wide
   // mirror back to it: align, focus, load its files, and a fresh board through the stored model.
@@ -119,6 +166,66 @@ TEST(RigCli, ACalibrationStoredInTheRigFolderHoldsAfterASwitch) {
                         " --out " + Scratch("rig", "bad-switch").string());
   EXPECT_EQ(bad.exit_code, 2) << bad.output;
   EXPECT_NE(bad.output.find("give --downscale 2"), std::string::npos) << bad.output;
+
+  // rig.json is checked, not trusted: every variant below once switched with exit 0 (or followed the path).
+  const std::string good = test::Run("cat " + (rig / "rig.json").string()).output;
+  const auto variant = [&](const std::function<void(nlohmann::json*)>& edit) {
+    nlohmann::json j = nlohmann::json::parse(good);
+    edit(&j);
+    std::ofstream(rig / "rig.json") << j.dump(1);
+  };
+  const auto switch_refused = [&](const std::string& needle, const std::string& machine = kMachine,
+                                  const std::string& to = "reference") {
+    const fs::path o = Scratch("rig", "refused-switch");
+    const auto s = Hovs("rig switch --machine " + machine + " --downscale 2 --to " + to + " --rig " +
+                        (rig / "rig.json").string() + " --out " + o.string());
+    EXPECT_EQ(s.exit_code, 2) << needle << "\n" << s.output;
+    EXPECT_NE(s.output.find(needle), std::string::npos) << s.output;
+    EXPECT_FALSE(fs::exists(o));
+  };
+  variant([](nlohmann::json* j) { (*j)["mirrors"]["reference"]["calibration"] = "../elsewhere/calibration.json"; });
+  switch_refused("leaves the file's folder");
+  variant([](nlohmann::json* j) { (*j)["mirrors"]["reference"]["map"] = "/etc/passwd"; });
+  switch_refused("absolute");
+  // Another mirror's files under this mirror's name: the wide mirror's slot given the reference's calibration.
+  variant([](nlohmann::json* j) {
+    (*j)["mirrors"]["wide"] = (*j)["mirrors"]["reference"];
+    (*j)["mirrors"]["wide"]["mirror"] = {{"a", 0.065}, {"b", 0.051}, {"rim_diameter", 0.080}};
+  });
+  switch_refused("does not image mirror 'wide''s field", kMachine, "wide");
+  // A calibration changed after it was written, and a map of another size with its checksum made to match.
+  std::string calibration = test::Run("cat " + (rig / "reference/calibration/calibration.json").string()).output;
+  std::ofstream(rig / "reference/calibration/calibration.json") << calibration + " ";
+  variant([](nlohmann::json*) {});
+  switch_refused("does not match its checksum");
+  std::ofstream(rig / "reference/calibration/calibration.json") << calibration;
+  const fs::path small = Scratch("rig", "small");
+  ASSERT_EQ(Hovs("-q dataset --kind mono_calibration --scene " + std::string(HOVS_SOURCE_DIR) +
+                 "/scenes/reference_calibration.yaml --count 1 --samples 1 --downscale 10 --out " + small.string())
+                .exit_code,
+            0);
+  ASSERT_EQ(Hovs("-q unwrap --model " + (small / "dataset.json").string() + " --layout article --input " +
+                 (small / "dataset.json").string() + " --save-map " + (rig / "other.hmap").string() + " --out " +
+                 (small / "views").string())
+                .exit_code,
+            0);
+  variant([&](nlohmann::json* j) { (*j)["mirrors"]["reference"]["map"] = "other.hmap"; });
+  switch_refused("does not match its checksum");
+  variant([&](nlohmann::json* j) {
+    (*j)["mirrors"]["reference"]["map"] = "other.hmap";
+    (*j)["mirrors"]["reference"]["map_checksum"] = FileChecksum(rig / "other.hmap");
+  });
+  switch_refused("maps 275 x 220 images; the folder's are 1375 x 1100");
+  // A folder made on another machine (a label of other markers).
+  std::ifstream in(kMachine);
+  std::string text((std::istreambuf_iterator<char>(in)), {});
+  text.replace(text.find("margin: 0.001"), 13, "margin: 0.0012");
+  text.replace(text.find("reference_board.yaml"), 20, std::string(HOVS_SOURCE_DIR) + "/scenes/reference_board.yaml");
+  const fs::path other_machine = Scratch("rig", "other-machine.yaml");
+  std::ofstream(other_machine) << text;
+  variant([](nlohmann::json*) {});
+  switch_refused("was made on machine", other_machine.string());
+  std::ofstream(rig / "rig.json") << good;
 }
 
 TEST(RigCli, LiveHoldsEveryFrameTakenWhileTheUnitIsNotReady) {

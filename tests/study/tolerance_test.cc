@@ -118,6 +118,81 @@ TEST(Tolerance, ShardsMergeToTheStudyOneProcessWrites) {
   EXPECT_NE(missing.output.find("shard 2 of 3 is missing"), std::string::npos) << missing.output;
 }
 
+TEST(Tolerance, ASampleThatCannotBeEvaluatedCountsAsFailedNeverAsZero) {
+  // Errors the unit cannot image its field with: every figure fails (NaN), not 0.
+  const ToleranceConfig c = study::LoadToleranceConfig(kReference);
+  const study::ToleranceEvaluator ev(c);
+  const study::SampleFigures lost = ev.Evaluate(study::SingleError("principal_point", 1e9), {});
+  for (int m = 0; m < 4; ++m) EXPECT_TRUE(lost.Failed(m)) << study::Metrics()[m].name << " " << lost.values[m];
+  const study::SampleFigures fine = ev.Evaluate(study::SingleError("lateral_offset", 0.05), {});
+  for (int m = 0; m < 4; ++m) EXPECT_FALSE(fine.Failed(m)) << study::Metrics()[m].name;
+  // Ten samples of which two failed: counted, reported, and the limits' p95 lands on a failure only when more
+  // than 5 % fail; then no limit is met, however small the evaluated figures are.
+  std::vector<study::Sample> samples(10);
+  for (int i = 0; i < 10; ++i) {
+    samples[i].index = i;
+    samples[i].figures = i < 2 ? lost : fine;
+  }
+  const nlohmann::json r = study::AnalyseSamples(c, samples);
+  for (const auto& m : study::Metrics()) {
+    EXPECT_EQ(r["figures"][m.name]["failed"].get<int>(), 2) << m.name;
+    EXPECT_EQ(r["figures"][m.name]["evaluated"].get<int>(), 8) << m.name;
+    EXPECT_TRUE(r["figures"][m.name]["all_p95"].is_null()) << m.name;
+  }
+  for (const auto& [name, l] : r["limits"].items()) {
+    EXPECT_FALSE(l["meets"].get<bool>()) << name;
+    EXPECT_TRUE(l["p95"].is_null()) << name;
+  }
+  EXPECT_EQ(r["warnings"].size(), 4u);
+}
+
+TEST(Tolerance, AMergeVerifiesEveryShardItJoins) {
+  const fs::path dir = test::Scratch("tolerance", "tamper");
+  const std::string base = "-q tolerance -c " + kReference + " -n 12 ";
+  for (int i = 0; i < 2; ++i)
+    ASSERT_EQ(
+        test::Hovs(base + "--shard " + std::to_string(i) + "/2 --out " + (dir / std::to_string(i)).string()).exit_code,
+        0);
+  const auto merge = [&]() {
+    return test::Hovs("merge " + (dir / "0").string() + " " + (dir / "1").string() + " --out " +
+                      (dir / "merged").string());
+  };
+  const auto refused = [&](const std::string& needle) {
+    const auto r = merge();
+    EXPECT_EQ(r.exit_code, 2) << r.output;
+    EXPECT_NE(r.output.find(needle), std::string::npos) << r.output;
+    EXPECT_FALSE(fs::exists(dir / "merged"));
+  };
+  const fs::path csv = dir / "1" / "samples.csv", head = dir / "1" / "tolerance.json";
+  const std::string good_csv = ReadFile(csv), good_head = ReadFile(head);
+  // An edited figure: the checksum refuses it; with the checksum made again, evaluating the sample again does.
+  std::string edited = good_csv;
+  const size_t last_comma = edited.rfind(',', edited.size() - 2);
+  edited.replace(last_comma + 1, edited.size() - 2 - last_comma, "0.000001");
+  WriteFileAtomic(csv, edited);
+  refused("does not match its checksum");
+  nlohmann::json j = nlohmann::json::parse(good_head);
+  j["shard"]["samples_checksum"] = TextChecksum(edited);
+  WriteFileAtomic(head, j.dump(1));
+  refused("evaluates to");
+  WriteFileAtomic(csv, good_csv);
+  // Malformed records: a count of 2e9, a string, a seed that is not a number.
+  for (const auto& [key, value] :
+       std::vector<std::pair<std::string, nlohmann::json>>{{"count", 2000000000}, {"count", "2"}, {"index", -1}}) {
+    nlohmann::json k = nlohmann::json::parse(good_head);
+    k["shard"][key] = value;
+    WriteFileAtomic(head, k.dump(1));
+    refused("tolerance.json (shard");
+  }
+  nlohmann::json seed = nlohmann::json::parse(good_head);
+  seed["seed"] = "one";
+  WriteFileAtomic(head, seed.dump(1));
+  refused("(seed)");
+  WriteFileAtomic(head, good_head);
+  const auto ok = merge();
+  EXPECT_EQ(ok.exit_code, 0) << ok.output;
+}
+
 TEST(Tolerance, BadConfigsAreRefusedNamingTheKey) {
   const fs::path dir = test::Scratch("tolerance", "bad");
   fs::create_directories(dir);
@@ -136,6 +211,11 @@ TEST(Tolerance, BadConfigsAreRefusedNamingTheKey) {
   refused("limits: {ray_error: 0.1}\n", "unknown figure 'ray_error'");
   refused("evaluation: {depth_ranges: [0.5]}\n", "twice the baseline");
   refused("seed: -3\n", "seed");
+  // Sizes beyond a manufacturing tolerance (they once gave p95 = 0 and "meets" on every limit), a key twice.
+  refused("tolerances: {principal_point: {normal: 1.0e9}}\n", "is not a manufacturing tolerance");
+  refused("tolerances: {rim_diameter: {uniform: 10000}}\n", "5 % of the nominal rim diameter");
+  refused("tolerances: {mirror_a: {normal: 0.01}, mirror_a: {normal: 0.02}}\n", "duplicate key 'mirror_a'");
+  refused("limits: {ray_error_deg: 0.1, ray_error_deg: 0.2}\n", "given twice");
   WriteFileAtomic(dir / "t.yaml", "tolerances: {}\n");
   const auto r = test::Hovs("tolerance -c " + (dir / "t.yaml").string() + " --out " + (dir / "out").string());
   EXPECT_EQ(r.exit_code, 2);
