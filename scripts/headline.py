@@ -21,6 +21,7 @@ CHECKS = [
     ("real: calibration RMS, polynomial + decentering, board flex", "real VMR images: polynomial + decentering, flex RMS"),
     ("real: calibration RMS, unified model", "real VMR images: unified RMS"),
     ("variable scale: worst fresh-board RMS after a switch", "variable scale: stored calibration after a mirror switch"),
+    ("optics: rendered edges, worst MTF50 error vs prediction", "rendered slanted edges vs predicted MTF50, worst error"),
 ]
 
 
