@@ -32,7 +32,7 @@ struct Preset {
   double detection_rms_px = 0.15, calibration_rms_px = 0.15;
   double baseline_mm = 0.5, rotation_deg = 0.02, sparse_rel = 0.01;
   double min_psnr_db = 30, dense_median_rel = 0.03;
-  // The blur prediction against rendered slanted edges (issue 68): samples per pixel of each edge region, and
+  // The blur prediction against rendered slanted edges (optics/README.md): samples per pixel of each edge region, and
   // the relative MTF50 agreement every edge must hold.
   int edge_samples = 400;
   double edge_mtf50_rel = 0.10;

@@ -39,6 +39,15 @@ def table():
         result = ("pass" if c["pass"] else "FAIL") if c["gate"] else ("met" if c["pass"] else "not met yet")
         rows.append(f"| {label} | {fmt(c['value'])}{unit} | {'<=' if c['kind'] == 'max' else '>='} "
                     f"{fmt(c['limit'])}{unit} | {result} ({'gate' if c['gate'] else 'target'}) |")
+    # Every check the run did not pass stays visible, listed or not.
+    listed = {name for name, _ in CHECKS}
+    for c in m["checks"]:
+        if c["name"] in listed or c["pass"]:
+            continue
+        unit = (" " + c["unit"]) if c["unit"] else ""
+        result = "FAIL" if c["gate"] else "not met yet"
+        rows.append(f"| {c['name']} | {fmt(c['value'])}{unit} | {'<=' if c['kind'] == 'max' else '>='} "
+                    f"{fmt(c['limit'])}{unit} | {result} ({'gate' if c['gate'] else 'target'}) |")
     b = json.loads((ROOT / "results/benchmarks/render_ratio.json").read_text())
     ctx = b["context"]
     med = {x["name"]: x for x in b["benchmarks"] if x.get("aggregate_name") == "median"}

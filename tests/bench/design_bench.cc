@@ -39,8 +39,8 @@ BENCHMARK(BM_IntegerMillimetre)->Unit(benchmark::kMillisecond)->UseRealTime();
 
 }  // namespace
 
-// The blur atlas of issue 68: 64 elevations x 32 scene distances x 256 pupil rays of the reference design at f/4,
-// traced (law of reflection per pupil point) and reduced to spots and MTF figures. Target: <= 1 s on 2 cores.
+// The blur atlas of a design report: 64 elevations x 32 scene distances x 256 pupil rays of the reference design at
+// f/4, traced (law of reflection per pupil point) and reduced to spots and MTF figures. Target: <= 1 s on 2 cores.
 void BM_BlurAtlas(benchmark::State& state) {
   const hovs::design::DesignConfig cfg =
       hovs::design::LoadDesignConfig(std::string(HOVS_SOURCE_DIR) + "/design/reference.yaml");
