@@ -55,7 +55,7 @@ Runner SetupEdgeCheck(CLI::App* sub, const GlobalOptions* global) {
       std::cout << ReadFile(std::filesystem::path(o->out) / "edge_check.json");
     else if (!global->quiet)
       std::cout << summary;
-    return 0;
+    return 0;  // a measurement, like hovs tolerance: edges out of tolerance are marked NOT MET in the summary
   };
 }
 

@@ -97,6 +97,10 @@ EdgeCheck RunEdgeCheck(const EdgeCheckOptions& o) {
   std::vector<double> elevations = o.elevations_deg;
   if (elevations.empty())
     for (int i = 0; i < 5; ++i) elevations.push_back(m.lower_deg + (m.upper_deg - m.lower_deg) * (i + 0.5) / 5);
+  for (const double e : elevations)
+    HOVS_REQUIRE(e > m.lower_deg && e < m.upper_deg, "edge check (elevations)", "elevation ", e,
+                 " deg is outside the design's field (", FormatNumber("%.2f", m.lower_deg), " .. ",
+                 FormatNumber("%.2f", m.upper_deg), " deg)");
   design::CameraSpec camera = o.camera;
   if (std::isinf(camera.lens.focus_distance)) {
     // Focused at infinity: render at the best single focus over the field for 1 m .. infinity instead.

@@ -35,6 +35,12 @@ TEST(EdgeCheck, RefusesOptionsItCannotMeasureWith) {
   o = EdgeCheckOptions{};
   o.camera.lens.f_number = -1;
   EXPECT_THROW(RunEdgeCheck(o), Error);
+  o = EdgeCheckOptions{};
+  o.elevations_deg = {10};  // above the field (which ends below the horizon)
+  try {
+    RunEdgeCheck(o);
+    ADD_FAILURE() << "an elevation outside the field was accepted";
+  } catch (const Error& e) { EXPECT_NE(std::string(e.what()).find("outside the design's field"), std::string::npos); }
 }
 
 }  // namespace
