@@ -26,7 +26,8 @@ struct Preset {
   int depth_width = 2048, depth_height = 512, disparities = 320;
   bool design = true, real = true;
   int rig_frames = 9;  // calibration boards per turret mirror (5 leave a mirror's calibration short of fresh boards)
-  // The variable-scale acceptance (issue 45): pose after a switch, fresh board through the stored calibration.
+  // The variable-scale acceptance (the variable-scale acceptance): pose after a switch, fresh board through the stored
+  // calibration.
   double rig_offset_mm = 0.05, rig_tilt_deg = 0.02, rig_board_rms_px = 0.1;
   // Thresholds (issue numbers in the check names' notes).
   double detection_rms_px = 0.15, calibration_rms_px = 0.15;

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <sstream>
+#include <utility>
 
 #include <tbb/parallel_for.h>
 
@@ -255,6 +256,19 @@ std::string SpotFigure(const DesignOptics& o, const DesignProblem& /*problem*/, 
   return name;
 }
 
+// The series of spot elevation i: radial as a line, tangential as points (not in the legend), coloured from blue
+// (lowest elevation) to red.
+std::pair<results::Series, results::Series> ElevationSeries(const DesignOptics& o, size_t i) {
+  const size_t n = o.spot_elevations.size();
+  const double t = n > 1 ? double(i) / (n - 1) : 0.0;
+  results::Series r;
+  r.name = "elevation " + FormatNumber("%.1f", o.spot_elevations[i]) + " deg";
+  r.rgb = {0.9 * t, 0.2, 0.9 * (1 - t)};
+  results::Series g = r;
+  g.name += " tangential", g.points = true, g.in_legend = false;
+  return {r, g};
+}
+
 // Through-focus curves at the farthest distance.
 std::string ThroughFocusFigure(const DesignOptics& o, const DesignProblem& /*problem*/,
                                const std::filesystem::path& fig, const std::string& prefix) {
@@ -263,11 +277,7 @@ std::string ThroughFocusFigure(const DesignOptics& o, const DesignProblem& /*pro
   f.x_label = "focus distance from the lens (m)";
   f.y_label = "RMS size (px)";
   for (size_t i = 0; i < o.through_focus.size(); ++i) {
-    const double t = o.through_focus.size() > 1 ? double(i) / (o.through_focus.size() - 1) : 0.0;
-    results::Series r, g;
-    r.name = "elevation " + FormatNumber("%.1f", o.spot_elevations[i]) + " deg";
-    r.rgb = {0.9 * t, 0.2, 0.9 * (1 - t)};
-    g = r, g.name += " tangential", g.points = true, g.in_legend = false;
+    auto [r, g] = ElevationSeries(o, i);
     for (const auto& s : o.through_focus[i]) {
       r.x.push_back(s.focus_distance), r.y.push_back(s.radial_rms);
       g.x.push_back(s.focus_distance), g.y.push_back(s.tangential_rms);
@@ -290,11 +300,7 @@ std::string MtfFigure(const DesignOptics& o, const DesignProblem& problem, const
   const double nw = sys.lens.WorkingFNumberAt(o.focus);
   for (size_t i = 0; i < o.spot_elevations.size(); ++i) {
     const auto& b = o.spots[i * o.spot_distances.size() + o.spot_distances.size() - 1].spot;
-    const double t = o.spot_elevations.size() > 1 ? double(i) / (o.spot_elevations.size() - 1) : 0.0;
-    results::Series r, g;
-    r.name = "elevation " + FormatNumber("%.1f", o.spot_elevations[i]) + " deg";
-    r.rgb = {0.9 * t, 0.2, 0.9 * (1 - t)};
-    g = r, g.points = true, g.in_legend = false;
+    auto [r, g] = ElevationSeries(o, i);
     const Vec2d tan(-b.radial_dir.y(), b.radial_dir.x());
     for (int k = 0; k <= 50; ++k) {
       const double nu = k / 50.0;
