@@ -3,6 +3,7 @@
 // received; and the errors of pairs and rigs that do not fit.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstring>
 #include <future>
@@ -102,15 +103,22 @@ TEST(PairLiveCli, TwoSimulatedUnitsExpandTogetherAndReachASubscriber) {
   ASSERT_EQ(pc.fields.size(), 4u);
   EXPECT_EQ(pc.point_step, 16u);
   ASSERT_GT(pc.width, 1000u);
-  // The scene is a textured floor 1.3 m below the units: points lie below them at plausible ranges.
+  // The scene is a textured floor 1.3 m below the units plus the standing boards: the median height is the
+  // floor's, and most points lie below the units at plausible ranges. Which of the three stereo pairs the last
+  // cloud comes from depends on the machine's load; over the three, the median height is -1.280 to -1.290 m and
+  // 89.9 to 91.1 % of the points are below and in range (the rest are on the boards and at the far floor).
   int below = 0;
+  std::vector<float> heights;
   for (uint32_t i = 0; i < pc.width; ++i) {
     float xyz[3];
     std::memcpy(xyz, &pc.data[16 * i], 12);
     const double dist = std::sqrt(xyz[0] * xyz[0] + xyz[1] * xyz[1] + xyz[2] * xyz[2]);
     below += xyz[2] < -0.5 && dist > 1.0 && dist < 40.0;
+    heights.push_back(xyz[2]);
   }
-  EXPECT_GT(below, static_cast<int>(0.9 * pc.width)) << below << " of " << pc.width;
+  std::nth_element(heights.begin(), heights.begin() + heights.size() / 2, heights.end());
+  EXPECT_NEAR(heights[heights.size() / 2], -1.3, 0.05);
+  EXPECT_GT(below, static_cast<int>(0.85 * pc.width)) << below << " of " << pc.width;
   ASSERT_FALSE(ranges.empty());
   const test::RosImage ri = test::DecodeImage(ranges.back());
   EXPECT_EQ(ri.encoding, "32FC1");
