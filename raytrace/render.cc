@@ -52,12 +52,22 @@ void CheckFrameMemory(const std::string& where, int width, int height, bool grou
   RequireMemory(where, frame, need - held, available, "render fewer pixels or free memory");
 }
 
+RenderOptions OptionsForView(const RayScene& scene, const ViewCamera& camera, RenderOptions options) {
+  if (options.lens_radius > 0 || camera.unit < 0 || camera.unit >= static_cast<int>(scene.description().units.size()))
+    return options;
+  const std::optional<ThinLens>& lens = scene.description().units[camera.unit].lens;
+  if (!lens) return options;
+  options.lens_radius = lens->ApertureRadius();
+  options.focus_distance = std::min(lens->focus_distance, kFarFocus);
+  return options;
+}
+
 void SampleRays(const RayScene& scene, const ViewCamera& camera, const RenderOptions& options, int n, const double* u,
                 const double* v, const double* disc_x, const double* disc_y, const double* tau, RayBatch* out) {
   HOVS_REQUIRE(n >= 0 && n <= RayBatch::kMax, "SampleRays", "at most ", RayBatch::kMax, " points (got ", n, ")");
   HOVS_REQUIRE((disc_x == nullptr) == (disc_y == nullptr), "SampleRays", "aperture points need both coordinates");
   options.Check("render");
-  const RayMaker maker(scene, camera, options);
+  const RayMaker maker(scene, camera, OptionsForView(scene, camera, options));
   double Mx[RayBatch::kMax], My[RayBatch::kMax], Mz[RayBatch::kMax];
   maker.MakeBatch(n, u, v, disc_x, disc_y, tau, out, Mx, My, Mz);
 }
@@ -323,8 +333,10 @@ class TileRenderer {
 
 }  // namespace
 
-void RenderInto(const RayScene& scene, const ViewCamera& camera, const RenderOptions& options, Frame* frame) {
-  options.Check("render");
+void RenderInto(const RayScene& scene, const ViewCamera& camera, const RenderOptions& view_options, Frame* frame) {
+  view_options.Check("render");
+  const RenderOptions options = OptionsForView(scene, camera, view_options);
+  options.Check("render (the unit's lens)");
   const auto start = std::chrono::steady_clock::now();
   const RayMaker maker(scene, camera, options);
   PrepareFrame(scene, camera, options, maker, frame);

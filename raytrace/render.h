@@ -52,7 +52,8 @@ struct RenderOptions {
   bool ground_truth = true;  // per-pixel ground truth from the pixel-centre ray (pinhole, time 0)
   // Thin-lens defocus of the camera (catadioptric or pinhole): lens radius in metres (0: pinhole) and the
   // distance from the lens along its optical axis to the plane in focus (for a catadioptric camera, the mirror's
-  // virtual image lies a little beyond the mirror: about 2c).
+  // virtual image lies a little beyond the mirror: about 2c). With lens_radius 0, a unit that has a lens
+  // (CatadioptricUnit::lens) is rendered through it (OptionsForView).
   double lens_radius = 0.0;
   double focus_distance = 0.13;
   // Motion blur: the exposure time (s); each sample sees the unit at a random time in [0, exposure] moving
@@ -110,6 +111,11 @@ struct Frame {
   uint64_t embree_rays = 0;
   double seconds = 0;
 };
+
+// The options a view is rendered with: with options.lens_radius 0 and a unit that has a lens, its aperture radius
+// and focus distance (a lens focused at infinity: rays of one pixel parallel, the focus plane at kFarFocus).
+constexpr double kFarFocus = 1e9;  // m
+RenderOptions OptionsForView(const RayScene& scene, const ViewCamera& camera, RenderOptions options);
 
 // A new frame. Its large buffers come from core/large_pages.h, so in a process that keeps freed large buffers
 // (KeepFreedLargePages; the hovs command does) a frame freed before this one lends it its memory, already mapped.

@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "core/catadioptric.h"
+#include "core/lens.h"
 #include "core/rigid.h"
 #include "raytrace/texture.h"
 
@@ -44,6 +45,9 @@ struct Rect {
 struct CatadioptricUnit {
   std::string name = "unit0";
   CatadioptricCamera<double> rig;          // mirror-frame model: mirror, camera, cam_from_mirror, occluder radius
+  // The camera's lens (core/lens.h): its aperture and focus defocus the unit's images, and rig.camera's image
+  // scale is its sensor distance at that focus. None: an ideal pinhole (unless RenderOptions::lens_radius > 0).
+  std::optional<ThinLens> lens;
   Rigid3d world_from_mirror;               // places the viewpoint F1 in the world
   double mount_outer_radius = 0;           // the mount ring around the rim (0: rim diameter / 2 + 15 mm)
   double body_length = 0.12;               // camera body behind the lens face

@@ -275,7 +275,8 @@ SceneConfig ParseSceneConfigUnguarded(const std::string& text, const std::string
     r.Require(u, k, "camera", &c);
     const std::string kc = k + ".camera";
     r.OnlyKeys(c, kc,
-               {"focal_length", "pixel_pitch", "width", "height", "lens_aperture", "distortion", "principal_point"});
+               {"focal_length", "pixel_pitch", "width", "height", "lens_aperture", "lens", "distortion",
+                "principal_point"});
     YAML::Node f, pp, w, h, la;
     const double focal = r.Positive(r.Require(c, kc, "focal_length", &f), kc + ".focal_length");
     const double pitch = r.Positive(r.Require(c, kc, "pixel_pitch", &pp), kc + ".pixel_pitch");
@@ -286,7 +287,18 @@ SceneConfig ParseSceneConfigUnguarded(const std::string& text, const std::string
     HOVS_REQUIRE(width > 0 && height > 0 && width <= 20000 && height <= 20000, r.Where(c, kc),
                  "image size must be 1..20000");
     const double lens = r.Positive(r.Require(c, kc, "lens_aperture", &la), kc + ".lens_aperture");
-    PinholeCamera<double> cam = PinholeCamera<double>::FromPhysical(focal, pitch, width, height);
+    // The lens (core/lens.h): the image scale is its sensor distance at the focus in force, not f.
+    std::optional<ThinLens> thin_lens;
+    if (c["lens"]) {
+      thin_lens = r.Lens(c["lens"], kc + ".lens", focal);
+      HOVS_REQUIRE(thin_lens->ApertureDiameter() <= lens, r.Where(c["lens"], kc + ".lens"), "its aperture (",
+                   thin_lens->ApertureDiameter() * 1e3, " mm at f/", thin_lens->f_number,
+                   ") is wider than the lens face, lens_aperture ", lens * 1e3, " mm");
+      HOVS_REQUIRE(thin_lens->ApertureRadius() <= raytrace::kMaxApertureRadius, r.Where(c["lens"], kc + ".lens"),
+                   "aperture radius above ", raytrace::kMaxApertureRadius, " m");
+    }
+    PinholeCamera<double> cam = thin_lens ? thin_lens->Camera(pitch, width, height)
+                                          : PinholeCamera<double>::FromPhysical(focal, pitch, width, height);
     if (c["principal_point"]) {
       const YAML::Node p = c["principal_point"];
       HOVS_REQUIRE(p.IsSequence() && p.size() == 2, r.Where(p, kc + ".principal_point"), "expected [cx, cy] in pixels");
@@ -299,6 +311,7 @@ SceneConfig ParseSceneConfigUnguarded(const std::string& text, const std::string
                         r.Number(dd[2], kc + ".distortion[2]"), r.Number(dd[3], kc + ".distortion[3]")};
     }
     unit.rig = CatadioptricCamera<double>::Aligned(mirror, cam, 0.5 * lens);
+    unit.lens = thin_lens;
     if (u["misalignment"]) {
       const YAML::Node mis = u["misalignment"];
       const std::string km = k + ".misalignment";
@@ -435,8 +448,10 @@ SceneConfig ParseSceneConfigUnguarded(const std::string& text, const std::string
     r.OnlyKeys(rn, "render",
                {"samples", "seed", "ground_truth", "truth_channels", "truth_compression", "sensor", "lens_radius",
                 "focus_distance", "exposure_time"});
-    if (rn["lens_radius"]) cfg.render.lens_radius = r.Number(rn["lens_radius"], "render.lens_radius");
-    if (rn["focus_distance"]) cfg.render.focus_distance = r.Number(rn["focus_distance"], "render.focus_distance");
+    for (const char* key : {"lens_radius", "focus_distance"})
+      HOVS_REQUIRE(!rn[key], r.Where(rn[key], std::string("render.") + key),
+                   "the lens is each unit's camera.lens {f_number, focus_distance} (one definition: its image scale "
+                   "follows the focus)");
     if (rn["exposure_time"]) cfg.render.exposure_time = r.Number(rn["exposure_time"], "render.exposure_time");
     if (rn["samples"]) cfg.render.samples = r.Integer(rn["samples"], "render.samples");
     if (rn["seed"]) cfg.render.seed = r.Seed(rn["seed"], "render.seed");

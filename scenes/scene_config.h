@@ -1,6 +1,9 @@
 // Scene files (YAML, validated on load): catadioptric units with their exact rigs, textured objects
 // (checkerboards, ArUco boards drawn with OpenCV, planes, boxes, the ground), the sky and render options.
 // Lengths in metres; angles in degrees where the key says _deg. Texture image paths are relative to the file.
+// A unit's camera may carry a lens, camera.lens {f_number or aperture_diameter, focus_distance, wavelength}
+// (core/lens.h, the keys of a design config's lens): its images are defocused through that aperture and their
+// scale is the sensor distance s = f d / (d - f) at the focus d. Without one the camera is a pinhole of scale f.
 #pragma once
 
 #include <filesystem>

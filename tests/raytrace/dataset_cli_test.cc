@@ -480,10 +480,10 @@ TEST(RenderCli, RendersAndRejectsBadInput) {
   std::string huge = scene;
   huge.replace(huge.find("squares: [8, 6]"), 15, "squares: [800000, 600000]");  // std::bad_alloc once
   rejected(huge, "at most 1000 x 1000");
-  // A lens radius of 1e300 m put ray origins at infinity (an Embree assertion); a unit may not outrun the world.
+  // An aperture of 1e300 m put ray origins at infinity (an Embree assertion); a unit may not outrun the world.
   std::string lens = scene;
-  lens.replace(lens.find("render: {samples: 16"), 20, "render: {lens_radius: 1e300, samples: 16");
-  rejected(lens, "lens_radius");
+  lens.replace(lens.find("lens_aperture: 0.020}"), 21, "lens_aperture: 0.020, lens: {aperture_diameter: 1e300}}");
+  rejected(lens, "wider than the lens face");
   std::string fast = scene;
   fast.replace(fast.find("pose: {position: [0, 0, 1.3]}"), 29,
                "pose: {position: [0, 0, 1.3]}\n    velocity: [1e300, 0, 0]");
