@@ -142,7 +142,8 @@ int RunSwitch(const SwitchOptions* s, const GlobalOptions* global) {
     std::cout << "hovs rig switch: " << spec.mirrors[from].id << " -> " << spec.mirrors[to].id << ": move "
               << r.move_seconds << " s, " << r.align.steps.size() << " loop iterations, truth lateral "
               << t->LateralM() * 1e3 << " mm, tilt " << t->TiltRad() / kDeg << " deg, height " << t->offset.z() * 1e3
-              << " mm; focus " << (r.focus ? r.focus->focus : 0.0) << " m; " << r.machine_seconds
+              << " mm; focus " << (r.focus ? r.focus->focus : 0.0) << " m"
+              << (r.focus ? rig::FocusAgainstPrediction(spec, to, r.focus->focus) : "") << "; " << r.machine_seconds
               << " s machine time\n";
   if (!r.align.converged) {
     std::cerr << "hovs rig switch: error: " << r.align.failure << "; every step is in " << s->out << "/switch.json\n";

@@ -67,6 +67,7 @@ DesignOptics AnalyseOptics(const DesignPoint& p, const DesignProblem& problem, c
   for (int i = 0; i < kAtlasElevations; ++i) o.elevations.push_back(fields[i * o.distances.size()].elevation_deg);
   const std::vector<optics::TracedField> traced = optics::TraceFields(sys, fields);
   o.best = optics::BestSingleFocus(sys, traced, min_focus);
+  o.depth_of_focus = optics::DepthOfFocusOf(sys, traced, o.best, problem.blur.limit_px, min_focus);
   o.focus_given = !std::isinf(o.lens.focus_distance);
   o.focus = o.focus_given ? o.lens.focus_distance : o.best.focus_distance;
   o.atlas.resize(traced.size());
@@ -117,6 +118,27 @@ DesignOptics AnalyseOptics(const DesignPoint& p, const DesignProblem& problem, c
   return o;
 }
 
+FocusPrediction PredictFocus(const DesignPoint& p, const DesignProblem& problem) {
+  FocusPrediction out;
+  const Metrics m = Evaluate(p, problem);
+  out.lower_deg = m.lower_deg, out.upper_deg = m.upper_deg;
+  const optics::OpticalSystem sys = SystemOf(p, problem.camera, 256);
+  const double min_focus = 1.5 * problem.camera.focal_length;
+  const auto traced = optics::TraceFields(sys, optics::FieldGrid(m.lower_deg, m.upper_deg, kAtlasElevations,
+                                                                 SceneDistances(problem.blur, kAtlasDistances)));
+  out.best = optics::BestSingleFocus(sys, traced, min_focus);
+  out.depth = optics::DepthOfFocusOf(sys, traced, out.best, problem.blur.limit_px, min_focus);
+  return out;
+}
+
+nlohmann::json FocusPredictionJson(const FocusPrediction& f) {
+  return {{"best_focus_m", f.best.focus_distance},
+          {"worst_rms_px", f.best.worst_rms},
+          {"depth_of_focus_m", {f.depth.near_focus, DistanceValue(f.depth.far_focus)}},
+          {"tolerance_px", f.depth.tolerance_px},
+          {"field_deg", {f.lower_deg, f.upper_deg}}};
+}
+
 std::string BlurCsvHeader(bool with_mirror) {
   return std::string(with_mirror ? "mirror," : "") +
          "a_mm,b_mm,elevation_deg,distance_m,focus_distance_m,f_number,rms_radius_px,radial_rms_px,tangential_rms_px,"
@@ -152,11 +174,14 @@ nlohmann::json OpticsJson(const DesignOptics& o) {
   j["f_number"] = o.lens.f_number;
   j["focus_distance"] = o.focus;
   j["focus_given"] = o.focus_given;
-  j["best_single_focus"] = {{"focus_distance", o.best.focus_distance},
-                            {"sensor_distance", o.lens.SensorDistanceAt(o.best.focus_distance)},
-                            {"worst_rms_px", o.best.worst_rms},
-                            {"rim_radius_px", o.at_best.rim_radius_px},
-                            {"feasible", MaxViolation(o.constraints_at_best) <= 0}};
+  j["best_single_focus"] = {
+      {"focus_distance", o.best.focus_distance},
+      {"sensor_distance", o.lens.SensorDistanceAt(o.best.focus_distance)},
+      {"worst_rms_px", o.best.worst_rms},
+      {"rim_radius_px", o.at_best.rim_radius_px},
+      {"feasible", MaxViolation(o.constraints_at_best) <= 0},
+      {"depth_of_focus", {o.depth_of_focus.near_focus, DistanceValue(o.depth_of_focus.far_focus)}},
+      {"depth_of_focus_tolerance_px", o.depth_of_focus.tolerance_px}};
   if (o.best.worst_field < o.atlas.size()) {
     const auto& f = o.atlas[o.best.worst_field].field;
     j["best_single_focus"]["worst_at"] = {{"elevation_deg", f.elevation_deg}, {"distance", DistanceValue(f.distance)}};
@@ -357,6 +382,9 @@ std::string OpticsSummary(const DesignOptics& o, const DesignProblem& problem) {
     << FormatNumber("%.4f", o.best.focus_distance)
     << " m (s = " << FormatNumber("%.3f", o.lens.SensorDistanceAt(o.best.focus_distance) * 1e3)
     << " mm), worst RMS blur " << FormatNumber("%.2f", o.best.worst_rms) << " px over the field for " << range << "\n";
+  s << "    depth of focus (worst RMS within " << FormatNumber("%.3g", o.depth_of_focus.tolerance_px)
+    << " px of the best): focus " << FormatNumber("%.4f", o.depth_of_focus.near_focus) << " to "
+    << Distance(o.depth_of_focus.far_focus) << " m\n";
   const bool ok = MaxViolation(o.constraints_at_best) <= 0;
   s << "    at that focus the rim is at " << FormatNumber("%.1f", o.at_best.rim_radius_px) << " px (limit "
     << FormatNumber("%.1f", problem.RimLimitPx()) << " px): " << (ok ? "every constraint holds" : "INFEASIBLE");

@@ -33,6 +33,7 @@ struct DesignOptics {
   std::vector<double> elevations, distances;  // the atlas grid (distances from F1; the last one +inf)
   std::vector<optics::FieldBlur> atlas;       // elevation-major: atlas[i * distances.size() + j]
   optics::SingleFocus best;                   // over the atlas
+  optics::DepthOfFocus depth_of_focus;        // about `best`, tolerance blur.limit_px
   double worst_rms = 0;                       // over the atlas at `focus`
   Metrics at_best;                            // the design's metrics with the lens at the best single focus
   std::vector<ConstraintValue> constraints_at_best;
@@ -46,6 +47,16 @@ struct DesignOptics {
 };
 
 DesignOptics AnalyseOptics(const DesignPoint& p, const DesignProblem& problem, const std::string& label);
+
+// The best single focus of a design over its field band and the blur's scene distances (the atlas's grid), and
+// the depth of focus about it for a tolerance of blur.limit_px: the prediction a focus loop is checked against.
+struct FocusPrediction {
+  optics::SingleFocus best;
+  optics::DepthOfFocus depth;
+  double lower_deg = 0, upper_deg = 0;  // the field band
+};
+FocusPrediction PredictFocus(const DesignPoint& p, const DesignProblem& problem);
+nlohmann::json FocusPredictionJson(const FocusPrediction& f);
 
 // blur.csv's header and rows (a `mirror` column first when mirror is non-empty).
 std::string BlurCsvHeader(bool with_mirror);

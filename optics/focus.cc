@@ -72,22 +72,50 @@ BestFocus BestFocusOf(const OpticalSystem& sys, const Bundle& b, double min_focu
   return out;
 }
 
+namespace {
+
+// The largest RMS radius over the fields' bundles at vergence v; *where: its field.
+double WorstRmsAt(const OpticalSystem& sys, const std::vector<TracedField>& fields, double v, size_t* where) {
+  double w = 0;
+  for (size_t i = 0; i < fields.size(); ++i) {
+    if (fields[i].bundle.Empty()) continue;
+    const double r = SpotAtVergence(sys, fields[i].bundle, v).rms;
+    if (r > w) w = r, *where = i;
+  }
+  return w;
+}
+
+}  // namespace
+
 SingleFocus BestSingleFocus(const OpticalSystem& sys, const std::vector<TracedField>& fields, double min_focus) {
   SingleFocus out;
-  const auto worst = [&](double v, size_t* where) {
-    double w = 0;
-    for (size_t i = 0; i < fields.size(); ++i) {
-      if (fields[i].bundle.Empty()) continue;
-      const double r = SpotAtVergence(sys, fields[i].bundle, v).rms;
-      if (r > w) w = r, *where = i;
-    }
-    return w;
-  };
+  const auto worst = [&](double v, size_t* where) { return WorstRmsAt(sys, fields, v, where); };
   size_t where = 0;
   const double v = MinimiseVergence([&](double x) { return worst(x, &where); }, 1.0 / min_focus, 96);
   out.focus_distance = FromVergence(v);
   out.worst_rms = worst(v, &where);
   out.worst_field = where;
+  return out;
+}
+
+DepthOfFocus DepthOfFocusOf(const OpticalSystem& sys, const std::vector<TracedField>& fields, const SingleFocus& best,
+                            double tolerance_px, double min_focus) {
+  DepthOfFocus out;
+  out.best_focus = best.focus_distance, out.best_worst_rms = best.worst_rms, out.tolerance_px = tolerance_px;
+  const double limit = best.worst_rms + tolerance_px, v_best = best.focus_distance > 0 ? 1.0 / best.focus_distance : 0;
+  size_t where = 0;
+  const auto within = [&](double v) { return WorstRmsAt(sys, fields, v, &where) <= limit; };
+  // Bisect the crossing between a vergence within the limit and one beyond it.
+  const auto crossing = [&](double v_in, double v_out) {
+    for (int it = 0; it < 50; ++it) {
+      const double m = 0.5 * (v_in + v_out);
+      (within(m) ? v_in : v_out) = m;
+    }
+    return v_in;
+  };
+  const double v_max = 1.0 / min_focus;
+  out.near_focus = FromVergence(within(v_max) ? v_max : crossing(v_best, v_max));
+  out.far_focus = within(0) ? kInfinity : FromVergence(crossing(v_best, 0));
   return out;
 }
 

@@ -43,6 +43,17 @@ struct SingleFocus {
 };
 SingleFocus BestSingleFocus(const OpticalSystem& sys, const std::vector<TracedField>& fields, double min_focus);
 
+// The depth of focus of a design about its best single focus: the focus settings (object side, from the lens)
+// whose worst RMS radius over `fields` stays within tolerance_px of the best single focus's worst_rms. near_focus
+// is the closest such setting (>= min_focus), far_focus the farthest (+inf when focusing at infinity stays within).
+struct DepthOfFocus {
+  double best_focus = kInfinity, near_focus = kInfinity, far_focus = kInfinity;
+  double best_worst_rms = 0, tolerance_px = 0;
+  bool Contains(double focus) const { return focus >= near_focus && focus <= far_focus; }
+};
+DepthOfFocus DepthOfFocusOf(const OpticalSystem& sys, const std::vector<TracedField>& fields, const SingleFocus& best,
+                            double tolerance_px, double min_focus);
+
 // The near and far sharp limits (distance from F1, m) of an elevation at one focus: the range about the sharpest
 // distance in [min_distance, inf] whose RMS radius stays <= limit_px. far is +inf when sharp out to infinity;
 // sharp is false (and near, far are NaN) when no distance is.

@@ -44,7 +44,7 @@ struct Rect {
 
 struct CatadioptricUnit {
   std::string name = "unit0";
-  CatadioptricCamera<double> rig;          // mirror-frame model: mirror, camera, cam_from_mirror, occluder radius
+  CatadioptricCamera<double> rig;  // mirror-frame model: mirror, camera, cam_from_mirror, occluder radius
   // The camera's lens (core/lens.h): its aperture and focus defocus the unit's images, and rig.camera's image
   // scale is its sensor distance at that focus. None: an ideal pinhole (unless RenderOptions::lens_radius > 0).
   std::optional<ThinLens> lens;

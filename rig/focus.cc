@@ -4,8 +4,11 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 
 #include "core/error.h"
+#include "core/format.h"
+#include "design/optics_report.h"
 
 namespace hovs::rig {
 
@@ -94,6 +97,31 @@ FocusResult FocusLens(Plant& plant, const TurretSpec& spec, const FocusOptions& 
   r.sharpness = measure(best_focus);
   r.focus = plant.machine().axis(AxisId::kFocus).Reported();
   return r;
+}
+
+std::optional<PredictedFocus> PredictFocus(const TurretSpec& spec, int k) {
+  if (!spec.lens) return std::nullopt;
+  const TurretMirror& m = spec.mirrors.at(k);
+  design::DesignProblem problem;
+  problem.camera.focal_length = spec.lens->focal_length;
+  problem.camera.pixel_pitch = spec.pixel_pitch;
+  problem.camera.width = spec.camera.width, problem.camera.height = spec.camera.height;
+  problem.camera.lens_aperture = spec.lens_aperture;
+  problem.camera.lens = *spec.lens;
+  problem.camera.lens.focus_distance = std::numeric_limits<double>::infinity();
+  const design::FocusPrediction f = design::PredictFocus({m.mirror.a, m.mirror.b, m.mirror.rim_diameter}, problem);
+  PredictedFocus out;
+  out.best = f.best.focus_distance, out.near = f.depth.near_focus, out.far = f.depth.far_focus;
+  out.worst_rms_px = f.best.worst_rms, out.tolerance_px = f.depth.tolerance_px;
+  return out;
+}
+
+std::string FocusAgainstPrediction(const TurretSpec& spec, int k, double focus) {
+  const auto p = PredictFocus(spec, k);
+  if (!p) return "";
+  return " (predicted best " + FormatNumber("%.4f", p->best) + " m, depth of focus " + FormatNumber("%.4f", p->near) +
+         " .. " + (std::isinf(p->far) ? std::string("inf") : FormatNumber("%.4f", p->far)) +
+         " m: " + (p->Contains(focus) ? "within" : "OUTSIDE") + ")";
 }
 
 }  // namespace hovs::rig

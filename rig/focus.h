@@ -9,6 +9,7 @@
 // between the coarse maximum's neighbours. Each evaluation moves the focus axis, waits for it and takes an image.
 #pragma once
 
+#include <optional>
 #include <string>
 #include <utility>
 #include <vector>
@@ -37,5 +38,18 @@ struct FocusResult {
 // Moves the focus axis of plant's machine; throws hovs::Error naming the focus axis when the sharpness is flat
 // (no image structure in the bracket: the lens cannot be focused there).
 FocusResult FocusLens(Plant& plant, const TurretSpec& spec, const FocusOptions& options);
+
+// What the optics predict for mirror k with the machine's camera and lens (design/optics_report.h PredictFocus,
+// optics/README.md): the best single focus over the mirror's field for scene distances 1 m to infinity, and the
+// depth of focus about it for a tolerance of 1 px (full-resolution pixels). Empty without a lens (a pinhole).
+struct PredictedFocus {
+  double best = 0, near = 0, far = 0;  // focus distances, m from the lens
+  double worst_rms_px = 0, tolerance_px = 0;
+  bool Contains(double focus) const { return focus >= near && focus <= far; }
+};
+std::optional<PredictedFocus> PredictFocus(const TurretSpec& spec, int k);
+// " (predicted best 0.1537 m, depth of focus 0.1490 .. 0.1590 m: within)" for a focus the loop found on mirror
+// k; empty without a lens.
+std::string FocusAgainstPrediction(const TurretSpec& spec, int k, double focus);
 
 }  // namespace hovs::rig

@@ -196,6 +196,15 @@ nlohmann::json AlignRunJson(const TurretSpec& spec, const AlignRun& run) {
     nlohmann::json samples = nlohmann::json::array();
     for (const auto& [x, y] : run.focus->samples) samples.push_back({x, y});
     f["samples"] = samples;
+    // The loop against the optics' prediction for the mirror (rig/focus.h): inside the depth of focus, the focus
+    // it found costs at most the tolerance of blur over the field.
+    if (const auto p = PredictFocus(spec, run.mirror))
+      f["predicted"] = {
+          {"best_focus_m", p->best},
+          {"depth_of_focus_m", {p->near, std::isinf(p->far) ? nlohmann::json("infinity") : nlohmann::json(p->far)}},
+          {"tolerance_px", p->tolerance_px},
+          {"worst_rms_px_at_best", p->worst_rms_px},
+          {"within", p->Contains(run.focus->focus)}};
     j["focus"] = f;
   }
   j["render_seconds"] = run.render_seconds;

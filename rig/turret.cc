@@ -145,14 +145,18 @@ TurretSpec ParseUnguarded(const std::string& text, const std::string& source, co
     const int h = r.Integer(r.Require(c, "camera", "height", &v), "camera.height");
     HOVS_REQUIRE(w >= 64 && h >= 64 && w <= 20000 && h <= 20000, r.Where(c, "camera"), "size must be 64..20000 px");
     s.camera = PinholeCamera<double>::FromPhysical(f, pitch, w, h);
+    s.pixel_pitch = pitch;
     s.lens_aperture = r.Positive(r.Require(c, "camera", "lens_aperture", &v), "camera.lens_aperture");
   }
   if (root["lens"]) {
-    r.OnlyKeys(root["lens"], "lens", {"aperture_radius"});
-    if (root["lens"]["aperture_radius"])
-      s.lens_aperture_radius = r.Number(root["lens"]["aperture_radius"], "lens.aperture_radius");
-    HOVS_REQUIRE(s.lens_aperture_radius >= 0 && s.lens_aperture_radius <= 0.5 * s.lens_aperture,
-                 r.Where(root["lens"], "lens.aperture_radius"), "must be in [0, lens_aperture / 2]");
+    // The lens definition of design configs and scenes (core/lens.h); the focus axis sets its focus.
+    const YAML::Node& l = root["lens"];
+    HOVS_REQUIRE(!l.IsMap() || !l["focus_distance"], r.Where(l, "lens.focus_distance"),
+                 "the focus axis sets the focus (axes.focus); the lens gives f_number or aperture_diameter");
+    s.lens = r.Lens(l, "lens", s.camera.fx * s.pixel_pitch);
+    HOVS_REQUIRE(s.lens->ApertureDiameter() <= s.lens_aperture, r.Where(l, "lens"), "its aperture (",
+                 s.lens->ApertureDiameter() * 1e3, " mm at f/", s.lens->f_number,
+                 ") is wider than the lens face, camera.lens_aperture ", s.lens_aperture * 1e3, " mm");
   }
   {
     const std::string file = r.String(r.Require(root, "", "surroundings", &n), "surroundings");
@@ -398,7 +402,7 @@ scenes::SceneConfig TurretSceneConfig(const TurretSpec& spec, int k, const Mirro
   }
   cfg.render.samples = spec.samples;
   cfg.render.seed = seed;
-  cfg.render.lens_radius = spec.lens_aperture_radius;
+  cfg.render.lens_radius = spec.LensRadius();
   cfg.render.focus_distance = focus_distance;
   return cfg;
 }

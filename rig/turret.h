@@ -4,7 +4,8 @@
 // lateral axes and two tilts that align the mirror axis with the camera's optical axis, and the lens focus.
 //
 // The machine file (YAML; lengths in metres, the turret and tilt axes and slot angles in degrees):
-//   name, camera {focal_length, pixel_pitch, width, height, lens_aperture}, lens {aperture_radius},
+//   name, camera {focal_length, pixel_pitch, width, height, lens_aperture}, lens {f_number or aperture_diameter,
+//     wavelength} (core/lens.h; the focus axis sets its focus; without it the camera is a pinhole),
 //   surroundings: a scene file whose objects and sky are rendered around the unit; its first unit's pose places
 //     the nominal viewpoint of the first mirror (the camera stays there for every mirror),
 //   turret {radius}: distance of the mirror axes from the turret's axis (which lies along -x of the camera),
@@ -30,6 +31,7 @@
 #include <vector>
 
 #include "core/catadioptric.h"
+#include "core/lens.h"
 #include "raytrace/render.h"
 #include "rig/actuators.h"
 
@@ -60,8 +62,10 @@ struct LabelSpec {
 struct TurretSpec {
   std::string name, source, text;
   PinholeCamera<double> camera;
-  double lens_aperture = 0.020;       // diameter of the lens face (occluder), m
-  double lens_aperture_radius = 0.0;  // thin-lens radius for defocus, m (0: pinhole)
+  double lens_aperture = 0.020;  // diameter of the lens face (occluder), m
+  double pixel_pitch = 4.54e-6;  // m
+  std::optional<ThinLens> lens;  // the thin lens of the defocus (none: a pinhole); its focus: the focus axis
+  double LensRadius() const { return lens ? lens->ApertureRadius() : 0.0; }
   double turret_radius = 0.09;
   std::vector<TurretMirror> mirrors;
   LabelSpec label;

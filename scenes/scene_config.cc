@@ -274,9 +274,9 @@ SceneConfig ParseSceneConfigUnguarded(const std::string& text, const std::string
         r.Positive(r.Require(m, k + ".mirror", "rim_diameter", &d), k + ".mirror.rim_diameter")};
     r.Require(u, k, "camera", &c);
     const std::string kc = k + ".camera";
-    r.OnlyKeys(c, kc,
-               {"focal_length", "pixel_pitch", "width", "height", "lens_aperture", "lens", "distortion",
-                "principal_point"});
+    r.OnlyKeys(
+        c, kc,
+        {"focal_length", "pixel_pitch", "width", "height", "lens_aperture", "lens", "distortion", "principal_point"});
     YAML::Node f, pp, w, h, la;
     const double focal = r.Positive(r.Require(c, kc, "focal_length", &f), kc + ".focal_length");
     const double pitch = r.Positive(r.Require(c, kc, "pixel_pitch", &pp), kc + ".pixel_pitch");

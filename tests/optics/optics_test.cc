@@ -93,6 +93,21 @@ TEST(Optics, TheSingleFocusBoundsEveryFieldPointAndTheDepthOfFieldHoldsTheLimit)
     for (const auto& t : traced) w = std::max(w, SpotAt(t.bundle, sys.CameraAt(d), d).rms);
     EXPECT_GE(w, sf.worst_rms);
   }
+  // Depth of focus: at its two ends the worst blur is the best's plus the tolerance; inside, within it.
+  const auto worst_at = [&](double d) {
+    double w = 0;
+    for (const auto& t : traced) w = std::max(w, SpotAt(t.bundle, sys.CameraAt(d), d).rms);
+    return w;
+  };
+  const DepthOfFocus dof_focus = DepthOfFocusOf(sys, traced, sf, 0.5, 0.03);
+  ASSERT_LT(dof_focus.near_focus, sf.focus_distance);
+  ASSERT_GT(dof_focus.far_focus, sf.focus_distance);
+  ASSERT_TRUE(std::isfinite(dof_focus.far_focus));
+  EXPECT_NEAR(worst_at(dof_focus.near_focus), sf.worst_rms + 0.5, 1e-6);
+  EXPECT_NEAR(worst_at(dof_focus.far_focus), sf.worst_rms + 0.5, 1e-6);
+  EXPECT_TRUE(dof_focus.Contains(sf.focus_distance));
+  EXPECT_FALSE(dof_focus.Contains(0.99 * dof_focus.near_focus));
+  EXPECT_LE(worst_at(0.5 * (dof_focus.near_focus + dof_focus.far_focus)), sf.worst_rms + 0.5);
   // Depth of field at one elevation, focused on its own best focus at 2 m: sharp there, blurred past the limits.
   const double e = -30;
   const Bundle b = TraceBundle(sys.rig, FieldPoint{e, 0, 2}.Position(), sys.lens.ApertureRadius(),

@@ -28,6 +28,29 @@ TEST(Focus, TheLoopReachesTheDenseSweepsBestWithinFivePercent) {
   EXPECT_LE(r.images, 30);
   // Well away from the plate: the virtual image lies beyond the mirror.
   EXPECT_GT(r.focus, 1.05 * s.mirrors[k].PlateHeight());
+  // The optics' prediction from the machine's lens (f/4): the loop lands inside the mirror's depth of focus.
+  const auto p = PredictFocus(s, k);
+  ASSERT_TRUE(p.has_value());
+  EXPECT_TRUE(p->Contains(r.focus)) << "loop " << r.focus << " m, predicted " << p->best << " m in [" << p->near << ", "
+                                    << p->far << "]";
+  EXPECT_NEAR(p->tolerance_px, 1.0, 1e-12);
+  EXPECT_LT(p->near, p->best);
+  EXPECT_GT(p->far, p->best);
+}
+
+TEST(Focus, ThePredictionFollowsTheLens) {
+  TurretSpec s = QuickSpec();
+  const int k = s.MirrorIndex("reference");
+  const auto f4 = PredictFocus(s, k);
+  ASSERT_TRUE(f4.has_value());
+  // A smaller aperture blurs less and focuses over a deeper range; a pinhole has nothing to predict.
+  s.lens->f_number = 8;
+  const auto f8 = PredictFocus(s, k);
+  EXPECT_LT(f8->worst_rms_px, 0.6 * f4->worst_rms_px);
+  EXPECT_GT(1 / f8->near - 1 / f8->far, 1 / f4->near - 1 / f4->far);  // in vergence
+  s.lens.reset();
+  EXPECT_FALSE(PredictFocus(s, k).has_value());
+  EXPECT_EQ(FocusAgainstPrediction(s, k, 0.15), "");
 }
 
 TEST(Focus, AStuckFocusAxisIsAnErrorNamingIt) {

@@ -157,6 +157,7 @@ TEST(RigCli, ACalibrationStoredInTheRigFolderHoldsAfterASwitch) {
   EXPECT_LT(j["final_truth"]["lateral_mm"].get<double>(), 0.05);
   EXPECT_LT(j["final_truth"]["tilt_deg"].get<double>(), 0.02);
   EXPECT_GT(j["focus"]["focus_m"].get<double>(), 0.14);  // the reference mirror's image lies beyond its plate
+  EXPECT_TRUE(j["focus"]["predicted"]["within"].get<bool>()) << j["focus"].dump();
   EXPECT_EQ(j["loaded"]["map_views"], 6);
   EXPECT_EQ(j["fresh_board"]["corners"], 35);
   EXPECT_LT(j["fresh_board"]["rms_px"].get<double>(), 0.1);
