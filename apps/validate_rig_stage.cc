@@ -38,17 +38,23 @@ void VariableScale(Validation& v, uint64_t seed_value) {
   v.Stage("variable-scale unit: calibrate each mirror, switch round, live", commands, [&]() {
     json switches = json::array();
     double worst_board = 0, worst_lateral = 0, worst_tilt = 0, worst_height = 0;
+    int focus_outside = 0;  // switches whose focus loop ended outside the optics' depth of focus (rig/focus.h)
     for (const auto& id : order) {
       const json j = ReadJsonFile(out / "rig-switch" / ("to-" + id) / "switch.json");
       worst_board = std::max(worst_board, Num(j, {"fresh_board", "rms_px"}));
       worst_lateral = std::max(worst_lateral, Num(j, {"final_truth", "lateral_mm"}));
       worst_tilt = std::max(worst_tilt, Num(j, {"final_truth", "tilt_deg"}));
       worst_height = std::max(worst_height, std::abs(Num(j, {"final_truth", "height_mm"})));
+      const json* predicted = j.contains("focus") ? &j["focus"]["predicted"] : nullptr;
+      focus_outside += !(predicted && predicted->is_object() && (*predicted)["within"].get<bool>());
       switches.push_back({{"from", j["from"]},
                           {"to", id},
                           {"converged", j["converged"]},
                           {"fresh_board_rms_px", Num(j, {"fresh_board", "rms_px"})},
                           {"final_truth", j["final_truth"]},
+                          {"focus", j.contains("focus") ? json{{"focus_m", j["focus"]["focus_m"]},
+                                                               {"predicted", j["focus"].value("predicted", json())}}
+                                                        : json(nullptr)},
                           {"images", j["images"]}});
     }
     const json l = ReadJsonFile(out / "rig-live" / "live.json");
@@ -70,6 +76,8 @@ void VariableScale(Validation& v, uint64_t seed_value) {
             "variable-scale acceptance");
     v.Check("variable scale: worst height error after a switch", worst_height, "max", p.rig_offset_mm, "mm",
             "variable-scale acceptance");
+    v.Check("variable scale: switches whose focus loop ended outside the predicted depth of focus", focus_outside,
+            "max", 0, "", "optics/README.md (depth of focus)");
     v.Check("variable scale: live switches that failed", live_failures, "max", 0, "", "variable-scale acceptance");
     v.Check("variable scale: live mapping swaps", Num(l, {"mapping_swaps"}), "min", 4, "", "variable-scale acceptance");
     v.Check("variable scale: live frames expanded outside the tolerance", Num(l, {"ready_outside_tolerance"}), "max", 0,

@@ -78,7 +78,16 @@ DesignConfig ParseDesignConfigUnguarded(const std::string& text, const std::stri
     p.camera.height = r.Integer(c["height"], "camera.height");
     p.camera.lens_aperture = r.Number(c["lens_aperture"], "camera.lens_aperture");
   }
-  if (root["lens"]) p.camera.lens = r.Lens(root["lens"], "lens", p.camera.focal_length);
+  if (root["lens"]) {
+    // f_number: auto leaves the f-number to the design (BlurSpec::auto_f_number); the rest is the lens.
+    YAML::Node lens = root["lens"];
+    if (lens.IsMap() && lens["f_number"] && lens["f_number"].IsScalar() && lens["f_number"].Scalar() == "auto") {
+      lens = YAML::Clone(lens);
+      lens.remove("f_number");
+      p.blur.auto_f_number = true;
+    }
+    p.camera.lens = r.Lens(lens, "lens", p.camera.focal_length);
+  }
   if (root["blur"]) {
     const YAML::Node b = root["blur"];
     r.OnlyKeys(b, "blur", {"limit_px", "scene_distance"});
@@ -107,7 +116,7 @@ DesignConfig ParseDesignConfigUnguarded(const std::string& text, const std::stri
     const YAML::Node k = root["constraints"];
     r.OnlyKeys(k, "constraints",
                {"max_upper_elevation_deg", "rim_margin_px", "min_vertical_field_deg", "min_rim_radius_px",
-                "max_system_length", "rod_travel"});
+                "max_system_length", "rod_travel", "max_blur_px"});
     Constraints& c = p.constraints;
     if (k["max_upper_elevation_deg"])
       c.max_upper_elevation_deg = r.Number(k["max_upper_elevation_deg"], "constraints.max_upper_elevation_deg");
@@ -116,6 +125,7 @@ DesignConfig ParseDesignConfigUnguarded(const std::string& text, const std::stri
       c.min_vertical_field_deg = r.Number(k["min_vertical_field_deg"], "constraints.min_vertical_field_deg");
     if (k["min_rim_radius_px"]) c.min_rim_radius_px = r.Number(k["min_rim_radius_px"], "constraints.min_rim_radius_px");
     if (k["max_system_length"]) c.max_system_length = r.Number(k["max_system_length"], "constraints.max_system_length");
+    if (k["max_blur_px"]) p.blur.max_rms_px = r.Positive(k["max_blur_px"], "constraints.max_blur_px");
     if (k["rod_travel"]) {
       HOVS_REQUIRE(k["rod_travel"].IsSequence(), r.Where(k["rod_travel"], "constraints.rod_travel"),
                    "expected [min, max]: the mounting plate's height above the pinhole the rod can set (m)");

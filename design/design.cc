@@ -205,6 +205,9 @@ void BlurSpec::Check(const std::string& where) const {
                limit_px, ")");
   HOVS_REQUIRE(std::isfinite(near) && near > 0 && !std::isnan(far) && far > near, where + ".scene_distance",
                "must be [near, far] with 0 < near < far (far may be infinity; got [", near, ", ", far, "])");
+  if (max_rms_px)
+    HOVS_REQUIRE(std::isfinite(*max_rms_px) && *max_rms_px > 0, where + ".max_blur_px",
+                 "must be a positive blur in px (got ", *max_rms_px, ")");
 }
 
 double DesignProblem::NearGroundElevationDeg() const { return -std::atan2(mounting_height, near_ground_radius) / kDeg; }

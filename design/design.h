@@ -58,6 +58,13 @@ struct CameraSpec {
 struct BlurSpec {
   double limit_px = 1.0;
   double near = 1.0, far = HUGE_VAL;  // m from F1
+  // constraints.max_blur_px: the chosen design's worst RMS radius over its field and [near, far] at its focus
+  // (checked on the chosen design after the geometric search: each evaluation traces the blur atlas).
+  std::optional<double> max_rms_px;
+  // lens.f_number: auto: the f-number is a design variable, the widest aperture (most light) whose worst RMS
+  // radius meets max_rms_px (else limit_px).
+  bool auto_f_number = false;
+  double FNumberLimitPx() const { return max_rms_px ? *max_rms_px : limit_px; }
   void Check(const std::string& where) const;
 };
 

@@ -55,7 +55,21 @@ FNumberTrade TradeAt(const DesignPoint& p, const DesignProblem& problem, const M
 
 }  // namespace
 
-DesignOptics AnalyseOptics(const DesignPoint& p, const DesignProblem& problem, const std::string& label) {
+namespace {
+
+// The smallest f-number (on the coarse trade grid) whose worst RMS radius is within limit_px (the blur falls as
+// the aperture closes); 0 when none up to f/256 is.
+double FNumberForLimit(const DesignPoint& p, const DesignProblem& problem, const Metrics& m, double limit_px) {
+  double lo = 0.5, hi = 256;
+  if (!(TradeAt(p, problem, m, hi).worst_rms <= limit_px)) return 0;
+  for (int it = 0; it < 12; ++it) {
+    const double mid = std::sqrt(lo * hi);
+    (TradeAt(p, problem, m, mid).worst_rms <= limit_px ? hi : lo) = mid;
+  }
+  return hi;
+}
+
+DesignOptics AnalyseAt(const DesignPoint& p, const DesignProblem& problem, const std::string& label) {
   DesignOptics o;
   o.label = label, o.p = p;
   o.metrics = Evaluate(p, problem);
@@ -88,15 +102,7 @@ DesignOptics AnalyseOptics(const DesignPoint& p, const DesignProblem& problem, c
 
   for (const double n : {2.0, 2.8, 4.0, 5.6, 8.0, 11.0, 16.0, 22.0, 32.0})
     o.trade.push_back(TradeAt(p, problem, o.metrics, n));
-  // The smallest f-number whose worst RMS radius is within the limit (the blur falls as the aperture closes).
-  double lo = 0.5, hi = 256;
-  if (TradeAt(p, problem, o.metrics, hi).worst_rms <= problem.blur.limit_px) {
-    for (int it = 0; it < 12; ++it) {
-      const double mid = std::sqrt(lo * hi);
-      (TradeAt(p, problem, o.metrics, mid).worst_rms <= problem.blur.limit_px ? hi : lo) = mid;
-    }
-    o.f_number_for_limit = hi;
-  }
+  o.f_number_for_limit = FNumberForLimit(p, problem, o.metrics, problem.blur.FNumberLimitPx());
 
   // Spot diagrams and through-focus curves on a 5 x 3 grid of field points.
   const double far = std::isinf(problem.blur.far) ? optics::kInfinity : problem.blur.far;
@@ -115,6 +121,28 @@ DesignOptics AnalyseOptics(const DesignPoint& p, const DesignProblem& problem, c
         o.through_focus.push_back(optics::ThroughFocus(sys, b, o.through_focus_distances));
     }
   }
+  return o;
+}
+
+}  // namespace
+
+DesignOptics AnalyseOptics(const DesignPoint& p, const DesignProblem& given, const std::string& label) {
+  const double limit = given.blur.FNumberLimitPx();
+  DesignProblem problem = given;
+  if (given.blur.auto_f_number) {
+    const double n = FNumberForLimit(p, given, Evaluate(p, given), limit);
+    if (n > 0) problem.camera.lens.f_number = n;
+  }
+  DesignOptics o = AnalyseAt(p, problem, label);
+  // The fine atlas may find a field point the coarse search did not: close the aperture until it holds too.
+  for (int it = 0; it < 4 && given.blur.auto_f_number && o.f_number_for_limit > 0 && o.worst_rms > limit; ++it) {
+    problem.camera.lens.f_number *= std::min(2.0, 1.02 * o.worst_rms / limit);
+    o = AnalyseAt(p, problem, label);
+  }
+  o.f_number_auto = given.blur.auto_f_number;
+  if (given.blur.max_rms_px)
+    o.blur_constraint =
+        ConstraintValue{"max_blur_px", o.worst_rms - *given.blur.max_rms_px, *given.blur.max_rms_px, "px"};
   return o;
 }
 
@@ -206,6 +234,10 @@ nlohmann::json OpticsJson(const DesignOptics& o) {
                      {"airy_radius_px", t.airy_radius_px}});
   j["f_number_trade"] = trade;
   j["f_number_for_limit"] = o.f_number_for_limit > 0 ? nlohmann::json(o.f_number_for_limit) : nlohmann::json(nullptr);
+  j["f_number_chosen_by_design"] = o.f_number_auto;
+  if (o.blur_constraint)
+    j["max_blur_px"] = {
+        {"limit_px", o.blur_constraint->limit}, {"worst_rms_px", o.worst_rms}, {"met", o.blur_constraint->value <= 0}};
   return j;
 }
 
@@ -390,7 +422,14 @@ std::string OpticsSummary(const DesignOptics& o, const DesignProblem& problem) {
     << FormatNumber("%.1f", problem.RimLimitPx()) << " px): " << (ok ? "every constraint holds" : "INFEASIBLE");
   for (const auto& g : o.constraints_at_best)
     if (g.value > 0) s << " [" << g.name << " by " << FormatNumber("%.1f", g.value) << " " << g.unit << "]";
-  s << "\n    f-number for a worst RMS blur <= " << FormatNumber("%.3g", problem.blur.limit_px) << " px: ";
+  if (o.f_number_auto)
+    s << "\n    f-number chosen by the design (lens.f_number: auto): f/" << FormatNumber("%.3g", o.lens.f_number)
+      << (o.f_number_for_limit > 0 ? "" : " (NOT MET: no f-number up to f/256 meets the blur limit)");
+  if (o.blur_constraint)
+    s << "\n    constraint max_blur_px: worst RMS blur " << FormatNumber("%.2f", o.worst_rms) << " px at focus "
+      << FormatNumber("%.4f", o.focus) << " m against " << FormatNumber("%.3g", o.blur_constraint->limit)
+      << " px: " << (o.blur_constraint->value <= 0 ? "met" : "NOT MET");
+  s << "\n    f-number for a worst RMS blur <= " << FormatNumber("%.3g", problem.blur.FNumberLimitPx()) << " px: ";
   if (o.f_number_for_limit > 0) {
     ThinLens at = o.lens;
     at.f_number = o.f_number_for_limit;

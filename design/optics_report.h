@@ -9,6 +9,7 @@
 
 #include <filesystem>
 #include <nlohmann/json.hpp>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -39,13 +40,19 @@ struct DesignOptics {
   std::vector<ConstraintValue> constraints_at_best;
   std::vector<optics::DepthOfField> dof;  // per elevation at `focus`
   std::vector<FNumberTrade> trade;
-  double f_number_for_limit = 0;         // the largest aperture (smallest N) whose worst RMS <= limit (0: none <= 256)
+  double f_number_for_limit =
+      0;                       // the largest aperture (smallest N) whose worst RMS <= FNumberLimitPx (0: none <= 256)
+  bool f_number_auto = false;  // lens.f_number: auto: lens.f_number is the design's choice
+  // constraints.max_blur_px on this design: the worst RMS radius over the atlas at `focus` against the limit.
+  std::optional<ConstraintValue> blur_constraint;
   std::vector<optics::FieldBlur> spots;  // a 5 x 3 grid of field points, points kept
   std::vector<double> spot_elevations, spot_distances;
   std::vector<std::vector<optics::FocusSample>> through_focus;  // per spot elevation, at the farthest distance
   std::vector<double> through_focus_distances;
 };
 
+// With lens.f_number: auto, the f-number is chosen first (the widest aperture whose worst RMS radius meets
+// BlurSpec::FNumberLimitPx on the atlas) and every figure is at it.
 DesignOptics AnalyseOptics(const DesignPoint& p, const DesignProblem& problem, const std::string& label);
 
 // The best single focus of a design over its field band and the blur's scene distances (the atlas's grid), and

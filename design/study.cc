@@ -67,7 +67,7 @@ nlohmann::json ProblemJson(const DesignConfig& cfg) {
                  {"lens_aperture", p.camera.lens_aperture}};
   const auto distance = [](double d) { return std::isinf(d) ? nlohmann::json("infinity") : nlohmann::json(d); };
   const ThinLens lens = p.camera.Lens();
-  j["lens"] = {{"f_number", lens.f_number},
+  j["lens"] = {{"f_number", p.blur.auto_f_number ? nlohmann::json("auto") : nlohmann::json(lens.f_number)},
                {"aperture_diameter", lens.ApertureDiameter()},
                {"focus_distance", distance(lens.focus_distance)},
                {"sensor_distance", lens.SensorDistance()},
@@ -87,6 +87,7 @@ nlohmann::json ProblemJson(const DesignConfig& cfg) {
   if (p.constraints.min_vertical_field_deg) k["min_vertical_field_deg"] = *p.constraints.min_vertical_field_deg;
   if (p.constraints.min_rim_radius_px) k["min_rim_radius_px"] = *p.constraints.min_rim_radius_px;
   if (p.constraints.max_system_length) k["max_system_length"] = *p.constraints.max_system_length;
+  if (p.blur.max_rms_px) k["max_blur_px"] = *p.blur.max_rms_px;
   if (p.constraints.rod_travel) k["rod_travel"] = {p.constraints.rod_travel->min, p.constraints.rod_travel->max};
   j["constraints"] = k;
   j["long_range_elevation_deg"] = p.long_range_elevation_deg;

@@ -160,7 +160,8 @@ TEST(RigCli, ACalibrationStoredInTheRigFolderHoldsAfterASwitch) {
   EXPECT_TRUE(j["focus"]["predicted"]["within"].get<bool>()) << j["focus"].dump();
   EXPECT_EQ(j["loaded"]["map_views"], 6);
   EXPECT_EQ(j["fresh_board"]["corners"], 35);
-  EXPECT_LT(j["fresh_board"]["rms_px"].get<double>(), 0.1);
+  // As well as the calibration fitted its own boards (the switch focuses for the whole field, not the board).
+  EXPECT_LT(j["fresh_board"]["rms_px"].get<double>(), 0.15);
 
   // The same folder at another resolution is refused before anything runs.
   const auto bad = Hovs("rig switch --machine " + kMachine + " --to reference --rig " + (rig / "rig.json").string() +
