@@ -54,6 +54,35 @@ Range RangeOf(const YamlReader& r, const YAML::Node& n, const std::string& key) 
 }  // namespace
 
 namespace {
+// lens: the thin lens (f_number: auto leaves the f-number to the design); blur: the blur figures' limit and
+// scene distances.
+void ParseLensAndBlur(const YamlReader& r, const YAML::Node& root, DesignProblem* problem) {
+  DesignProblem& p = *problem;
+  if (root["lens"]) {
+    // f_number: auto leaves the f-number to the design (BlurSpec::auto_f_number); the rest is the lens.
+    YAML::Node lens = root["lens"];
+    if (lens.IsMap() && lens["f_number"] && lens["f_number"].IsScalar() && lens["f_number"].Scalar() == "auto") {
+      lens = YAML::Clone(lens);
+      lens.remove("f_number");
+      p.blur.auto_f_number = true;
+    }
+    p.camera.lens = r.Lens(lens, "lens", p.camera.focal_length);
+  }
+  if (root["blur"]) {
+    const YAML::Node b = root["blur"];
+    r.OnlyKeys(b, "blur", {"limit_px", "scene_distance"});
+    if (b["limit_px"]) p.blur.limit_px = r.Positive(b["limit_px"], "blur.limit_px");
+    if (b["scene_distance"]) {
+      const YAML::Node d = b["scene_distance"];
+      HOVS_REQUIRE(d.IsSequence() && d.size() == 2, r.Where(d, "blur.scene_distance"),
+                   "expected [near, far] in metres from F1 (far may be infinity)");
+      p.blur.near = r.Positive(d[0], "blur.scene_distance[0]");
+      p.blur.far = r.DistanceOrInfinity(d[1], "blur.scene_distance[1]");
+      HOVS_REQUIRE(p.blur.far > p.blur.near, r.Where(d, "blur.scene_distance"), "far must exceed near");
+    }
+  }
+}
+
 DesignConfig ParseDesignConfigUnguarded(const std::string& text, const std::string& source) {
   const YamlReader r(source);
   const YAML::Node root = r.Load(text);
@@ -78,29 +107,7 @@ DesignConfig ParseDesignConfigUnguarded(const std::string& text, const std::stri
     p.camera.height = r.Integer(c["height"], "camera.height");
     p.camera.lens_aperture = r.Number(c["lens_aperture"], "camera.lens_aperture");
   }
-  if (root["lens"]) {
-    // f_number: auto leaves the f-number to the design (BlurSpec::auto_f_number); the rest is the lens.
-    YAML::Node lens = root["lens"];
-    if (lens.IsMap() && lens["f_number"] && lens["f_number"].IsScalar() && lens["f_number"].Scalar() == "auto") {
-      lens = YAML::Clone(lens);
-      lens.remove("f_number");
-      p.blur.auto_f_number = true;
-    }
-    p.camera.lens = r.Lens(lens, "lens", p.camera.focal_length);
-  }
-  if (root["blur"]) {
-    const YAML::Node b = root["blur"];
-    r.OnlyKeys(b, "blur", {"limit_px", "scene_distance"});
-    if (b["limit_px"]) p.blur.limit_px = r.Positive(b["limit_px"], "blur.limit_px");
-    if (b["scene_distance"]) {
-      const YAML::Node d = b["scene_distance"];
-      HOVS_REQUIRE(d.IsSequence() && d.size() == 2, r.Where(d, "blur.scene_distance"),
-                   "expected [near, far] in metres from F1 (far may be infinity)");
-      p.blur.near = r.Positive(d[0], "blur.scene_distance[0]");
-      p.blur.far = r.DistanceOrInfinity(d[1], "blur.scene_distance[1]");
-      HOVS_REQUIRE(p.blur.far > p.blur.near, r.Where(d, "blur.scene_distance"), "far must exceed near");
-    }
-  }
+  ParseLensAndBlur(r, root, &p);
   if (root["mirror"]) {
     const YAML::Node m = root["mirror"];
     r.OnlyKeys(m, "mirror", {"rim_diameter"});

@@ -57,14 +57,12 @@ TEST(DesignOptics, AnAutomaticFNumberIsTheWidestApertureThatMeetsTheConstraint) 
 }
 
 TEST(DesignOptics, BadBlurConstraintsAreRefusedByName) {
-  for (const std::string& bad : {std::string("{max_blur_px: 0}"), std::string("{max_blur_px: -1}"),
-                                 std::string("{max_blur_px: .nan}")}) {
+  for (const std::string& bad :
+       {std::string("{max_blur_px: 0}"), std::string("{max_blur_px: -1}"), std::string("{max_blur_px: .nan}")}) {
     try {
       ParseDesignConfig(Config("{f_number: 4}", bad), "blur.yaml");
       ADD_FAILURE() << "accepted " << bad;
-    } catch (const Error& e) {
-      EXPECT_NE(std::string(e.what()).find("max_blur_px"), std::string::npos) << e.what();
-    }
+    } catch (const Error& e) { EXPECT_NE(std::string(e.what()).find("max_blur_px"), std::string::npos) << e.what(); }
   }
   EXPECT_THROW(ParseDesignConfig(Config("{f_number: automatic}", "{max_blur_px: 1}"), "blur.yaml"), Error);
 }
