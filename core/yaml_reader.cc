@@ -105,8 +105,12 @@ ThinLens YamlReader::Lens(const YAML::Node& n, const std::string& key, double fo
   ThinLens lens;
   lens.focal_length = focal_length;
   if (n["f_number"]) lens.f_number = Number(n["f_number"], key + ".f_number");
-  if (n["aperture_diameter"])
-    lens.f_number = focal_length / Positive(n["aperture_diameter"], key + ".aperture_diameter");
+  if (n["aperture_diameter"]) {
+    const double diameter = Positive(n["aperture_diameter"], key + ".aperture_diameter");
+    HOVS_REQUIRE(diameter <= 2 * focal_length, Where(n["aperture_diameter"], key + ".aperture_diameter"),
+                 "must be at most twice the focal length, f/0.5 (got ", diameter, " m for f = ", focal_length, " m)");
+    lens.f_number = focal_length / diameter;
+  }
   if (n["focus_distance"]) lens.focus_distance = DistanceOrInfinity(n["focus_distance"], key + ".focus_distance");
   if (n["wavelength"]) lens.wavelength = Number(n["wavelength"], key + ".wavelength");
   lens.Check(Where(n, key));
