@@ -1,15 +1,10 @@
-// The lens focus of the variable-scale unit: a sharpness measure on the mirror image and the loop that focuses
-// through the focus axis. Every mirror puts the virtual image of the scene at its own distance (about 1.15 x
+// The lens focus of the variable-scale unit: a sharpness measure on the mirror image and the loop that maximises
+// it through the focus axis. Every mirror puts the virtual image of the scene at its own distance (about 1.15 x
 // the plate height for the reference mirror), so a switch must refocus.
 //
 // Sharpness: the mean squared gradient (Sobel, after a Gaussian of 1 px that keeps the renderer's and the
 // sensor's pixel noise out) over the mirror annulus between 35 % and 95 % of the rim's image radius, where the
-// scene is (not the camera's own reflection, not the rim's edge), in kFocusBands rings (bands of elevation).
-// Goal: the field's image is curved (optics/README.md), so no focus is sharpest everywhere; like the optics'
-// best single focus, which minimises the worst blur over the field, the loop maximises the worst band: the score
-// of an image is the smallest of its bands' sharpness, each divided by that band's best over the coarse scan.
-// (Maximising the annulus' mean instead favours the inner rings, where the near ground's texture is: it focuses
-// 1-8 mm short of the optics' depth of focus on three of the four mirrors.)
+// scene is (not the camera's own reflection, not the rim's edge).
 // Search: a coarse scan of the focus over [low, high] x the plate height, then a golden-section refinement
 // between the coarse maximum's neighbours. Each evaluation moves the focus axis, waits for it and takes an image.
 #pragma once
@@ -23,9 +18,6 @@
 
 namespace hovs::rig {
 
-inline constexpr int kFocusBands = 8;
-// The mean squared gradient of each band, inner first; Sharpness: over the whole annulus.
-std::vector<double> BandSharpness(const TurretImage& image, const TurretSpec& spec, int k);
 double Sharpness(const TurretImage& image, const TurretSpec& spec, int k);
 
 struct FocusOptions {
@@ -38,9 +30,8 @@ struct FocusOptions {
 
 struct FocusResult {
   double focus = 0;                                // the focus distance the axis was left at, m
-  double sharpness = 0;                            // there (the annulus' mean)
-  double score = 0;                                // there (the worst band against its best, <= about 1)
-  std::vector<std::pair<double, double>> samples;  // (focus, score) in the order taken
+  double sharpness = 0;                            // there
+  std::vector<std::pair<double, double>> samples;  // (focus, sharpness) in the order taken
   int images = 0;
 };
 

@@ -144,7 +144,7 @@ std::vector<AlignSummary> SummariseAlignStudy(const TurretSpec& spec, const std:
       if (r.focus) {
         double best = 0;
         for (const auto& [f, sh] : r.focus->samples) best = std::max(best, sh);
-        focus.push_back(r.focus->score / best);
+        focus.push_back(r.focus->sharpness / best);
       }
     }
     if (s.runs == 0) continue;
@@ -192,7 +192,6 @@ nlohmann::json AlignRunJson(const TurretSpec& spec, const AlignRun& run) {
     nlohmann::json f;
     f["focus_m"] = run.focus->focus;
     f["sharpness"] = run.focus->sharpness;
-    f["score"] = run.focus->score;  // the worst band against its best (rig/focus.h); samples: (focus, score)
     f["images"] = run.focus->images;
     nlohmann::json samples = nlohmann::json::array();
     for (const auto& [x, y] : run.focus->samples) samples.push_back({x, y});

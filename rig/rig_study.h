@@ -63,7 +63,7 @@ struct AlignSummary {
   double median_lateral = 0, worst_lateral = 0, median_tilt = 0, worst_tilt = 0, median_height = 0,
          worst_height = 0;  // m, rad, m (absolute)
   double median_iterations = 0, worst_iterations = 0;
-  double median_focus_ratio = 0;  // score after the focus loop / the best the loop saw (with focus)
+  double median_focus_ratio = 0;  // sharpness after the focus loop / the best the loop saw (with focus)
 };
 std::vector<AlignSummary> SummariseAlignStudy(const TurretSpec& spec, const std::vector<AlignRun>& runs);
 
