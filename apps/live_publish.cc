@@ -1,5 +1,6 @@
 #include "apps/live_publish.h"
 
+#include <algorithm>
 #include <cstdio>
 #include <cstdlib>
 
@@ -48,9 +49,13 @@ std::unique_ptr<stream::Publisher> OpenPublisher(const PublishCliOptions& o,
                                                  const std::vector<unwrap::ViewSpec>& views) {
   if (!dds) return nullptr;
   auto pub = std::make_unique<stream::Publisher>(*dds, stream::TopicsOfViews(views, o.prefix, false));
-  if (o.wait_subscribers > 0)
+  if (o.wait_subscribers > 0) {
     HOVS_REQUIRE(pub->WaitForSubscribers(1, o.wait_subscribers), "--wait-subscribers",
                  "no subscriber on every image topic within ", o.wait_subscribers, " s");
+    // A camera's subscriber reads its CameraInfo too, and discovery may match that reader a little later than the
+    // image's: give it up to 2 s so the first frame's CameraInfo is not lost, without requiring one.
+    pub->WaitForSubscribers(1, std::min(2.0, o.wait_subscribers), /*camera_info=*/true);
+  }
   return pub;
 }
 

@@ -1,8 +1,8 @@
 #!/usr/bin/env bash
 # The test suite, from a fresh Debian 12 machine: install, build, run every CTest test; then, in a second tree
 # built with clang, AddressSanitizer + UndefinedBehaviorSanitizer and libFuzzer's coverage (build-fuzz), the core,
-# design and unwrap unit tests (the remap kernels read memory by hand) and a short run of every parser's fuzzer
-# (scripts/fuzz.sh, HOVS_FUZZ_SECONDS each, two at a time).
+# design, optics and unwrap unit tests (the remap kernels read memory by hand) and a short run of every parser's
+# fuzzer (scripts/fuzz.sh, HOVS_FUZZ_SECONDS each, two at a time).
 # Environment: HOVS_TEST_LABELS (a CTest -L regex) to run a slice; HOVS_SKIP_SANITIZE=1 to skip the sanitizer
 # tree; HOVS_FUZZ_SECONDS (default 30) per fuzzer, 0 to build the fuzzers without running them.
 set -euo pipefail
@@ -31,7 +31,8 @@ if [ "${HOVS_SKIP_SANITIZE:-0}" != "1" ]; then
   # Not the calibration tests: Debian's Ceres is a static library built without ASan, and Eigen switches to its
   # own aligned allocator under ASan, so Eigen code shared between Ceres and hovs would free with one allocator
   # what the other allocated (a false alarm of mixed builds, not a hovs defect).
-  cmake --build build-fuzz --parallel "$jobs" --target hovs_core_tests hovs_design_tests hovs_unwrap_tests hovs_fuzzers
+  cmake --build build-fuzz --parallel "$jobs" \
+    --target hovs_core_tests hovs_design_tests hovs_optics_tests hovs_unwrap_tests hovs_fuzzers
   ASAN_OPTIONS=detect_leaks=1:abort_on_error=1 UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1 \
     ctest --test-dir build-fuzz --output-on-failure --parallel "$jobs" -L unit
   if [ "${HOVS_FUZZ_SECONDS:-30}" != "0" ]; then
