@@ -73,7 +73,11 @@ def table():
 def main():
     global ROOT
     if "--root" in sys.argv:
-        ROOT = pathlib.Path(sys.argv[sys.argv.index("--root") + 1]).resolve()
+        i = sys.argv.index("--root") + 1
+        if i >= len(sys.argv) or not pathlib.Path(sys.argv[i], "README.md").is_file():
+            print("headline.py: --root needs a folder holding README.md and results/", file=sys.stderr)
+            return 2
+        ROOT = pathlib.Path(sys.argv[i]).resolve()
     readme = (ROOT / "README.md").read_text()
     a, b = readme.index(BEGIN), readme.index(END) + len(END)
     new = readme[:a] + table() + readme[b:]
