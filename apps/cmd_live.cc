@@ -164,7 +164,9 @@ int RunLiveCommand(const Options& o, const GlobalOptions& global) {
   CheckOptions(o);
   hw::LiveOptions lo;
   lo.interpolation = unwrap::ParseInterpolation(o.interp);
-  const std::optional<stream::DdsOptions> dds = o.publish.Resolve();
+  std::optional<stream::DdsOptions> dds = o.publish.Resolve();
+  if (dds && !o.source.replay.empty())  // a replay has no deadline: every frame reaches every reader
+    dds->history = 0, dds->max_blocking_s = 5;
   const std::optional<depth::LiveDepthOptions> depth_options = o.depth.Resolve();
   // One unit's views (a table), or a rig layout's views of two units (a rig mapping) expanded from frame pairs.
   const bool pair = IsRigUnwrap(o.layout, o.map);

@@ -65,6 +65,8 @@ void DdsOptions::Check(const std::string& where) const {
                "the DDS domain id must be 0 .. 232, not ", domain);
   HOVS_REQUIRE(std::isfinite(max_blocking_s) && max_blocking_s >= 0 && max_blocking_s <= 60, where,
                "the writers' blocking time must be 0 .. 60 s, not ", max_blocking_s);
+  HOVS_REQUIRE(history >= 0 && history <= 10000, where, "the writers' history must be 0 (all) .. 10000 samples, not ",
+               history);
   if (!interface.empty()) {
     HOVS_REQUIRE(PlainName(interface), "--dds-interface", "'", interface, "' is not an interface name or address");
     const auto ifs = Interfaces();

@@ -18,10 +18,14 @@ namespace hovs::stream {
 // configures the domain itself: that interface only, and with peers, unicast discovery to them and no multicast
 // (the loopback has no multicast: interface "lo" with peer 127.0.0.1 is how one machine talks to itself).
 struct DdsOptions {
-  int domain = 0;                              // DDS domain id, 0 .. 232 (ROS_DOMAIN_ID)
-  std::string interface;                       // a network interface name ("lo", "eth0") or one of its addresses
-  std::vector<std::string> peers;              // unicast discovery addresses
-  double max_blocking_s = 0.1;                 // how long a write may wait for a reliable reader's acknowledgements
+  int domain = 0;                  // DDS domain id, 0 .. 232 (ROS_DOMAIN_ID)
+  std::string interface;           // a network interface name ("lo", "eth0") or one of its addresses
+  std::vector<std::string> peers;  // unicast discovery addresses
+  double max_blocking_s = 0.1;     // how long a write may wait for a reliable reader's acknowledgements
+  // Samples each writer keeps for retransmission. A reader that lags further behind loses the oldest (ROS 2's
+  // KEEP_LAST behaviour: a live stream never waits for a slow reader). 0 keeps every sample until every reader
+  // has acknowledged it (KEEP_ALL): nothing is lost, and a write blocks up to max_blocking_s while readers lag.
+  int history = 16;
   void Check(const std::string& where) const;  // throws hovs::Error naming `where` (the option)
 };
 

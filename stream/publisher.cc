@@ -15,13 +15,16 @@ namespace {
 
 using Clock = std::chrono::steady_clock;
 
-dds_qos_t* WriterQos(double max_blocking_s) {
+dds_qos_t* WriterQos(const DdsOptions& o) {
   dds_qos_t* q = dds_create_qos();
-  dds_qset_reliability(q, DDS_RELIABILITY_RELIABLE, static_cast<dds_duration_t>(max_blocking_s * 1e9));
+  dds_qset_reliability(q, DDS_RELIABILITY_RELIABLE, static_cast<dds_duration_t>(o.max_blocking_s * 1e9));
   dds_qset_durability(q, DDS_DURABILITY_VOLATILE);
-  // Deep enough that a sample whose fragments the reader's socket dropped is still there to resend when its
-  // retransmission request arrives, a few frames later at worst.
-  dds_qset_history(q, DDS_HISTORY_KEEP_LAST, 16);
+  // Keep-last deep enough (16 by default) that a sample whose fragments the reader's socket dropped is still
+  // there to resend when its retransmission request arrives, a few frames later at worst.
+  if (o.history == 0)
+    dds_qset_history(q, DDS_HISTORY_KEEP_ALL, 0);
+  else
+    dds_qset_history(q, DDS_HISTORY_KEEP_LAST, o.history);
   return q;
 }
 
@@ -91,7 +94,7 @@ Publisher::Publisher(const DdsOptions& options, const PublisherTopics& topics)
     : topics_(topics), participant_(std::make_unique<Participant>(options)), writers_(std::make_unique<Writers>()) {
   HOVS_REQUIRE(!topics_.images.empty() || topics_.cloud, "DDS publisher", "nothing to publish");
   CheckRosNamespace(topics_.prefix, "DDS publisher (topic prefix)");
-  dds_qos_t* qos = WriterQos(options.max_blocking_s);
+  dds_qos_t* qos = WriterQos(options);
   const dds_entity_t pp = participant_->handle();
   auto make = [&](Writers::Entry* e, const std::string& ros, const std::string& frame, MessageType type) {
     const dds_topic_descriptor_t* desc = type == MessageType::kImage        ? &sensor_msgs_msg_dds__Image__desc
@@ -180,8 +183,20 @@ void Publisher::Offer(Bundle* bundle, bool wait) {
 }
 
 bool Publisher::Flush(double timeout_s) {
-  std::unique_lock<std::mutex> lock(mutex_);
-  return cv_.wait_for(lock, std::chrono::duration<double>(timeout_s), [&] { return !pending_ && !writing_; });
+  const auto end = Clock::now() + std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(timeout_s));
+  {
+    std::unique_lock<std::mutex> lock(mutex_);
+    if (!cv_.wait_until(lock, end, [&] { return !pending_ && !writing_; })) return false;
+  }
+  // Written is not delivered: a sample a reader has not acknowledged yet (it lagged, or a fragment needs
+  // resending) is lost if the process ends now.
+  bool acked = true;
+  for (auto* e : writers_->All()) {
+    const double left = std::chrono::duration<double>(end - Clock::now()).count();
+    const dds_duration_t t = static_cast<dds_duration_t>(std::max(0.0, left) * 1e9);
+    acked = dds_wait_for_acks(e->writer, t) == DDS_RETCODE_OK && acked;
+  }
+  return acked;
 }
 
 bool Publisher::WaitForSubscribers(int count, double timeout_s, bool camera_info) {

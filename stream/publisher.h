@@ -95,7 +95,9 @@ class Publisher {
   // True when every image (and cloud) topic has at least `count` matched readers (waits up to timeout_s); with
   // camera_info, every CameraInfo topic as well (a reader that must see every CameraInfo, as a test).
   bool WaitForSubscribers(int count, double timeout_s, bool camera_info = false);
-  bool Flush(double timeout_s);  // true when every offered bundle has been written or dropped
+  // True when every offered bundle has been written (or dropped) and every matched reader has acknowledged
+  // every written sample, within timeout_s.
+  bool Flush(double timeout_s);
   PublishStats Stats() const;
   // Each topic as "ROS name (type)", in creation order.
   std::vector<std::string> Topics() const;

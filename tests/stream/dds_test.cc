@@ -103,16 +103,18 @@ Bundle TestBundle(int k) {
 }
 
 // The publishing process: waits for the reader of every topic, then publishes 100 bundles (waiting for the writer
-// thread: none dropped), and reports through its exit code.
+// thread: none dropped) and for the readers' acknowledgements, and reports through its exit code.
 int PublishHundred(int domain) {
   try {
-    Publisher pub(Loopback(domain), TestTopics());
+    DdsOptions o = Loopback(domain);
+    o.history = 0, o.max_blocking_s = 10;  // every sample kept until acknowledged: a starved reader loses none
+    Publisher pub(o, TestTopics());
     if (!pub.WaitForSubscribers(1, 30, /*camera_info=*/true)) return 3;  // every topic's reader, under load too
     for (int k = 0; k < 100; ++k) {
       Bundle b = TestBundle(k);
       pub.Offer(&b, true);
     }
-    if (!pub.Flush(30)) return 4;
+    if (!pub.Flush(30)) return 4;  // written and acknowledged
     const PublishStats s = pub.Stats();
     return s.published == 100 && s.dropped == 0 ? 0 : 5;
   } catch (const std::exception& e) {
@@ -148,7 +150,7 @@ TEST(DdsLoopback, AHundredBundlesCrossProcessesIntactInRos2Layout) {
   int status = 0;
   waitpid(child, &status, 0);
   ASSERT_TRUE(WIFEXITED(status));
-  ASSERT_EQ(WEXITSTATUS(status), 0) << "3: no reader matched; 4: not flushed; 5: dropped; 6: error";
+  ASSERT_EQ(WEXITSTATUS(status), 0) << "3: no reader matched; 4: not flushed or acknowledged; 5: dropped; 6: error";
   for (const char* t : {"image", "info", "pano", "points"}) ASSERT_EQ(got[t].size(), 100u) << t;
 
   for (int k = 0; k < 100; ++k) {
