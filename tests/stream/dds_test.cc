@@ -50,6 +50,11 @@ TEST(DdsOptions, RefuseWhatCycloneCannotUseNamingTheOption) {
   EXPECT_NO_THROW(o.Check(""));
   o.peers = {"<Peer/>"};
   EXPECT_THROW(o.Check(""), Error);
+  o.peers = {"127.0.0.1"};
+  o.history = -1;
+  EXPECT_THROW(o.Check(""), Error) << "a negative writer history accepted";
+  o.history = 0;  // keep-all
+  EXPECT_NO_THROW(o.Check(""));
 }
 
 TEST(DdsOptions, LoopbackConfigurationIsUnicastOnTheNamedInterface) {
