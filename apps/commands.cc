@@ -209,7 +209,11 @@ int RunCommandLine(int argc, const char* const* argv, bool rethrow) {
       CheckOutputOption(*sub);
       return run();
     } catch (const Error& e) {
-      std::cerr << "hovs " << sub->get_name() << ": error: " << OneLine(e.what()) << "\n";
+      // An error raised by the command itself names it already ("hovs merge: ..."): said once.
+      const std::string prefix = "hovs " + sub->get_name() + ": ";
+      std::string message = OneLine(e.what());
+      if (message.rfind(prefix, 0) == 0) message.erase(0, prefix.size());
+      std::cerr << prefix << "error: " << message << "\n";
       return 2;
     } catch (const std::filesystem::filesystem_error& e) {
       // A file system refusal (permissions, a full disk, a path that is a file) is about the paths given.

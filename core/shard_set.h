@@ -73,11 +73,13 @@ inline std::vector<size_t> OrderShards(const std::vector<nlohmann::json>& docs,
     const nlohmann::json h = head(docs[k]);
     if (h != ref) {
       std::string differ;
+      int differing = 0;
       for (const auto& [key, value] : ref.items())
-        if (!h.contains(key) || h[key] != value) differ += (differ.empty() ? "" : ", ") + key;
+        if (!h.contains(key) || h[key] != value) differ += (differing++ ? ", " : "") + key;
       for (const auto& [key, value] : h.items())
-        if (!ref.contains(key)) differ += (differ.empty() ? "" : ", ") + key;
-      throw Error(files[k].string(), "does not belong with " + files[0].string() + ": its " + differ + " differ");
+        if (!ref.contains(key)) differ += (differing++ ? ", " : "") + key;
+      throw Error(files[k].string(), "does not belong with " + files[0].string() + ": its " + differ +
+                                         (differing == 1 ? " differs" : " differ"));
     }
     HOVS_REQUIRE(n == count, files[k].string(), "is shard ", index, " of ", n, ", the first of ", count);
     if (!seen.insert(index).second) {

@@ -26,11 +26,11 @@ void AxisSpec::Check(const std::string& where, AxisId axis) const {
   HOVS_REQUIRE(std::isfinite(step) && step > 0 && step <= 0.01 * (max - min), where, "the step ", text(step),
                " must be positive and at most a hundredth of the travel (", text(max - min), ")");
   HOVS_REQUIRE(std::isfinite(time_constant) && time_constant > 0 && time_constant <= 100, where,
-               "time_constant must be in (0, 100] s");
-  HOVS_REQUIRE(std::isfinite(backlash) && backlash >= 0 && backlash < 0.1 * (max - min), where,
-               "backlash must be >= 0 and below a tenth of the travel");
-  HOVS_REQUIRE(std::isfinite(noise) && noise >= 0 && noise < 0.1 * (max - min), where,
-               "noise must be >= 0 and below a tenth of the travel");
+               "time_constant must be in (0, 100] s (got ", FormatNumber("%.6g", time_constant), " s)");
+  HOVS_REQUIRE(std::isfinite(backlash) && backlash >= 0 && backlash < 0.1 * (max - min), where, "backlash ",
+               text(backlash), " must be >= 0 and below a tenth of the travel (", text(max - min), ")");
+  HOVS_REQUIRE(std::isfinite(noise) && noise >= 0 && noise < 0.1 * (max - min), where, "noise ", text(noise),
+               " must be >= 0 and below a tenth of the travel (", text(max - min), ")");
 }
 
 SimulatedAxis::SimulatedAxis(AxisId id, const AxisSpec& spec, double start, uint64_t seed)

@@ -131,7 +131,7 @@ ViewRecord RenderView(const SceneConfig& cfg, const raytrace::RayScene& scene, i
 }
 
 // A thumbnail (longest side `size` px) of an image file, written next to it under thumbs/; one already there (a
-// merge links the shards' own) is kept.
+// resumed run's) is kept.
 std::string Thumbnail(const fs::path& dir, const std::string& image, int size) {
   const std::string existing = "thumbs/" + fs::path(image).filename().string();
   if (fs::is_regular_file(dir / existing)) return existing;
@@ -519,14 +519,13 @@ void MergeDatasetShards(const std::vector<fs::path>& shards, const fs::path& out
         if (view.contains("ground_truth"))
           for (const char* key : {"exr", "sidecar"})
             if (view["ground_truth"].contains(key)) files.push_back(view["ground_truth"][key]);
-        // Every file as its shard recorded it (LoadDatasetManifest expects the checksums), then the shard's
-        // thumbnail, derived from the image (the same bytes the merged page would make from it).
+        // Every file as its shard recorded it (LoadDatasetManifest expects the checksums). The shard's thumbnails
+        // carry no checksum, so they are not taken: the merged page makes its own from the verified images (the
+        // bytes one process writes).
         for (const auto& f : files) {
           HOVS_REQUIRE(fs::is_regular_file(dir / f), (dir / f).string(), "is missing from its shard");
           VerifyExpectedChecksum(dir / f);
         }
-        const std::string thumb = "thumbs/" + fs::path(view["image"].get<std::string>()).filename().string();
-        if (fs::is_regular_file(dir / thumb)) files.push_back(thumb);
         for (const auto& f : files) {
           fs::create_directories((stage.staging() / f).parent_path());
           // A hard link where the file system allows (a merged set of hundreds of GB is not copied), else a copy.

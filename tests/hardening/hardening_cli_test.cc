@@ -319,6 +319,9 @@ TEST_F(Hardening, AbsurdModelsManifestsAndTablesAreRefusedByName) {
 TEST_F(Hardening, OptionsAndCommandsAreNamedInOneLine) {
   const fs::path w = Work("options");
   Refused("frobnicate", "unknown command 'frobnicate'");
+  // A command's own error names the command once.
+  Refused("unwrap --input " + Image().string() + " --out " + (w / "u").string(),
+          "hovs unwrap: error: give either --model or --map");
   Refused("--frob render", "unknown option '--frob'");
   for (const std::string v : {"nan", "inf", "-1", "1e12"})
     Refused("depth --dataset " + Street().string() + " --sigma-disparity " + v + " --out " + (w / "d").string(),

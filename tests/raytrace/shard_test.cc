@@ -104,7 +104,14 @@ TEST(DatasetShards, MergedShardsAreTheSetOneProcessWrites) {
   edited([](nlohmann::json* e) { (*e)["shard"]["index"] = "1"; });
   refused({dir / "s2_0", shard}, "shard.index");
   WriteFileAtomic(manifest, good);
+  // A shard's thumbnail carries no checksum: a changed one never reaches the merged set, whose page makes its own
+  // from the verified images (the bytes one process writes).
+  const fs::path thumb = shard / "thumbs" / image.filename();
+  ASSERT_TRUE(fs::is_regular_file(thumb));
+  WriteFileAtomic(thumb, ReadFile(thumb) + "tampered");
   EXPECT_NO_THROW(scenes::MergeDatasetShards({dir / "s2_0", shard}, dir / "good"));
+  EXPECT_EQ(ReadFile(dir / "good" / "thumbs" / image.filename()),
+            ReadFile(dir / "whole" / "thumbs" / image.filename()));
   // From the command line: a bad shard is one clear error, exit 2, nothing written.
   const auto bad = test::Hovs("-q dataset --scene " + std::string(HOVS_SOURCE_DIR) +
                               "/scenes/reference_calibration.yaml -n 2 --shard 2/2 -o " + (dir / "bad").string());
