@@ -18,7 +18,7 @@
 namespace hovs::apps {
 namespace {
 
-struct Options {
+struct CalibrateCommandOptions {
   std::string corners, size, dataset, unit, images, board, out = "results/calibration", loss = "none";
   bool truth_corners = false, physical = false, physical_intrinsics = false, physical_mirror = false, rim = true;
   std::string nominal;
@@ -35,7 +35,7 @@ struct Options {
   int suggest = 0;
 };
 
-int RunCalibrate(const Options& o, const GlobalOptions& global) {
+int RunCalibrate(const CalibrateCommandOptions& o, const GlobalOptions& global) {
   HOVS_REQUIRE(int(!o.corners.empty()) + int(!o.dataset.empty()) + int(!o.images.empty()) == 1, "hovs calibrate",
                "give exactly one of --corners, --dataset and --images");
   HOVS_REQUIRE(o.noise == 0 || o.truth_corners, "--corner-noise",
@@ -117,7 +117,7 @@ int RunCalibrate(const Options& o, const GlobalOptions& global) {
 }  // namespace
 
 Runner SetupCalibrate(CLI::App* sub, const GlobalOptions* global) {
-  auto o = std::make_shared<Options>();
+  auto o = std::make_shared<CalibrateCommandOptions>();
   sub->add_option("--corners", o->corners, "corner table: image,corner,board_x_mm,board_y_mm,u_px,v_px");
   sub->add_option("--size", o->size, "image size WxH (with --corners)");
   sub->add_option("--dataset", o->dataset, "dataset manifest (dataset.json): corners detected in its images");

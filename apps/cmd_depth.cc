@@ -27,7 +27,7 @@ namespace hovs::apps {
 namespace {
 namespace fs = std::filesystem;
 
-struct Options {
+struct DepthCommandOptions {
   std::string dataset, out = "results/depth", left, right, left_model, right_model, stereo, model_kind = "auto";
   int frame = 0, width = 2048, height = 512, disparities = 320, block = 5, max_points = 200000;
   double sigma_px = 0.5, max_rel_sigma = 0.05;
@@ -46,7 +46,7 @@ struct DepthFrame {
   View left_view, right_view;
 };
 
-DepthFrame LoadDepthFrame(const Options& o) {
+DepthFrame LoadDepthFrame(const DepthCommandOptions& o) {
   const fs::path manifest(o.dataset);
   const auto m = LoadDatasetManifest(manifest);
   const auto& units = m.at("units");
@@ -79,7 +79,7 @@ DepthFrame LoadDepthFrame(const Options& o) {
 
 // The models (the manifest's exact rigs or the calibrated ones) and the relative pose (the manifest's or
 // --stereo's); `pose_source` says which.
-depth::StereoRig RigFor(const Options& o, const DepthFrame& f, std::string* pose_source) {
+depth::StereoRig RigFor(const DepthCommandOptions& o, const DepthFrame& f, std::string* pose_source) {
   depth::StereoRig rig{
       o.left_model.empty() ? AnyModel::Exact(f.left.rig) : LoadCalibratedModel(o.left_model, o.model_kind),
       o.right_model.empty() ? AnyModel::Exact(f.right.rig) : LoadCalibratedModel(o.right_model, o.model_kind),
@@ -102,7 +102,7 @@ void WriteImage8(const fs::path& path, const unwrap::Image8& im) {
 }
 
 // The rectified pair, the disparity, the range image and the point clouds. Returns the points written.
-size_t WriteDepthOutputs(const fs::path& folder, const Options& o, const depth::Rectification& rect,
+size_t WriteDepthOutputs(const fs::path& folder, const DepthCommandOptions& o, const depth::Rectification& rect,
                          const depth::DenseDepth& d, const unwrap::Image8& left, const unwrap::Image8& right,
                          const nlohmann::json& versions) {
   WriteImage8(folder / "rectified_left.png", left);
@@ -122,7 +122,7 @@ size_t WriteDepthOutputs(const fs::path& folder, const Options& o, const depth::
   return pts.size();
 }
 
-int RunDepth(const Options& o, const GlobalOptions& global) {
+int RunDepth(const DepthCommandOptions& o, const GlobalOptions& global) {
   depth::RectifyOptions ro;
   ro.width = o.width, ro.height = o.height;
   ro.Check("--width/--height");
@@ -219,7 +219,7 @@ int RunDepth(const Options& o, const GlobalOptions& global) {
 }  // namespace
 
 Runner SetupDepth(CLI::App* sub, const GlobalOptions* global) {
-  auto o = std::make_shared<Options>();
+  auto o = std::make_shared<DepthCommandOptions>();
   sub->add_option("--dataset", o->dataset, "dataset manifest with two units (dataset.json)")->required();
   sub->add_option("--left", o->left, "left unit name (default: the first)");
   sub->add_option("--right", o->right, "right unit name (default: the second)");

@@ -32,7 +32,7 @@
 namespace hovs::apps {
 namespace {
 namespace fs = std::filesystem;
-struct Options {
+struct LiveCommandOptions {
   SourceOptions source;
   RigLiveCliOptions rig;
   PublishCliOptions publish;
@@ -83,14 +83,14 @@ struct LiveMapping {
   }
 };
 
-unwrap::RemapTable UnitLiveMapping(const Options& o) {
+unwrap::RemapTable UnitLiveMapping(const LiveCommandOptions& o) {
   if (!o.map.empty()) return unwrap::LoadRemapTable(o.map);
   const AnyModel model = LoadModelSpec(o.model, o.unit, o.scene_distance);
   return unwrap::BuildRemapTable(model, unwrap::ResolveLayout(o.layout, o.fixed_elevation ? nullptr : &model),
                                  unwrap::RemapOptions(), nlohmann::json(Versions()).dump());
 }
 
-unwrap::RigMapping RigLiveMapping(const Options& o) {
+unwrap::RigMapping RigLiveMapping(const LiveCommandOptions& o) {
   if (!o.map.empty()) return unwrap::LoadRigMapping(o.map);
   const std::vector<unwrap::RigUnitModel> units = LoadRigUnits(o.model, o.scene_distance);
   const unwrap::Layout layout = unwrap::ResolveLayout(o.layout, o.fixed_elevation ? nullptr : &units[0].model);
@@ -101,7 +101,7 @@ unwrap::RigMapping RigLiveMapping(const Options& o) {
   return m;
 }
 
-void CheckOptions(const Options& o) {
+void CheckOptions(const LiveCommandOptions& o) {
   HOVS_REQUIRE(o.model.empty() != o.map.empty(), "hovs live", "give either --model or --map");
   HOVS_REQUIRE(o.frames > 0 || o.seconds > 0 || o.display, "hovs live",
                "give --frames or --seconds (or --display, ended with q)");
@@ -112,8 +112,9 @@ void CheckOptions(const Options& o) {
 }
 
 // live.json's common part: the sources, the figures and the latencies of every stage.
-nlohmann::json LiveJson(const Options& o, const std::vector<hw::CameraSource*>& cams, size_t views, double table_ms,
-                        const hw::LiveRun& r, const nlohmann::json& published, uint64_t* underruns_out) {
+nlohmann::json LiveJson(const LiveCommandOptions& o, const std::vector<hw::CameraSource*>& cams, size_t views,
+                        double table_ms, const hw::LiveRun& r, const nlohmann::json& published,
+                        uint64_t* underruns_out) {
   const bool pair = cams.size() == 2;
   nlohmann::json sources = nlohmann::json::array(), streams = nlohmann::json::array();
   uint64_t underruns = 0;
@@ -150,7 +151,7 @@ nlohmann::json LiveJson(const Options& o, const std::vector<hw::CameraSource*>& 
   return j;
 }
 
-int RunLiveCommand(const Options& o, const GlobalOptions& global) {
+int RunLiveCommand(const LiveCommandOptions& o, const GlobalOptions& global) {
   if (!o.rig.rig_json.empty()) {
     HOVS_REQUIRE(o.model.empty() && o.map.empty(), "--rig",
                  "the rig folder gives each mirror's mapping; drop --model / --map");
@@ -258,7 +259,7 @@ int RunLiveCommand(const Options& o, const GlobalOptions& global) {
 }  // namespace
 
 Runner SetupLive(CLI::App* sub, const GlobalOptions* global) {
-  auto o = std::make_shared<Options>();
+  auto o = std::make_shared<LiveCommandOptions>();
   AddSourceOptions(sub, &o->source);
   AddRigLiveOptions(sub, &o->rig);
   AddPublishOptions(sub, &o->publish);

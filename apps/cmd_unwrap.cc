@@ -39,7 +39,7 @@ namespace hovs::apps {
 namespace {
 namespace fs = std::filesystem;
 
-struct Options {
+struct UnwrapCommandOptions {
   std::string model, unit, layout = "article", input, out = "results/unwrap", map, save_map;
   std::string interp = "bilinear", format = "auto";
   double scene_distance = 10.0;
@@ -73,7 +73,7 @@ void CheckSizes(const std::vector<InputFrame>& frames, const std::vector<io::Ima
 }
 
 // The mapping: loaded from --map or built from --model and --layout; `source` says which.
-unwrap::RemapTable Mapping(const Options& o, const std::vector<InputFrame>& frames,
+unwrap::RemapTable Mapping(const UnwrapCommandOptions& o, const std::vector<InputFrame>& frames,
                            const std::vector<io::ImageHeader>& headers, std::string* source) {
   if (!o.map.empty()) {
     unwrap::RemapTable table = unwrap::LoadRemapTable(o.map);
@@ -103,7 +103,7 @@ void WriteRgb8(const fs::path& path, int width, int height, int channels, const 
 // Unwraps every frame into `folder`: <frame>/<view>.png, and beside each perspective view with a truth render
 // <frame>/<view>_truth.png and its PSNR in `truth_json`. Returns the frames' records; remap_ms gets each
 // frame's remap time.
-nlohmann::json UnwrapFrames(const Options& o, bool quiet, const std::vector<InputFrame>& frames,
+nlohmann::json UnwrapFrames(const UnwrapCommandOptions& o, bool quiet, const std::vector<InputFrame>& frames,
                             const unwrap::RemapTable& table,
                             const std::vector<std::optional<std::vector<uint8_t>>>& truth, const fs::path& folder,
                             nlohmann::json* truth_json, std::vector<double>* remap_ms) {
@@ -149,7 +149,7 @@ nlohmann::json UnwrapFrames(const Options& o, bool quiet, const std::vector<Inpu
 }
 
 // The frames for COLMAP, with each frame's unit pose when the input is a rendered dataset.
-std::vector<unwrap::ColmapFrame> ColmapFrames(const Options& o, const std::vector<InputFrame>& frames) {
+std::vector<unwrap::ColmapFrame> ColmapFrames(const UnwrapCommandOptions& o, const std::vector<InputFrame>& frames) {
   const bool manifest = fs::is_regular_file(o.input) && fs::path(o.input).extension() == ".json";
   const auto poses = manifest ? scenes::ViewPosesByImage(o.input) : std::map<fs::path, Rigid3d>();
   std::vector<unwrap::ColmapFrame> out;
@@ -160,7 +160,7 @@ std::vector<unwrap::ColmapFrame> ColmapFrames(const Options& o, const std::vecto
   return out;
 }
 
-int RunUnwrap(const Options& o, const GlobalOptions& global) {
+int RunUnwrap(const UnwrapCommandOptions& o, const GlobalOptions& global) {
   HOVS_REQUIRE(o.model.empty() != o.map.empty(), "hovs unwrap", "give either --model or --map");
   if (o.interactive) {
     HOVS_REQUIRE(!o.model.empty() && !o.input.empty(), "hovs unwrap --interactive",
@@ -249,7 +249,7 @@ int RunUnwrap(const Options& o, const GlobalOptions& global) {
 }  // namespace
 
 Runner SetupUnwrap(CLI::App* sub, const GlobalOptions* global) {
-  auto o = std::make_shared<Options>();
+  auto o = std::make_shared<UnwrapCommandOptions>();
   sub->add_option("--model", o->model, "scene YAML or dataset.json (exact rig), calib_results.txt or calibration.json");
   sub->add_option("--unit", o->unit, "unit name in a scene or manifest (default: the first)");
   sub->add_option("--layout", o->layout,
